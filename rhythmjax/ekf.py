@@ -1,0 +1,265 @@
+"""The Extended Kalman Filter of equations (4)-(9), written once for inference and for fitting.
+
+State X = (x_p, x_v, y_p, y_v) on the ground plane (m, m/s), constant velocity (1); measurement
+Y = (u_p, v_p) through the camera of (3). Every step runs the same three calls (STYLE R5):
+
+    prior = predict(...)                    # (5), (8)
+    cand = update(..., prior, z_safe)       # (4), (6), (7): the temporary estimate X~ of (11)
+    state = select(valid, cand, prior)      # the gate switch of Fig. 2
+
+Only the source of `valid` differs: `FromAnnotations` (fitting: the measurement is present) or
+`gates.PaperGates` (inference: the width gate (10) and the outlier gate (11) exactly as written).
+The covariance update is the Joseph form, symmetrised, with Cholesky solves and no inverse, so P
+stays symmetric positive definite in float32. A NaN or missing measurement is replaced by the
+predicted measurement *before* it is used (double where), so it becomes a prediction step with
+finite gradients.
+"""
+
+from __future__ import annotations
+
+import abc
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.scipy.linalg as jsl
+from jaxtyping import Array, Bool, Float
+
+from .camera import ground_from_image, in_front, measure, measure_jacobian
+from .params import Camera, Noise
+
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+class Gaussian(eqx.Module):
+    """A state estimate: mean (4,) and covariance (4, 4) in (m, m/s)."""
+
+    mean: Float[Array, "4"]
+    cov: Float[Array, "4 4"]
+
+
+class Update(eqx.Module):
+    """The temporary update with a measurement, and what it says about that measurement."""
+
+    posterior: Gaussian
+    innovation: Float[Array, "2"]  # nu = Y - h(X(k|k-1)), px
+    innovation_cov: Float[Array, "2 2"]  # S = H P H^T + R, px^2
+    nis: Float[Array, ""]  # nu^T S^-1 nu
+    loglik: Float[Array, ""]  # log N(nu; 0, S)
+    ok: Bool[Array, ""]  # S finite and positive definite, prior in front of the camera
+
+
+def _symmetrise(P):
+    return 0.5 * (P + P.T)
+
+
+def transition(dt: Float[Array, ""]) -> Float[Array, "4 4"]:
+    """F of (1) for a step of dt seconds."""
+    one, zero = jnp.ones_like(dt), jnp.zeros_like(dt)
+    row = lambda *xs: jnp.stack(xs)
+    return jnp.stack([row(one, dt, zero, zero), row(zero, one, zero, zero),
+                      row(zero, zero, one, dt), row(zero, zero, zero, one)])
+
+
+def predict(noise: Noise, state: Gaussian, dt: Float[Array, ""]) -> Gaussian:
+    """(5) and (8): X(k+1|k) = F X(k|k), P(k+1|k) = F P(k|k) F^T + Q."""
+    F = transition(dt)
+    return Gaussian(F @ state.mean, _symmetrise(F @ state.cov @ F.T + noise.Q(dt)))
+
+
+def update(camera: Camera, noise: Noise, prior: Gaussian, z: Float[Array, "2"]) -> Update:
+    """(4), (6), (7) with H from (9); `z` must be finite (see `step`).
+
+    The covariance uses the Joseph form (I - K H) P (I - K H)^T + K R K^T, algebraically equal to
+    (7) and positive definite in float32 where (7) is not (RELIABILITY.md, finding 1).
+    """
+    R = noise.R()
+    P = prior.cov
+    H = measure_jacobian(camera, prior.mean)
+    zhat = measure(camera, prior.mean)
+    S = _symmetrise(H @ P @ H.T + R)
+    # PX4-style sanity check before the factorisation; a failed check means "do not update".
+    ok = (jnp.all(jnp.isfinite(S)) & in_front(camera, prior.mean[2])
+          & jnp.all(jnp.diag(S) >= jnp.diag(R) * (1.0 - 1e-3)))
+    L = jnp.linalg.cholesky(jnp.where(ok, S, jnp.eye(2, dtype=S.dtype)))
+    ok = ok & jnp.all(jnp.isfinite(L))
+    L = jnp.where(ok, L, jnp.eye(2, dtype=S.dtype))
+    PHt = P @ H.T
+    K = jsl.cho_solve((L, True), PHt.T).T  # (6) as a solve: K = P H^T S^-1
+    nu = z - zhat
+    mean = prior.mean + K @ nu
+    IKH = jnp.eye(4, dtype=P.dtype) - K @ H
+    cov = _symmetrise(IKH @ P @ IKH.T + K @ R @ K.T)
+    w = jsl.solve_triangular(L, nu, lower=True)
+    nis = w @ w
+    logdet = 2.0 * jnp.sum(jnp.log(jnp.diag(L)))
+    loglik = -0.5 * (nis + logdet + 2.0 * _LOG_2PI)
+    return Update(Gaussian(mean, cov), nu, S, nis, loglik, ok)
+
+
+def select(valid: Bool[Array, ""], cand: Gaussian, prior: Gaussian) -> Gaussian:
+    """The gate switch of Fig. 2: the update where valid, the prediction otherwise."""
+    return jax.tree.map(lambda a, b: jnp.where(valid, a, b), cand, prior)
+
+
+def initial_state(
+    camera: Camera, noise: Noise, z: Float[Array, "2"]
+) -> tuple[Gaussian, Bool[Array, ""]]:
+    """The state after a track's first measurement (DETECT -> OBSERVE in Fig. 3).
+
+    Position: the inverse perspective of z, with covariance J R J^T (J the Jacobian of the inverse
+    projection); velocity: zero with standard deviation `noise.init_speed_std()` (m/s).
+    `ok` is False when z has no ground point (on or above the horizon).
+    """
+    def ground(uv):
+        x, y, _ = ground_from_image(camera, uv[0], uv[1])
+        return jnp.stack([x, y])
+
+    _, _, ok = ground_from_image(camera, z[0], z[1])
+    xy = ground(z)
+    J = jax.jacfwd(ground)(z)
+    pos_cov = J @ noise.R() @ J.T
+    sv2 = noise.init_speed_std() ** 2
+    zero = jnp.zeros((), xy.dtype)
+    mean = jnp.stack([xy[0], zero, xy[1], zero])
+    cov = jnp.zeros((4, 4), xy.dtype)
+    cov = cov.at[0, 0].set(pos_cov[0, 0]).at[0, 2].set(pos_cov[0, 1])
+    cov = cov.at[2, 0].set(pos_cov[1, 0]).at[2, 2].set(pos_cov[1, 1])
+    cov = cov.at[1, 1].set(sv2).at[3, 3].set(sv2)
+    cov = jnp.where(ok, cov, jnp.eye(4, dtype=xy.dtype))
+    return Gaussian(mean, cov), ok
+
+
+# ----------------------------------------------------------------------------------------------
+# Where `valid` comes from
+
+
+class AbstractValidity(eqx.Module):
+    """Decides whether an available measurement is used (OBSERVE) or not (PREDICT)."""
+
+    @abc.abstractmethod
+    def accept_initial(self, camera: Camera, z: Float[Array, "2"], width: Float[Array, ""],
+                       ground: Gaussian) -> Bool[Array, ""]:
+        """Whether a first measurement may start a track (DETECT -> OBSERVE)."""
+
+    @abc.abstractmethod
+    def __call__(self, camera: Camera, prior: Gaussian, cand: Update, z: Float[Array, "2"],
+                 width: Float[Array, ""]) -> Bool[Array, ""]:
+        """Whether the candidate update `cand` of `prior` with `z` is accepted."""
+
+
+class FromAnnotations(AbstractValidity):
+    """Fitting: every present, finite measurement is used, so the loss is smooth in the
+    parameters. Absence is already expressed by NaN or the `present` mask."""
+
+    def accept_initial(self, camera, z, width, ground):
+        return jnp.asarray(True)
+
+    def __call__(self, camera, prior, cand, z, width):
+        return jnp.asarray(True)
+
+
+# ----------------------------------------------------------------------------------------------
+# One step, one track (scan), a batch (vmap)
+
+
+class Carry(eqx.Module):
+    state: Gaussian
+    started: Bool[Array, ""]
+
+
+class StepOutput(eqx.Module):
+    """Per step: the selected estimate and what the measurement did."""
+
+    mean: Float[Array, "4"]
+    cov: Float[Array, "4 4"]
+    pred_mean: Float[Array, "4"]
+    innovation: Float[Array, "2"]  # 0 where no measurement was available
+    nis: Float[Array, ""]  # 0 where no measurement was available
+    loglik: Float[Array, ""]  # innovation log-likelihood of a used measurement, else 0
+    available: Bool[Array, ""]  # present and finite
+    valid: Bool[Array, ""]  # used in an update (OBSERVE); False for PREDICT and the first one
+    started: Bool[Array, ""]  # the track has been initialised at or before this step
+
+
+def empty_carry(dtype=None) -> Carry:
+    dtype = dtype or jnp.result_type(float)
+    return Carry(Gaussian(jnp.zeros(4, dtype), jnp.eye(4, dtype=dtype)), jnp.asarray(False))
+
+
+def step(
+    camera: Camera,
+    noise: Noise,
+    validity: AbstractValidity,
+    carry: Carry,
+    z: Float[Array, "2"],
+    width: Float[Array, ""],
+    dt: Float[Array, ""],
+    present: Bool[Array, ""],
+) -> tuple[Carry, StepOutput]:
+    """One frame: initialise on the first usable measurement, then predict-update-select."""
+    prior = predict(noise, carry.state, dt)
+    available = present & jnp.all(jnp.isfinite(z))
+    z_safe = jnp.where(available, z, measure(camera, prior.mean))  # double where, see module doc
+    cand = update(camera, noise, prior, z_safe)
+    gate = validity(camera, prior, cand, z_safe, width)  # a NaN width is the validity's call
+    valid = carry.started & available & cand.ok & gate
+
+    init, init_ok = initial_state(camera, noise, z_safe)
+    start_now = (~carry.started & available & init_ok
+                 & validity.accept_initial(camera, z_safe, width, init))
+    tracked = select(valid, cand.posterior, prior)
+    state = select(start_now, init, select(carry.started, tracked, carry.state))
+    started = carry.started | start_now
+    zero = jnp.zeros((), prior.mean.dtype)
+    out = StepOutput(
+        mean=state.mean, cov=state.cov, pred_mean=prior.mean,
+        innovation=jnp.where(available & carry.started, cand.innovation, 0.0),
+        nis=jnp.where(available & carry.started, cand.nis, zero),
+        loglik=jnp.where(valid, cand.loglik, zero),
+        available=available, valid=valid, started=started,
+    )
+    return Carry(state, started), out
+
+
+class FilterOutput(eqx.Module):
+    """Outputs of `filter_track` stacked over time (leading axis T; batch axis first if any)."""
+
+    steps: StepOutput
+    loglik: Float[Array, "*b"]  # total innovation log-likelihood of the used measurements
+
+
+def filter_track(
+    camera: Camera,
+    noise: Noise,
+    validity: AbstractValidity,
+    z: Float[Array, "T 2"],
+    width: Float[Array, " T"],
+    dt: Float[Array, " T"],
+    present: Bool[Array, " T"],
+) -> FilterOutput:
+    """Run one (padded) track through `step` by `lax.scan`; dt[k] is t[k] - t[k-1] in s."""
+    z, width, dt = (jnp.asarray(a, jnp.result_type(float)) for a in (z, width, dt))
+
+    def body(carry, inp):
+        return step(camera, noise, validity, carry, *inp)
+
+    _, out = jax.lax.scan(body, empty_carry(z.dtype), (z, width, dt, jnp.asarray(present)))
+    return FilterOutput(out, jnp.sum(out.loglik))
+
+
+@eqx.filter_jit
+def filter_batch(
+    camera: Camera,
+    noise: Noise,
+    validity: AbstractValidity,
+    z: Float[Array, "B T 2"],
+    width: Float[Array, "B T"],
+    dt: Float[Array, "B T"],
+    present: Bool[Array, "B T"],
+) -> FilterOutput:
+    """`filter_track` vmapped over a batch of padded tracks sharing the parameters."""
+    run = jax.vmap(filter_track, in_axes=(None, None, None, 0, 0, 0, 0))
+    return run(camera, noise, validity, z, width, dt, present)

@@ -1,0 +1,76 @@
+"""The paper's discrete gates, (10), (11) and (14): booleans from numbers, no filter code.
+
+Every comparison is written `d2 <= k**2`, so a NaN distance *rejects* (RELIABILITY.md, 37);
+`~(d2 > k**2)` would accept it. `PaperGates` composes (10) and (11) into the `valid` input of
+`ekf.step` for inference; fitting uses `ekf.FromAnnotations` instead.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import jax.scipy.linalg as jsl
+from jaxtyping import Array, Bool, Float
+
+from .camera import ground_width
+from .ekf import AbstractValidity, Gaussian, Update
+from .params import Camera, Thresholds, WalkingModel, WidthModel
+
+
+def width_distance2(
+    camera: Camera, model: WidthModel, z: Float[Array, "2"], width_px: Float[Array, ""]
+) -> Float[Array, ""]:
+    """(wid - mean)^2 / sigma^2 of (10): wid (m) is the inverse perspective of the image width
+    `width_px` at the foot point z = (u_p, v_p). NaN where the foot point has no ground point."""
+    wid, ok = ground_width(camera, width_px, z[0], z[1])
+    d2 = (wid - model.mean) ** 2 / model.std**2
+    return jnp.where(ok, d2, jnp.nan)
+
+
+def width_ok(camera: Camera, model: WidthModel, k_sigma1, z, width_px) -> Bool[Array, ""]:
+    """(10): the measured object is as wide as a pedestrian (no occlusion)."""
+    return width_distance2(camera, model, z, width_px) <= k_sigma1**2
+
+
+def outlier_distance2(prior: Gaussian, temporary_mean: Float[Array, "4"]) -> Float[Array, ""]:
+    """(11): [X(k|k-1) - X~]^T P(k|k-1)^-1 [X(k|k-1) - X~], by a Cholesky solve of P(k|k-1).
+
+    X~ is the temporary estimate of (4) made with the new measurement. NaN when P(k|k-1) is not
+    positive definite (so the gate rejects)."""
+    dx = prior.mean - temporary_mean
+    L = jnp.linalg.cholesky(prior.cov)
+    w = jsl.solve_triangular(L, dx, lower=True)
+    return w @ w
+
+
+def outlier_ok(prior: Gaussian, temporary_mean, k_sigma2) -> Bool[Array, ""]:
+    """(11): the measurement is not an outlier."""
+    return outlier_distance2(prior, temporary_mean) <= k_sigma2**2
+
+
+def walking_ok(model: WalkingModel, k_sigma3, pace_hz, stride_m) -> Bool[Array, "*b"]:
+    """(14): pace F (Hz) and stride T (m) both within k_sigma3 of the walking model."""
+    dF = (pace_hz - model.pace_mean) ** 2 / model.pace_std**2
+    dT = (stride_m - model.stride_mean) ** 2 / model.stride_std**2
+    return (dF <= k_sigma3**2) & (dT <= k_sigma3**2)
+
+
+def in_range(thresholds: Thresholds, y_m) -> Bool[Array, "*b"]:
+    """Fig. 3: the object is inside the detection range (distance ahead, m)."""
+    return (y_m >= thresholds.range_min) & (y_m <= thresholds.range_max)
+
+
+class PaperGates(AbstractValidity):
+    """Inference: a measurement is valid when it passes (10) and (11) (Fig. 2); a track may
+    start (DETECT -> OBSERVE) when its first measurement lies in the detection range and passes
+    (10)."""
+
+    width_model: WidthModel
+    thresholds: Thresholds
+
+    def accept_initial(self, camera: Camera, z, width, ground: Gaussian) -> Bool[Array, ""]:
+        return (in_range(self.thresholds, ground.mean[2])
+                & width_ok(camera, self.width_model, self.thresholds.k_sigma1, z, width))
+
+    def __call__(self, camera: Camera, prior: Gaussian, cand: Update, z, width) -> Bool[Array, ""]:
+        return (width_ok(camera, self.width_model, self.thresholds.k_sigma1, z, width)
+                & outlier_ok(prior, cand.posterior.mean, self.thresholds.k_sigma2))
