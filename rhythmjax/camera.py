@@ -24,14 +24,14 @@ from .params import Camera
 _EPS_DEPTH = 1e-3  # m; a point closer than this to the image plane is treated as behind it
 
 
-def depth(camera: Camera, y: Float[Array, "*b"]) -> Float[Array, "*b"]:
+def depth(camera: Camera, y: Float[Array, "..."]) -> Float[Array, "..."]:
     """The denominator of (3), f + y cos(theta) + h sin(theta), in m."""
     return camera.f + y * jnp.cos(camera.theta) + camera.h * jnp.sin(camera.theta)
 
 
 def project(
-    camera: Camera, x: Float[Array, "*b"], y: Float[Array, "*b"]
-) -> tuple[Float[Array, "*b"], Float[Array, "*b"]]:
+    camera: Camera, x: Float[Array, "..."], y: Float[Array, "..."]
+) -> tuple[Float[Array, "..."], Float[Array, "..."]]:
     """Equation (3): image foot point (u, v) in px of the ground point (x, y) in m.
 
     Behind the camera (depth <= 1 mm) the depth is replaced by a safe value, so the result is
@@ -45,7 +45,7 @@ def project(
     return u, v
 
 
-def in_front(camera: Camera, y: Float[Array, "*b"]) -> Bool[Array, "*b"]:
+def in_front(camera: Camera, y: Float[Array, "..."]) -> Bool[Array, "..."]:
     """True where the ground point at distance y (m) lies in front of the image plane."""
     return depth(camera, y) > _EPS_DEPTH
 
@@ -67,8 +67,8 @@ def horizon_v(camera: Camera) -> Float[Array, ""]:
 
 
 def ground_from_image(
-    camera: Camera, u: Float[Array, "*b"], v: Float[Array, "*b"]
-) -> tuple[Float[Array, "*b"], Float[Array, "*b"], Bool[Array, "*b"]]:
+    camera: Camera, u: Float[Array, "..."], v: Float[Array, "..."]
+) -> tuple[Float[Array, "..."], Float[Array, "..."], Bool[Array, "..."]]:
     """Inverse perspective: the ground point (x, y) in m of the image foot point (u, v) in px.
 
     Solves (3) for y from v, then x from u. `ok` is False for points on or above the horizon or
@@ -89,7 +89,7 @@ def ground_from_image(
     return jnp.where(ok, x, zero), jnp.where(ok, y, zero), ok
 
 
-def image_width(camera: Camera, width_m: Float[Array, "*b"], y: Float[Array, "*b"]):
+def image_width(camera: Camera, width_m: Float[Array, "..."], y: Float[Array, "..."]):
     """Image width (px) of a ground width (m) at distance y (m): a f w / depth, from (3)."""
     d = depth(camera, y)
     d_safe = jnp.where(d > _EPS_DEPTH, d, 1.0)
@@ -97,8 +97,8 @@ def image_width(camera: Camera, width_m: Float[Array, "*b"], y: Float[Array, "*b
 
 
 def ground_width(
-    camera: Camera, width_px: Float[Array, "*b"], u: Float[Array, "*b"], v: Float[Array, "*b"]
-) -> tuple[Float[Array, "*b"], Bool[Array, "*b"]]:
+    camera: Camera, width_px: Float[Array, "..."], u: Float[Array, "..."], v: Float[Array, "..."]
+) -> tuple[Float[Array, "..."], Bool[Array, "..."]]:
     """Real width (m) of an image width (px) seen at the foot point (u, v): the inverse of
     `image_width` at the ground point of (u, v). `ok` as in `ground_from_image`."""
     _, y, ok = ground_from_image(camera, u, v)

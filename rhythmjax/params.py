@@ -222,7 +222,7 @@ def config_to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
     }
 
 
-def _num(sec: str, key: str, v: Any, *, lo=None, hi=None, lo_open=True, integer=False) -> float:
+def _num(sec: str, key: str, v: Any, *, lo=None, hi=None, lo_open=True, integer=False) -> Any:
     name = f"{sec}.{key}"
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ConfigError(name, f"expected a number, got {v!r}")

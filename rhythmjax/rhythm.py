@@ -1,0 +1,204 @@
+"""Rhythm features and model matching, Sec. 4 of the rhythm paper, batched over tracks.
+
+For each track: the EKF with the paper's gates tracks the foot point; the rhythm window is the
+first N frames from the frame the track started (DETECT -> OBSERVE); the window-B intensity I(k)
+of those frames goes through the Burg MEM spectrum (`mem.spectrum`); the peaks give pace F and,
+with the ground speed, stride T (12); (13)-(15) decide Pedestrian or Non-pedestrian.
+
+Conventions fixed here (the paper is silent):
+- I(k) is normalised per window to zero mean and unit standard deviation before Burg, and P(f)
+  is expressed relative to the white-noise level of that variance: P(f) = PSD(f) / (var dt), so
+  white noise has P = 1 everywhere and P_thr = 10 asks for a peak ten times above it. P_thr and
+  R_thr are then dimensionless and independent of contrast, clothing, window area, distance and
+  frame rate. A window whose standard deviation is zero has no peaks.
+- D in (12) is the mean ground speed over the window times its duration N dt, the speed being the
+  least-squares slope of the filtered ground positions against time. So T = speed / F: no -1/N
+  bias from counting N samples as N intervals, and robust to the first, unsettled estimates.
+- Missing intensities inside the window are linearly interpolated; more than a quarter missing,
+  or a sampling interval varying by more than 10 % inside the window, gives `bad-signal`.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float, Int
+
+from . import mem
+from .ekf import filter_track
+from .gates import PaperGates, walking_ok
+from .params import Config, Thresholds, WalkingModel
+from .status import Reason, Verdict
+
+
+N_PEAKS = 8  # peak slots kept per spectrum (fixed size, masked)
+N_FREQS = 512  # frequency grid points from 0 to Nyquist
+MAX_MISSING_FRACTION = 0.25
+MAX_DT_JITTER = 0.10
+
+
+class RhythmResult(eqx.Module):
+    """Per-track outcome (batch axis first when batched). Undefined values are NaN."""
+
+    verdict: Int[Array, "*b"]  # status.Verdict
+    reason: Int[Array, "*b"]  # status.Reason
+    pace_hz: Float[Array, "*b"]  # F of the chosen peak
+    stride_m: Float[Array, "*b"]  # T of (12) for that peak
+    ratio: Float[Array, "*b"]  # R_m of (15) for that peak
+    speed_mps: Float[Array, "*b"]  # mean ground speed over the window
+    n_samples: Int[Array, "*b"]  # frames tracked from the start (all of the track)
+    peak_freq: Float[Array, "*b k"]
+    peak_power: Float[Array, "*b k"]
+    peak_mask: Bool[Array, "*b k"]
+
+
+def normalise_window(x: Float[Array, " n"]) -> tuple[Float[Array, " n"], Bool[Array, ""]]:
+    """Zero mean, unit standard deviation; `ok` False (and zeros) for a constant window."""
+    xc = x - jnp.mean(x)
+    sd = jnp.sqrt(jnp.mean(xc**2))
+    scale = jnp.max(jnp.abs(xc))
+    ok = jnp.isfinite(sd) & (sd > 1e-6 * jnp.maximum(scale, jnp.finfo(x.dtype).tiny) + 0.0)
+    ok = ok & (scale > 0)
+    return jnp.where(ok, xc / jnp.where(ok, sd, 1.0), 0.0), ok
+
+
+def fill_gaps(x: Float[Array, " n"], known: Bool[Array, " n"]) -> Float[Array, " n"]:
+    """Linear interpolation over the unknown entries (ends held at the nearest known value)."""
+    n = x.shape[0]
+    idx = jnp.arange(n)
+    prev = jax.lax.cummax(jnp.where(known, idx, -1))
+    nxt = jax.lax.cummin(jnp.where(known, idx, n), reverse=True)
+    prev_c = jnp.where(prev >= 0, prev, nxt).clip(0, n - 1)
+    nxt_c = jnp.where(nxt < n, nxt, prev).clip(0, n - 1)
+    xs = jnp.where(known, x, 0.0)
+    span = jnp.maximum(nxt_c - prev_c, 1)
+    w = jnp.where(nxt_c > prev_c, (idx - prev_c) / span, 0.0).astype(x.dtype)
+    filled = xs[prev_c] + w * (xs[nxt_c] - xs[prev_c])
+    return jnp.where(known, x, filled)
+
+
+def ground_speed(t: Float[Array, " n"], xy: Float[Array, "n 2"]) -> Float[Array, ""]:
+    """Least-squares ground velocity over the window, its norm in m/s."""
+    tc = t - jnp.mean(t)
+    var = jnp.maximum(jnp.sum(tc**2), jnp.finfo(t.dtype).tiny)
+    vel = (tc @ (xy - jnp.mean(xy, axis=0, keepdims=True))) / var
+    return jnp.sqrt(jnp.sum(vel**2))
+
+
+def match(
+    peaks: mem.Peaks, speed: Float[Array, ""], walking: WalkingModel, thr: Thresholds
+) -> tuple[Int[Array, ""], Int[Array, ""], Float[Array, ""], Float[Array, ""], Float[Array, ""]]:
+    """(13)-(15) on one spectrum's peaks. Returns verdict, reason, pace F, stride T, ratio R.
+
+    The reported peak is the best-matching one when any passes (14), else the strongest peak."""
+    strong = peaks.mask & (peaks.power > thr.p_thr)  # (13)
+    S = jnp.sum(jnp.where(strong, peaks.power, 0.0))
+    stride = speed / jnp.where(peaks.mask, peaks.freq, 1.0)  # (12) with D = speed * N dt
+    passes = strong & walking_ok(walking, thr.k_sigma3, peaks.freq, stride)  # (14)
+    ratio = peaks.power / jnp.where(S > 0, S, 1.0)  # (15)
+    best = jnp.argmax(jnp.where(passes, ratio, -1.0))
+    any_peak, any_pass = jnp.any(strong), jnp.any(passes)
+    pick = jnp.where(any_pass, best, 0)  # peaks are sorted by power: slot 0 is the strongest
+    r_best = jnp.where(strong[pick], ratio[pick], 0.0)
+    pedestrian = any_pass & (r_best > thr.r_thr)
+    reason = jnp.where(~any_peak, Reason.NO_PEAK,
+                       jnp.where(~any_pass, Reason.NO_MODEL_MATCH,
+                                 jnp.where(pedestrian, Reason.MATCHED, Reason.BELOW_THRESHOLD)))
+    verdict = jnp.where(pedestrian, Verdict.PEDESTRIAN, Verdict.NON_PEDESTRIAN)
+    nan = jnp.asarray(jnp.nan, peaks.freq.dtype)
+    has = peaks.mask[pick]
+    return (verdict, reason, jnp.where(has, peaks.freq[pick], nan),
+            jnp.where(has, stride[pick], nan), jnp.where(has, r_best, nan))
+
+
+def classify_window(
+    cfg: Config,
+    intensity: Float[Array, " n"],
+    t: Float[Array, " n"],
+    xy: Float[Array, "n 2"],
+    usable: Bool[Array, ""],
+) -> RhythmResult:
+    """Classify one rhythm window of N frames that the track has been tracked over.
+
+    `intensity` may contain NaN (missing); `t` (s) and `xy` (m, filtered ground positions) are
+    finite. `usable` False marks a window that is not complete (the caller sets the reason)."""
+    thr = cfg.thresholds
+    n = intensity.shape[0]
+    known = jnp.isfinite(intensity)
+    n_missing = n - jnp.sum(known)
+    dts = jnp.diff(t)
+    dt_med = jnp.median(dts)
+    dt_ok = jnp.all(jnp.abs(dts - dt_med) <= MAX_DT_JITTER * dt_med) & (dt_med > 0)
+    signal_ok = (n_missing <= MAX_MISSING_FRACTION * n) & dt_ok
+    x, nonconstant = normalise_window(fill_gaps(intensity, known))
+    spec = mem.spectrum(x, jnp.where(dt_ok, dt_med, 1.0), thr.m, n_freqs=N_FREQS,
+                        n_peaks=N_PEAKS)
+    peaks = spec.peaks
+    mask = peaks.mask & nonconstant & spec.ok
+    power = jnp.where(mask, peaks.power / jnp.where(dt_ok, dt_med, 1.0), 0.0)  # x white level
+    peaks = mem.Peaks(peaks.freq, power, mask)
+    speed = ground_speed(t, xy)
+    verdict, reason, pace, stride, ratio = match(peaks, speed, cfg.walking, thr)
+    bad = usable & ~signal_ok
+    unclassified = ~usable | bad
+    nan = jnp.asarray(jnp.nan, x.dtype)
+    return RhythmResult(
+        verdict=jnp.where(unclassified, Verdict.UNCLASSIFIED, verdict).astype(jnp.int32),
+        reason=jnp.where(bad, Reason.BAD_SIGNAL, reason).astype(jnp.int32),
+        pace_hz=jnp.where(unclassified, nan, pace),
+        stride_m=jnp.where(unclassified, nan, stride),
+        ratio=jnp.where(unclassified, nan, ratio),
+        speed_mps=jnp.where(usable, speed, nan),
+        n_samples=jnp.asarray(n, jnp.int32),
+        peak_freq=peaks.freq, peak_power=peaks.power, peak_mask=peaks.mask & ~unclassified,
+    )
+
+
+def classify_track(
+    cfg: Config,
+    z: Float[Array, "T 2"],
+    width: Float[Array, " T"],
+    intensity: Float[Array, " T"],
+    dt: Float[Array, " T"],
+    present: Bool[Array, " T"],
+) -> RhythmResult:
+    """Track one padded track with the paper's gates, then classify its first rhythm window.
+
+    T must be >= N (pad with present=False). Reasons: `no-measurements` when no measurement is
+    finite; `too-short` when fewer than N frames follow the start (Sec. 5: never guess)."""
+    n = cfg.thresholds.n
+    T = z.shape[0]
+    if T < n:
+        raise ValueError(f"tracks must be padded to at least N = {n} frames, got {T}")
+    gates = PaperGates(cfg.width, cfg.thresholds)
+    out = filter_track(cfg.camera, cfg.noise, gates, z, width, dt, present).steps
+    idx = jnp.arange(T)
+    k0 = jnp.argmax(out.started)
+    started = out.started[k0]
+    n_tracked = jnp.sum(present & out.started)
+    complete = started & (n_tracked >= n)
+    start = jnp.clip(k0, 0, T - n)
+    window = lambda a: jax.lax.dynamic_slice_in_dim(a, start, n)
+    t = jnp.cumsum(jnp.where(idx == 0, 0.0, dt))
+    xy = out.mean[:, jnp.array([0, 2])]
+    res = classify_window(cfg, window(intensity), window(t), window(xy), complete)
+    any_meas = jnp.any(out.available)
+    short_reason = jnp.where(any_meas, Reason.TOO_SHORT, Reason.NO_MEASUREMENTS)
+    reason = jnp.where(complete, res.reason, short_reason).astype(jnp.int32)
+    n_samples = n_tracked.astype(jnp.int32)
+    return eqx.tree_at(lambda r: (r.reason, r.n_samples), res, (reason, n_samples))
+
+
+@eqx.filter_jit
+def classify_batch(
+    cfg: Config,
+    z: Float[Array, "B T 2"],
+    width: Float[Array, "B T"],
+    intensity: Float[Array, "B T"],
+    dt: Float[Array, "B T"],
+    present: Bool[Array, "B T"],
+) -> RhythmResult:
+    """`classify_track` vmapped over a batch of padded tracks (one compilation per shape)."""
+    return jax.vmap(classify_track, in_axes=(None, 0, 0, 0, 0, 0))(
+        cfg, z, width, intensity, dt, present)

@@ -1,0 +1,174 @@
+"""Rhythm matching (12)-(15) and per-track verdicts, against a plain-Python reading of the paper."""
+
+import math
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from rhythmjax import mem
+from rhythmjax.params import Config, Thresholds, WalkingModel
+from rhythmjax.rhythm import classify_batch, classify_track, fill_gaps, ground_speed, match
+from rhythmjax.status import Reason, Verdict
+
+
+WALK, THR = WalkingModel(), Thresholds()
+
+
+def match_reference(freqs, powers, speed, p_thr=10.0, r_thr=0.1, k=3.0):
+    """Sec. 4.2 step by step, in plain Python floats."""
+    peaks = [(f, p) for f, p in zip(freqs, powers) if p > p_thr]  # (13)
+    if not peaks:
+        return "non-pedestrian", "no-peak", None
+    S = sum(p for _, p in peaks)
+    sets = [(f, p, speed / f) for f, p in peaks]  # (12) with D = speed * N * dt
+    ok = [(f, p, T) for f, p, T in sets
+          if (f - 2.05) ** 2 / 0.183**2 <= k**2 and (T - 0.72) ** 2 / 0.09**2 <= k**2]  # (14)
+    if not ok:
+        return "non-pedestrian", "no-model-match", None
+    f, p, T = max(ok, key=lambda s: s[1] / S)  # (15): greatest R_m
+    R = p / S
+    return ("pedestrian", "matched", (f, T, R)) if R > r_thr else (
+        "non-pedestrian", "below-threshold", (f, T, R))
+
+
+def _peaks(freqs, powers, k=8):
+    order = np.argsort(powers)[::-1]
+    f = np.zeros(k, np.float32)
+    p = np.zeros(k, np.float32)
+    m = np.zeros(k, bool)
+    f[: len(freqs)] = np.asarray(freqs, np.float32)[order]
+    p[: len(freqs)] = np.asarray(powers, np.float32)[order]
+    m[: len(freqs)] = True
+    return mem.Peaks(jnp.asarray(f), jnp.asarray(p), jnp.asarray(m))
+
+
+CASES = {  # name: (peak freqs Hz, powers, speed m/s, expected reason)
+    "no peak at all": ([], [], 1.5, "no-peak"),
+    "peaks below P_thr": ([2.0, 4.0], [9.9, 3.0], 1.5, "no-peak"),
+    "pace outside the model": ([3.7], [50.0], 1.5, "no-model-match"),
+    "stride outside the model (bicycle)": ([2.1], [50.0], 4.5, "no-model-match"),
+    "model match, one peak": ([2.05], [50.0], 1.48, "matched"),
+    "model match with low ratio": ([2.0] + [3.5 + 0.4 * i for i in range(7)],
+                                   [11.0] + [100.0] * 7, 1.44, "below-threshold"),
+    "greatest R among matching, not the strongest peak": ([4.1, 1.9], [80.0, 40.0], 1.4,
+                                                          "matched"),
+    "P exactly at P_thr is not a peak": ([2.05], [10.0], 1.48, "no-peak"),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_match_branches_agree_with_reference(name):
+    freqs, powers, speed, reason = CASES[name]
+    v, r, *vals = match(_peaks(freqs, powers), jnp.float32(speed), WALK, THR)
+    ref_v, ref_r, ref_vals = match_reference(freqs, powers, speed)
+    assert ref_r == reason  # the case is what it says
+    assert Reason(int(r)).label == ref_r
+    assert Verdict(int(v)).label == ref_v
+    pace, stride, ratio = (float(x) for x in vals)
+    if ref_vals is not None:
+        assert pace == pytest.approx(ref_vals[0], abs=1e-5)
+        assert stride == pytest.approx(ref_vals[1], rel=1e-5)
+        assert ratio == pytest.approx(ref_vals[2], rel=1e-5)
+
+
+def test_match_random_peak_sets_agree_with_reference():
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        k = int(rng.integers(0, 9))
+        freqs = list(rng.uniform(0.3, 7.0, k))
+        powers = [float(rng.uniform(0, 10) if rng.random() < 0.4 else rng.uniform(10, 300))
+                  for _ in range(k)]
+        speed = float(rng.uniform(0.2, 3.0))
+        v, r, *_ = match(_peaks(freqs, powers), jnp.float32(speed), WALK, THR)
+        ref_v, ref_r, _ = match_reference(freqs, powers, speed)
+        assert (Verdict(int(v)).label, Reason(int(r)).label) == (ref_v, ref_r)
+
+
+def test_fill_gaps_is_linear_interpolation():
+    x = jnp.array([np.nan, 1.0, np.nan, np.nan, 4.0, 5.0, np.nan], jnp.float32)
+    got = np.asarray(fill_gaps(x, jnp.isfinite(x)))
+    np.testing.assert_allclose(got, [1, 1, 2, 3, 4, 5, 5], atol=1e-6)
+
+
+def test_ground_speed_is_least_squares_slope():
+    t = jnp.arange(64, dtype=jnp.float32) / 15
+    xy = jnp.stack([0.3 + 1.2 * t, 10.0 - 0.5 * t], -1)
+    assert float(ground_speed(t, xy)) == pytest.approx(math.hypot(1.2, 0.5), rel=1e-5)
+
+
+# ----------------------------------------------------------------------------------------------
+# Whole tracks
+
+
+def _walker(n=100, pace=2.0, stride=0.7, fps=15.0, intensity=None, seed=0):
+    from rhythmjax.camera import image_width, project
+
+    cfg = Config()
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / fps
+    speed = pace * stride
+    x, y = -2.0 + speed * t, np.full(n, 12.0)
+    u, v = (np.asarray(a, np.float64) for a in project(cfg.camera, jnp.asarray(x, jnp.float32),
+                                                       jnp.asarray(y, jnp.float32)))
+    z = np.stack([u, v], -1) + rng.normal(0, 1.0, (n, 2))
+    w = np.asarray(image_width(cfg.camera, jnp.float32(0.45), jnp.asarray(y, jnp.float32)))
+    if intensity is None:
+        intensity = 100 + 80 * np.abs(np.sin(np.pi * pace * t + 0.3)) + rng.normal(0, 5, n)
+    dt = np.full(n, 1 / fps)
+    arrays = (z, w, intensity, dt, np.ones(n, bool))
+    return cfg, [jnp.asarray(a, jnp.float32 if a.dtype.kind == "f" else None) for a in arrays]
+
+
+def test_walker_track_matches_with_its_pace_and_stride():
+    cfg, arrays = _walker(pace=2.0, stride=0.7)
+    r = classify_track(cfg, *arrays)
+    assert Verdict(int(r.verdict)) == Verdict.PEDESTRIAN
+    assert Reason(int(r.reason)) == Reason.MATCHED
+    assert float(r.pace_hz) == pytest.approx(2.0, abs=0.03)
+    assert float(r.stride_m) == pytest.approx(0.7, rel=0.05)
+    assert float(r.speed_mps) == pytest.approx(1.4, rel=0.05)
+    assert int(r.n_samples) == 100
+
+
+def test_constant_intensity_has_no_peak():
+    cfg, arrays = _walker(intensity=np.full(100, 250.0))
+    r = classify_track(cfg, *arrays)
+    assert (Verdict(int(r.verdict)), Reason(int(r.reason))) == (Verdict.NON_PEDESTRIAN,
+                                                                Reason.NO_PEAK)
+    assert np.all(np.isfinite(np.asarray(r.peak_power)))
+
+
+def test_too_short_and_no_measurements_are_unclassified():
+    cfg, (z, w, i, dt, p) = _walker(n=100)
+    short = p.at[40:].set(False)
+    r = classify_track(cfg, z, w, i, dt, short)
+    assert (Verdict(int(r.verdict)), Reason(int(r.reason))) == (Verdict.UNCLASSIFIED,
+                                                                Reason.TOO_SHORT)
+    assert int(r.n_samples) == 40 and math.isnan(float(r.pace_hz))
+    r = classify_track(cfg, jnp.full_like(z, jnp.nan), w, i, dt, p)
+    assert Reason(int(r.reason)) == Reason.NO_MEASUREMENTS
+    assert Verdict(int(r.verdict)) == Verdict.UNCLASSIFIED
+
+
+def test_bad_signal_gaps_and_irregular_sampling():
+    cfg, (z, w, i, dt, p) = _walker(n=100)
+    holes = i.at[5:25].set(jnp.nan)  # 20 of the first 64 missing > 25 %
+    assert Reason(int(classify_track(cfg, z, w, holes, dt, p).reason)) == Reason.BAD_SIGNAL
+    few = i.at[5:15].set(jnp.nan)  # 10 of 64: interpolated, still classified
+    assert Reason(int(classify_track(cfg, z, w, few, dt, p).reason)) == Reason.MATCHED
+    jitter = dt.at[30].set(dt[30] * 1.5)
+    assert Reason(int(classify_track(cfg, z, w, i, jitter, p).reason)) == Reason.BAD_SIGNAL
+
+
+def test_batch_equals_single_tracks_and_isolates_a_bad_track():
+    cfg, a = _walker(seed=1)
+    _, b = _walker(seed=2, pace=1.8, stride=0.8)
+    bad = [jnp.full_like(a[0], jnp.inf), *a[1:]]
+    batch = [jnp.stack(x) for x in zip(a, bad, b)]
+    res = classify_batch(cfg, *batch)
+    for i, single in ((0, a), (2, b)):
+        r = classify_track(cfg, *single)
+        assert int(res.verdict[i]) == int(r.verdict)
+        np.testing.assert_allclose(float(res.pace_hz[i]), float(r.pace_hz), rtol=1e-6)
+    assert Reason(int(res.reason[1])) == Reason.NO_MEASUREMENTS
