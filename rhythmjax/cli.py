@@ -190,12 +190,25 @@ def _extra_commands() -> list[Callable]:
     return [importlib.import_module(n).register for n in names if importlib.util.find_spec(n)]
 
 
+def _enable_compilation_cache() -> None:
+    """Keep compiled XLA programs between runs (the application's choice, never the library's):
+    a second `rhythmjax classify` skips the ~10 s compilation. RHYTHMJAX_CACHE_DIR=0 disables."""
+    d = os.environ.get("RHYTHMJAX_CACHE_DIR",
+                       os.path.join(os.path.expanduser("~"), ".cache", "rhythmjax", "xla"))
+    if d and d != "0":
+        import jax
+
+        jax.config.update("jax_compilation_cache_dir", d)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+
+
 def main(argv=None) -> int:
     from .io import BadInput
     from .params import ConfigError
 
     parser = build_parser()
     args = parser.parse_args(argv)
+    _enable_compilation_cache()
     try:
         return args.func(args)
     except (BadInput, ConfigError) as e:

@@ -61,15 +61,15 @@ def in_range(thresholds: Thresholds, y_m) -> Bool[Array, "*b"]:
 
 class PaperGates(AbstractValidity):
     """Inference: a measurement is valid when it passes (10) and (11) (Fig. 2); a track may
-    start (DETECT -> OBSERVE) when its first measurement lies in the detection range and passes
-    (10)."""
+    start (DETECT -> OBSERVE) when its first measurement lies in the detection range (Fig. 3:
+    the range is the only test there, so an object wider than a pedestrian starts a track and
+    is then only predicted)."""
 
     width_model: WidthModel
     thresholds: Thresholds
 
     def accept_initial(self, camera: Camera, z, width, ground: Gaussian) -> Bool[Array, ""]:
-        return (in_range(self.thresholds, ground.mean[2])
-                & width_ok(camera, self.width_model, self.thresholds.k_sigma1, z, width))
+        return in_range(self.thresholds, ground.mean[2])
 
     def __call__(self, camera: Camera, prior: Gaussian, cand: Update, z, width) -> Bool[Array, ""]:
         return (width_ok(camera, self.width_model, self.thresholds.k_sigma1, z, width)

@@ -3,6 +3,7 @@ import os
 
 # Strict numerics in tests only: the library itself never flips global configuration.
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
+os.environ["RHYTHMJAX_CACHE_DIR"] = "0"  # in-process CLI tests leave no compilation cache
 
 import jax
 import jax.random as jr

@@ -1,0 +1,399 @@
+"""Tracks, footprints, verdicts and config files (ARCHITECTURE.md, "File formats").
+
+Validation lives here, at the edge; the jitted kernels trust what `to_batch` gives them. Every
+problem is a `BadInput` whose one-line message names the file and the line, column, track or key.
+Tables: `io_tables` (strict CSV/Parquet reading, atomic writes), re-exported here.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .io_tables import (
+    BadInput as BadInput,
+    PathLike,
+    Table as Table,
+    atomic_path as atomic_path,
+    atomic_write as atomic_write,
+    check_writable as check_writable,
+    read_table as read_table,
+    write_table as write_table,
+)
+from .params import Config, ConfigError, config_from_dict, config_to_dict
+
+
+TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity")
+OPTIONAL_TRACK_COLUMNS = ("label", "x", "y")
+LABELS = ("pedestrian", "bicycle", "dog", "car", "other")
+MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y")
+MAX_ABS = 1e12
+_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
+          "width_px": "float", "intensity": "float", "label": "str", "x": "float", "y": "float"}
+
+
+@dataclass
+class Tracks:
+    """Validated rows of a tracks file, sorted by (track, frame); tracks keep the order in which
+    they first appear. `line` is each row's source line (CSV, header = 1) or row (Parquet), named
+    by `unit`. `notes` records what was repaired (e.g. re-sorted rows) for the run summary."""
+
+    path: str
+    track_id: np.ndarray  # object array of str, as written in the file
+    frame: np.ndarray  # int64
+    t: np.ndarray  # float64, seconds
+    u: np.ndarray  # float64 px; NaN = no measurement
+    v: np.ndarray
+    width_px: np.ndarray
+    intensity: np.ndarray
+    line: np.ndarray  # int64
+    unit: str = "line"
+    label: np.ndarray | None = None  # object array of normalised labels ("" = unlabelled)
+    x: np.ndarray | None = None
+    y: np.ndarray | None = None
+    fps: float | int | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def __len__(self) -> int:
+        return int(self.frame.shape[0])
+
+    @property
+    def ids(self) -> list[str]:
+        """Track ids in file order."""
+        return [str(i) for i in self.track_id[_starts(self.track_id)]]
+
+    def to_batch(self, *, max_gap_frames: int, min_len: int, bucket: bool = True,
+                 fps: float | int | None = None) -> TrackBatch:
+        return to_batch(self, max_gap_frames=max_gap_frames, min_len=min_len, bucket=bucket,
+                        fps=fps)
+
+
+@dataclass
+class TrackBatch:
+    """Tracks padded to a common length T on their frame grid (float32, NaN = no measurement).
+
+    dt[:, 0] is the nominal step and dt[:, k] = t[:, k] - t[:, k-1]; `present` is False on the
+    padding, where t continues by the nominal step and dt equals it."""
+
+    ids: list[str]
+    z: np.ndarray  # (B, T, 2) u, v px
+    width: np.ndarray  # (B, T) px
+    intensity: np.ndarray  # (B, T)
+    t: np.ndarray  # (B, T) s
+    dt: np.ndarray  # (B, T) s
+    present: np.ndarray  # (B, T) bool
+    length: np.ndarray  # (B,) int32
+    labels: list[str] | None = None
+    xy: np.ndarray | None = None  # (B, T, 2) m
+
+
+# ----------------------------------------------------------------------------------------------
+def read_tracks(path: PathLike, *, fps: float | int | None = None) -> Tracks:
+    """Read and validate a tracks file (RELIABILITY.md section 3, items 17-30).
+
+    `fps` (the camera's) sharpens the milliseconds check. Raises `BadInput`."""
+    p = os.fspath(path)
+    tab = read_table(p, TRACK_COLUMNS, OPTIONAL_TRACK_COLUMNS, types=_TYPES,
+                     not_empty=("track_id", "frame", "t"))
+    bad_t = _first(~np.isfinite(tab["t"]))
+    if bad_t is not None:
+        raise tab.where(p, bad_t, "t", f"{float(tab['t'][bad_t])!r} is not a finite time (s)")
+    for c in MEASUREMENTS:
+        if c not in tab:
+            continue
+        a = tab[c]
+        i = _first(np.isinf(a) | (np.abs(np.nan_to_num(a)) > MAX_ABS))
+        if i is not None:
+            raise tab.where(p, i, c, f"{float(a[i])!r} is not a usable value (inf or |value| > "
+                            "1e12); leave the cell empty for a missing measurement")
+        if c in ("width_px", "intensity"):
+            i = _first(a < 0)
+            if i is not None:
+                raise tab.where(p, i, c, f"{float(a[i])!r} is negative")
+    labels = None
+    if "label" in tab:
+        labels = np.asarray([s.strip().lower() for s in tab["label"]], dtype=object)
+        i = _first(~np.isin(labels, LABELS + ("",)))
+        if i is not None:
+            raise tab.where(p, i, "label", f"unknown label {tab['label'][i]!r} (expected one of "
+                            f"{', '.join(LABELS)}, or empty)")
+    tid = np.asarray(tab["track_id"], dtype=object)
+    notes: list[str] = []
+    order = _track_order(tid, tab["frame"])
+    if np.any(order != np.arange(len(order))):
+        moved = int(np.flatnonzero(order != np.arange(len(order)))[0])
+        notes.append(f"{p}: rows were not grouped by track and ordered by frame (first at "
+                     f"{tab.unit} {int(tab.lines[order[moved]])}); sorted by (track_id, frame)")
+    col = {k: tab[k][order] for k in tab if k != "label"}
+    lines = tab.lines[order]
+    tid, labels = tid[order], (None if labels is None else labels[order])
+    _check_tracks(p, tab.unit, tid, col["frame"], col["t"], lines, labels)
+    _check_units(p, tab.unit, tid, col, lines, fps, notes)
+    return Tracks(path=p, track_id=tid, frame=col["frame"].astype(np.int64), t=col["t"],
+                  u=col["u"], v=col["v"], width_px=col["width_px"], intensity=col["intensity"],
+                  line=lines, unit=tab.unit, label=labels, x=col.get("x"), y=col.get("y"),
+                  fps=None if fps is None else float(fps), notes=notes)
+
+
+def read_footprints(path: PathLike, *, fps: float | int | None = None) -> Tracks:
+    """`read_tracks` for annotated footprints: the ground position columns x, y are required."""
+    tr = read_tracks(path, fps=fps)
+    if tr.x is None or tr.y is None:
+        raise BadInput(path, "footprints need columns 'x' and 'y' (ground position, m)")
+    return tr
+
+
+def _first(mask: np.ndarray) -> int | None:
+    idx = np.flatnonzero(mask)
+    return int(idx[0]) if idx.size else None
+
+
+def _starts(tid: np.ndarray) -> np.ndarray:
+    """Index of the first row of each track in rows grouped by track."""
+    if len(tid) == 0:
+        return np.zeros(0, np.int64)
+    return np.flatnonzero(np.r_[True, tid[1:] != tid[:-1]])
+
+
+def _steps(tid: np.ndarray, frame: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Time per frame of each step between consecutive rows of a track (frames increasing)."""
+    if len(tid) < 2:
+        return np.zeros(0)
+    same = (tid[1:] == tid[:-1]) & (np.diff(frame) > 0)
+    return (np.diff(t)[same] / np.diff(frame)[same]).astype(np.float64)
+
+
+def _track_order(tid: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """Stable permutation grouping rows by track (in order of first appearance), then by frame."""
+    if len(tid) == 0:
+        return np.zeros(0, np.int64)
+    _, first, inverse = np.unique(tid.astype(str), return_index=True, return_inverse=True)
+    rank = np.empty(len(first), np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    return np.lexsort((frame, rank[inverse.reshape(-1)]))
+
+
+def _check_tracks(p, unit, tid, frame, t, lines, labels) -> None:
+    if len(tid) < 2:
+        return
+    same = tid[1:] == tid[:-1]
+    dup = _first(same & (frame[1:] == frame[:-1]))
+    if dup is not None:
+        a, b = sorted((int(lines[dup]), int(lines[dup + 1])))
+        raise BadInput(p, f"frame {frame[dup]} appears twice ({unit}s {a} and {b})",
+                       track_id=str(tid[dup]), line=b)
+    k = _first(same & (t[1:] <= t[:-1]))
+    if k is not None:
+        what = ("decreases" if t[k + 1] < t[k] else
+                f"does not increase ({float(t[k])!r} s at frames {frame[k]} and {frame[k + 1]})")
+        raise BadInput(p, f"t {what} at frame {frame[k + 1]} ({unit} {lines[k + 1]})",
+                       track_id=str(tid[k]), line=int(lines[k + 1]), column="t")
+    if labels is not None:
+        k = _first(same & (labels[1:] != labels[:-1]))
+        if k is not None:
+            raise BadInput(p, f"label changes from {labels[k]!r} to {labels[k + 1]!r} at frame "
+                           f"{frame[k + 1]} ({unit} {lines[k + 1]})", track_id=str(tid[k]),
+                           line=int(lines[k + 1]), column="label")
+
+
+def _check_units(p, unit, tid, col, lines, fps, notes) -> None:
+    frame, t = col["frame"], col["t"]
+    if len(t) >= 2:
+        step = _steps(tid, frame, t)
+        if step.size:
+            med = float(np.median(step))
+            ms = 300.0 < med * fps < 3000.0 if fps else med > 1.0
+            if ms:
+                expect = f"; at {fps:g} fps expect {1 / fps:.4g} s" if fps else ""
+                raise BadInput(p, f"column 't' looks like milliseconds (median step {med:.4g} "
+                               f"per frame{expect}); give seconds", column="t")
+            if fps and not 0.5 < med * fps < 2.0:
+                notes.append(f"{p}: median time step {med:.4g} s per frame disagrees with "
+                             f"{fps:g} fps (expected {1 / fps:.4g} s)")
+    starts = _starts(tid)
+    if len(starts):
+        u, v = col["u"], col["v"]
+        meas = np.isfinite(u) & np.isfinite(v)
+        unit01 = meas & (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
+        n_meas = np.add.reduceat(meas.astype(np.int64), starts)
+        n01 = np.add.reduceat(unit01.astype(np.int64), starts)
+        b = _first((n_meas > 3) & (n01 == n_meas))
+        if b is not None:
+            s = starts[b]
+            raise BadInput(p, f"u, v all lie in [0, 1]: looks normalised, expected pixels "
+                           f"({unit} {lines[s]})", track_id=str(tid[s]), line=int(lines[s]))
+    if "x" in col and "y" in col:
+        r = np.hypot(col["x"], col["y"])
+        r = r[np.isfinite(r)]
+        if r.size and float(np.median(r)) > 300.0:
+            notes.append(f"{p}: x, y (median distance {float(np.median(r)):.4g}) look like "
+                         "centimetres; expected metres")
+
+
+# ----------------------------------------------------------------------------------------------
+def _bucket(n: int) -> int:
+    return 1 << max(0, int(n - 1).bit_length())
+
+
+def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool = True,
+             fps: float | int | None = None) -> TrackBatch:
+    """Pad tracks onto their frame grid in one (B, T) batch.
+
+    A gap of up to `max_gap_frames` frames is filled with missing rows (NaN measurement,
+    present=True, t interpolated linearly); a longer gap stays one step of the real duration.
+    T = max(min_len, longest track), rounded up to a power of two when `bucket`, so that batches
+    of similar length share one compiled shape. The nominal step is 1/fps (`fps` or the
+    tracks'), else the median time per frame, else 1 s."""
+    if max_gap_frames < 1 or min_len < 1:
+        raise ValueError("max_gap_frames and min_len must be >= 1")
+    tid, frame, t = tracks.track_id, tracks.frame, tracks.t
+    n = len(frame)
+    starts = _starts(tid)
+    B = len(starts)
+    seg = np.cumsum(np.r_[False, tid[1:] != tid[:-1]]) if n else np.zeros(0, np.int64)
+    df = np.diff(frame)
+    same = seg[1:] == seg[:-1]
+    fps = fps or tracks.fps
+    if fps:
+        dt0 = 1.0 / fps
+    else:
+        steps = _steps(tid, frame, t)
+        dt0 = float(np.median(steps)) if steps.size else 1.0
+    ins = np.zeros(n, np.int64)
+    if n > 1:
+        ins[1:] = np.where(same & (df > 1) & (df <= max_gap_frames), df - 1, 0)
+    g = np.cumsum(ins + 1) - 1  # expanded index of each row over the whole file
+    pos = g - g[starts][seg] if n else np.zeros(0, np.int64)
+    ends = np.r_[starts[1:], n] - 1 if B else np.zeros(0, np.int64)
+    length = (pos[ends] + 1).astype(np.int32)
+    T = max(int(min_len), int(length.max()) if B else 1)
+    T = _bucket(T) if bucket else T
+
+    def grid(a: np.ndarray | None) -> np.ndarray | None:
+        if a is None:
+            return None
+        out = np.full((B, T), np.nan)
+        out[seg, pos] = a
+        return out
+
+    tg = grid(t)
+    # inserted rows: j = 1..m between row k-1 and row k, at pos[k] - m - 1 + j
+    kk = np.repeat(np.arange(n), ins)
+    if kk.size:
+        m = ins[kk]
+        j = np.arange(kk.size) - np.repeat(np.cumsum(ins) - ins, ins) + 1
+        tg[seg[kk], pos[kk] - m - 1 + j] = t[kk - 1] + (t[kk] - t[kk - 1]) * j / (m + 1)
+    idx = np.arange(T)
+    present = idx[None, :] < length[:, None]
+    if B:
+        t_last = tg[np.arange(B), length - 1]
+        tg = np.where(present, tg, t_last[:, None] + dt0 * (idx[None, :] - length[:, None] + 1))
+    dt = np.concatenate([np.full((B, 1), dt0), np.diff(tg, axis=1)], axis=1)
+    f32 = lambda a: None if a is None else a.astype(np.float32)
+    z = np.stack([grid(tracks.u), grid(tracks.v)], axis=-1)
+    xy = None
+    if tracks.x is not None and tracks.y is not None:
+        xy = f32(np.stack([grid(tracks.x), grid(tracks.y)], axis=-1))
+    labels = None if tracks.label is None else [str(s) for s in tracks.label[starts]]
+    return TrackBatch(ids=[str(s) for s in tid[starts]], z=f32(z), width=f32(grid(tracks.width_px)),
+                      intensity=f32(grid(tracks.intensity)), t=f32(tg), dt=f32(dt),
+                      present=present, length=length, labels=labels, xy=xy)
+
+
+# ----------------------------------------------------------------------------------------------
+# Config and JSON
+
+class _Token(Exception):
+    pass
+
+
+def _no_constant(token: str) -> Any:
+    raise _Token(token)
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in pairs:
+        if k in out:
+            raise _Token(f"duplicate key {k!r}")
+        out[k] = v
+    return out
+
+
+def read_config(path: PathLike) -> Config:
+    """Read a config JSON (partial configs take the defaults). Raises `BadInput` naming the file
+    and the line/col (syntax), the token (NaN, Infinity), the duplicate key or the config key."""
+    p = os.fspath(path)
+    if os.path.isdir(p):
+        raise BadInput(p, "is a directory, not a config file")
+    try:
+        with open(p, "rb") as f:
+            text = f.read().decode("utf-8-sig")
+    except FileNotFoundError:
+        raise BadInput(p, "no such file") from None
+    except UnicodeDecodeError:
+        raise BadInput(p, "not UTF-8 text") from None
+    except OSError as e:
+        raise BadInput(p, f"cannot read: {e.strerror}") from None
+    if not text.strip():
+        raise BadInput(p, "empty file (expected a JSON object)")
+    try:
+        d = json.loads(text, parse_constant=_no_constant, object_pairs_hook=_no_duplicates)
+    except json.JSONDecodeError as e:
+        raise BadInput(p, e.msg, line=e.lineno, column=e.colno) from None
+    except _Token as e:
+        what = str(e)
+        if what.startswith("duplicate"):
+            raise BadInput(p, f"{what} (each key may appear once per object)") from None
+        m = re.search(r'(?<![\w"])' + re.escape(what) + r'(?![\w"])', text)
+        loc = {}
+        if m:
+            line = text.count("\n", 0, m.start()) + 1
+            loc = {"line": line, "column": m.start() - text.rfind("\n", 0, m.start())}
+        raise BadInput(p, f"{what} is not valid JSON (give a number, or omit the key for the "
+                       "default)", **loc) from None
+    try:
+        return config_from_dict(d)
+    except ConfigError as e:
+        raise BadInput(p, str(e), key=e.key) from None
+
+
+def write_config(path: PathLike, cfg: Config) -> None:
+    """Write the full config (sections in `config_to_dict` order) as JSON, atomically."""
+    text = json.dumps(config_to_dict(cfg), indent=2, allow_nan=False)
+    with atomic_write(path, "w") as f:
+        f.write(text + "\n")
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def dumps_json(obj: Any, **kwargs: Any) -> str:
+    """`json.dumps` for `--json` outputs: NumPy values become Python ones and NaN/inf become
+    null, so the output is always valid JSON (`allow_nan=False`)."""
+    return json.dumps(_jsonable(obj), allow_nan=False, **kwargs)
+
+
+__all__: Sequence[str] = (
+    "BadInput", "Table", "Tracks", "TrackBatch", "atomic_path", "atomic_write", "check_writable",
+    "dumps_json", "read_config", "read_footprints", "read_table", "read_tracks", "to_batch",
+    "write_config", "write_table",
+)

@@ -1,0 +1,469 @@
+"""Tables (CSV, Parquet) read strictly and written atomically; the `BadInput` error.
+
+Reading is validation at the edge (RELIABILITY.md sections 3 and 6): CSV is parsed by pyarrow with
+every column as text and an `invalid_row_handler` that records the line of each row with the wrong
+number of fields (the first data row and a truncated last row included); numbers are converted
+here so that the first bad cell is reported with its line and column. Every output goes through
+`atomic_write`: a temp file beside the target that keeps the suffix, fsync, then `os.replace`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import errno
+import math
+import os
+import secrets
+from collections.abc import Iterator, Mapping, Sequence
+from typing import IO, Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.csv as pacsv
+
+
+PathLike = str | os.PathLike
+TABLE_SUFFIXES = (".csv", ".parquet")
+NULL_TOKENS = ("", "nan", "NaN", "NAN", "NA", "N/A", "null", "NULL", "None")
+KINDS = ("float", "int", "id", "str")
+
+
+class BadInput(ValueError):
+    """A user's file is unusable. `str()` is one line naming the file and where: the CSV `line`
+    (1-based, header = line 1) or Parquet `row` (1-based), the `column`, the `track_id` or the
+    config `key`. The command line prints it and exits 2."""
+
+    def __init__(self, path: PathLike, message: str, *, line: int | None = None,
+                 row: int | None = None, column: str | int | None = None,
+                 track_id: str | None = None, key: str | None = None):
+        self.path, self.message = os.fspath(path), message
+        self.line, self.row, self.column, self.track_id, self.key = line, row, column, track_id, key
+        super().__init__(self._text())
+
+    def _text(self) -> str:
+        head, msg = self.path, self.message
+        if self.track_id is not None:
+            msg = f"track {self.track_id}: {msg}"
+        elif self.line is not None or self.row is not None:
+            head += f" line {self.line}" if self.line is not None else f" row {self.row}"
+            if isinstance(self.column, int):
+                head += f" col {self.column}"
+            elif self.column is not None:
+                head += f", column '{self.column}'"
+        return f"{head}: {msg}".replace("\n", " ")
+
+
+# ----------------------------------------------------------------------------------------------
+# Atomic writes
+
+def _temp_name(path: str) -> str:
+    d, base = os.path.split(path)
+    stem, suffix = os.path.splitext(base)
+    return os.path.join(d, f".{stem}.{secrets.token_hex(4)}.tmp{suffix}")
+
+
+def _fsync(path: str) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _target(path: PathLike) -> str:
+    p = os.fspath(path)
+    return os.path.realpath(p) if os.path.islink(p) else p
+
+
+def _commit(tmp: str, final: str) -> None:
+    with contextlib.suppress(OSError):  # keep the permissions of the file being replaced
+        os.chmod(tmp, os.stat(final).st_mode & 0o7777)
+    os.replace(tmp, final)
+    with contextlib.suppress(OSError):  # best effort: not every filesystem allows it
+        _fsync(os.path.dirname(final) or ".")
+
+
+@contextlib.contextmanager
+def atomic_write(path: PathLike, mode: str = "wb") -> Iterator[IO[Any]]:
+    """Open a temp file beside `path` (``.<stem>.<random>.tmp<suffix>``) for writing; on success
+    flush, fsync and rename it over `path`; on any exception (Ctrl-C included) remove it and
+    re-raise, leaving the previous `path` untouched. Text modes are UTF-8 with ``newline=""``."""
+    if not mode.startswith(("w", "x")) or "+" in mode:
+        raise ValueError(f"atomic_write needs a write mode, got {mode!r}")
+    final = _target(path)
+    f, tmp = _open_temp(final, mode)
+    try:
+        with f:
+            yield f
+            f.flush()
+            os.fsync(f.fileno())
+        _commit(tmp, final)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+@contextlib.contextmanager
+def atomic_path(path: PathLike) -> Iterator[str]:
+    """Yield a temp PATH beside `path` that keeps its suffix, for writers that take a file name
+    (cv2.VideoWriter, pyarrow.parquet.write_table, savefig); rename it over `path` on success,
+    remove it on failure. A writer that created no file is an error (OSError ENOENT)."""
+    final = _target(path)
+    check_writable(final)
+    tmp = _temp_name(final)
+    try:
+        yield tmp
+        if not os.path.isfile(tmp):
+            raise FileNotFoundError(errno.ENOENT, "the writer created no file", tmp)
+        _fsync(tmp)
+        _commit(tmp, final)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def check_writable(path: PathLike) -> None:
+    """Fail fast (before any work) if `path` cannot be written: its directory is missing or not
+    writable, or `path` is a directory. Probes with a real temp file, so it holds for root too."""
+    f, probe = _open_temp(os.fspath(path), "wb")
+    f.close()
+    os.unlink(probe)
+
+
+def _open_temp(final: str, mode: str) -> tuple[IO[Any], str]:
+    """Create the temp file for `final` exclusively (permissions from the umask, as for a plain
+    open); a missing or unwritable directory is a `BadInput` naming `final`."""
+    d = os.path.dirname(os.path.abspath(final))
+    if os.path.isdir(final):
+        raise BadInput(final, "is a directory, not an output file")
+    if not os.path.isdir(d):
+        raise BadInput(final, f"output directory '{d}' does not exist")
+    text = "b" not in mode
+    while True:
+        tmp = _temp_name(final)
+        try:
+            return open(tmp, mode.replace("w", "x"), encoding="utf-8" if text else None,
+                        newline="" if text else None), tmp
+        except FileExistsError:
+            continue
+        except OSError as e:
+            raise BadInput(final, f"cannot write in '{d}': {e.strerror or e}") from None
+
+
+# ----------------------------------------------------------------------------------------------
+# Reading
+
+class Table(dict):
+    """Columns (name -> NumPy array) plus `lines`: the source line (CSV, header = 1) or row
+    (Parquet, 1-based) of each row, and `unit` ("line" or "row")."""
+
+    def __init__(self, cols: Mapping[str, np.ndarray], lines: np.ndarray, unit: str):
+        super().__init__(cols)
+        self.lines, self.unit = lines, unit
+
+    def where(self, path: PathLike, i: int, column: str | None, message: str) -> BadInput:
+        """A BadInput for row index `i` of this table."""
+        n = int(self.lines[i])
+        return BadInput(path, message, column=column,
+                        **({"line": n} if self.unit == "line" else {"row": n}))
+
+
+def _table_suffix(p: str) -> str:
+    suffix = os.path.splitext(p)[1].lower()
+    if suffix not in TABLE_SUFFIXES:
+        raise BadInput(p, f"unsupported table format '{suffix or '(no extension)'}' "
+                       "(use .csv or .parquet)")
+    return suffix
+
+
+def _check_path(path: PathLike) -> str:
+    p = os.fspath(path)
+    suffix = _table_suffix(p)
+    if os.path.isdir(p):
+        raise BadInput(p, "is a directory, not a table file")
+    if not os.path.exists(p):
+        raise BadInput(p, "no such file")
+    return suffix
+
+
+def read_table(path: PathLike, required: Sequence[str] = (), optional: Sequence[str] = (), *,
+               types: Mapping[str, str] | None = None, not_empty: Sequence[str] = ()) -> Table:
+    """Read a `.csv` or `.parquet` table strictly; raise `BadInput` naming the file and location.
+
+    `types` maps a column to "float" (empty cell / null -> NaN), "int", "id" (integer or text,
+    returned as text) or "str"; columns without a type are inferred (CSV: int, then float, else
+    text). Columns in `not_empty` must have a value in every row. With `required` or `optional`
+    given, only those columns are returned (unknown extra columns are ignored)."""
+    p, suffix = os.fspath(path), _check_path(path)
+    types = dict(types or {})
+    if not set(types.values()) <= set(KINDS):
+        raise ValueError(f"unknown column type in {types} (use {KINDS})")
+    try:
+        if suffix == ".csv":
+            return _read_csv(p, tuple(required), tuple(optional), types, set(not_empty))
+        return _read_parquet(p, tuple(required), tuple(optional), types, set(not_empty))
+    except PermissionError as e:
+        raise BadInput(p, f"cannot read: {e.strerror}") from None
+
+
+def _select(p: str, names: list[str], required, optional) -> list[str]:
+    missing = [c for c in required if c not in names]
+    if missing:
+        found = ", ".join(names) if names else "no columns"
+        hint = ""
+        lower = {n.lower(): n for n in names}
+        if missing[0].lower() in lower:
+            hint = f"; '{lower[missing[0].lower()]}' differs only in case"
+        raise BadInput(p, f"missing column '{missing[0]}' (found: {found}){hint}")
+    if not required and not optional:
+        return list(names)
+    return [c for c in (*required, *optional) if c in names]
+
+
+def _csv_header(p: str) -> list[str]:
+    with open(p, "rb") as f:
+        head = f.read(1 << 16)
+    text = head.decode("utf-8-sig", errors="replace")
+    if not text.strip():
+        raise BadInput(p, "empty file (no header)")
+    first = text.splitlines()[0]
+    if not first.strip():
+        raise BadInput(p, "the header line is empty (the column names must be on line 1)",
+                       line=1)
+    raw = next(csv.reader([first]))
+    if len(raw) == 1:
+        for sep, word in ((";", "';'"), ("\t", "tab"), ("|", "'|'")):
+            if sep in raw[0]:
+                raise BadInput(p, f"1 column named {raw[0][:60]!r}; the file looks "
+                               f"{word}-separated (use ',')", line=1)
+    seen: set[str] = set()
+    for name in raw:
+        if name.strip() in seen:
+            raise BadInput(p, f"column '{name.strip()}' appears twice in the header", line=1)
+        seen.add(name.strip())
+    return raw
+
+
+def _read_csv(p: str, required, optional, types, not_empty) -> Table:
+    raw = _csv_header(p)
+    names = [n.strip() for n in raw]
+    keep = _select(p, names, required, optional)
+    bad: list[tuple[int, int, int]] = []
+
+    def on_bad_row(row) -> str:
+        bad.append((row.number, row.expected_columns, row.actual_columns))
+        return "skip"
+
+    try:
+        tbl = pacsv.read_csv(
+            p, read_options=pacsv.ReadOptions(use_threads=False),
+            parse_options=pacsv.ParseOptions(invalid_row_handler=on_bad_row,
+                                             ignore_empty_lines=False),
+            convert_options=pacsv.ConvertOptions(
+                column_types={n: pa.string() for n in raw}, strings_can_be_null=False,
+                quoted_strings_can_be_null=False))
+    except pa.ArrowInvalid as e:
+        msg = str(e)
+        if "cannot infer number of columns" in msg or "Empty CSV" in msg:  # header, no newline
+            tbl = pa.table({n: pa.array([], pa.string()) for n in raw})
+        elif "UTF8" in msg:
+            raise BadInput(p, f"not UTF-8 text ({msg.splitlines()[0]})") from None
+        else:
+            raise BadInput(p, f"cannot parse as CSV: {msg.splitlines()[0]}") from None
+    total = tbl.num_rows + len(bad)
+    good = np.ones(total, bool)
+    good[[b[0] - 2 for b in bad]] = False
+    lines = np.arange(2, 2 + total, dtype=np.int64)[good]
+    cols = {n: tbl.column(r) for n, r in zip(names, raw, strict=True)}
+    blank = np.ones(tbl.num_rows, bool)  # blank lines read as rows of empty cells: drop them
+    for c in cols.values():
+        blank &= np.asarray(pc.equal(c, "").to_numpy(zero_copy_only=False), bool)
+    if bad:
+        number, expected, actual = bad[0]
+        last = int(lines[~blank].max()) if (~blank).any() else 1
+        hint = " (file truncated?)" if actual < expected and number > last else ""
+        more = ""
+        if len(bad) > 1:
+            shown = ", ".join(str(b[0]) for b in bad[1:4]) + (", ..." if len(bad) > 4 else "")
+            more = f"; {len(bad)} such rows, also line(s) {shown}"
+        raise BadInput(p, f"expected {expected} fields, saw {actual}{hint}{more}", line=number)
+    if blank.any():
+        cols = {n: c.filter(pa.array(~blank)) for n, c in cols.items()}
+        lines = lines[~blank]
+    table = Table({}, lines, "line")
+    results = {n: _csv_column(cols[n], n, types.get(n), n in not_empty) for n in keep}
+    _raise_first(p, table, results)
+    table.update(results)
+    return table
+
+
+def _raise_first(p: str, table: Table, results: dict) -> None:
+    """Raise for the earliest bad cell (by row, then column order) among the converted columns."""
+    errors = [(v[0], i, n, v[1]) for i, (n, v) in enumerate(results.items())
+              if isinstance(v, tuple)]
+    if errors:
+        r, _, n, msg = min(errors)
+        raise table.where(p, r, n, msg)
+
+
+def _first(mask: np.ndarray) -> int | None:
+    idx = np.flatnonzero(mask)
+    return int(idx[0]) if idx.size else None
+
+
+def _csv_column(col: pa.ChunkedArray, name: str, kind: str | None, required: bool):
+    """Convert one text column. Returns an array, or (row index, message) for the first bad cell."""
+    text = pc.utf8_trim_whitespace(col.combine_chunks())
+    null_mask = pc.is_in(text, value_set=pa.array(NULL_TOKENS))
+    null = np.asarray(null_mask.to_numpy(zero_copy_only=False), bool)
+    clean = pc.if_else(null_mask, pa.scalar(None, pa.string()), text)  # null tokens -> null
+    if kind is None:
+        kind = _infer(clean, null)
+    if required or kind == "int":
+        i = _first(null)
+        if i is not None:
+            s = text[i].as_py()
+            return i, f"{'empty cell' if s == '' else repr(s)}: a value is required in every row"
+    if kind in ("id", "str"):
+        return np.asarray(text.to_numpy(zero_copy_only=False), dtype=object)
+    target = pa.int64() if kind == "int" else pa.float64()
+    try:
+        out = pc.cast(clean, target).to_numpy(zero_copy_only=False)
+        return out.astype(np.int64 if kind == "int" else np.float64)
+    except pa.ArrowInvalid:
+        return _slow_numbers(np.asarray(text.to_numpy(zero_copy_only=False), dtype=object),
+                             null, kind)
+
+
+def _infer(clean: pa.Array, null: np.ndarray) -> str:
+    for kind, target in (("int", pa.int64()), ("float", pa.float64())):
+        try:
+            if not (kind == "int" and null.any()):
+                pc.cast(clean, target)
+                return kind
+        except pa.ArrowInvalid:
+            pass
+    return "str"
+
+
+def _slow_numbers(values: np.ndarray, null: np.ndarray, kind: str):
+    out = np.empty(len(values), np.int64 if kind == "int" else np.float64)
+    for i, (s, isnull) in enumerate(zip(values, null, strict=True)):
+        if isnull:
+            out[i] = np.nan
+            continue
+        try:
+            if "_" in s:
+                raise ValueError
+            x = float(s)
+        except ValueError:
+            return i, f"{s!r} is not a number"
+        if kind == "int":
+            if not (math.isfinite(x) and x == int(x)):
+                return i, f"{s!r} is not an integer"
+            x = int(x)
+        out[i] = x
+    return out
+
+
+def _read_parquet(p: str, required, optional, types, not_empty) -> Table:
+    import pyarrow.parquet as pq
+
+    try:
+        pf = pq.ParquetFile(p)
+        names = list(pf.schema_arrow.names)
+        keep = _select(p, names, required, optional)
+        tbl = pf.read(columns=keep)
+    except (pa.ArrowException, OSError) as e:
+        if isinstance(e, PermissionError):
+            raise
+        raise BadInput(p, "not a valid Parquet file (truncated?)") from None
+    table = Table({}, np.arange(1, tbl.num_rows + 1, dtype=np.int64), "row")
+    results = {}
+    for n in keep:
+        col = tbl.column(n).combine_chunks()
+        if pa.types.is_dictionary(col.type):
+            col = col.dictionary_decode()
+        results[n] = _parquet_column(p, col, n, types.get(n), n in not_empty)
+    _raise_first(p, table, results)
+    table.update(results)
+    return table
+
+
+def _parquet_column(p: str, col: pa.Array, name: str, kind: str | None, required: bool):
+    t = col.type
+    is_text = pa.types.is_string(t) or pa.types.is_large_string(t) or str(t) == "string_view"
+    is_int = pa.types.is_integer(t)
+    is_num = is_int or pa.types.is_floating(t) or pa.types.is_decimal(t)
+    if kind is None:
+        if not (is_num or is_text):  # e.g. bool or timestamp: no conversion asked for
+            return col.to_numpy(zero_copy_only=False)
+        kind = "int" if is_int and not col.null_count else "float" if is_num else "str"
+    ok = {"float": is_num, "int": is_num, "id": is_num or is_text, "str": is_text}[kind]
+    if not ok:
+        expected = {"float": "float", "int": "integer", "id": "integer or string",
+                    "str": "string"}[kind]
+        raise BadInput(p, f"column '{name}' has type {t}, expected {expected}")
+    null = np.asarray(col.is_null().to_numpy(zero_copy_only=False), bool)
+    if is_text:
+        values = np.asarray(col.fill_null("").to_numpy(zero_copy_only=False), dtype=object)
+        values = np.asarray([s.strip() for s in values], dtype=object)
+        null |= values == ""
+    else:
+        values = col.cast(pa.float64()).to_numpy(zero_copy_only=False)
+        null |= np.isnan(values)
+    if (required or kind in ("int", "id")) and null.any():
+        return _first(null), "empty cell: a value is required in every row"
+    if kind == "str":
+        return values
+    if kind == "float":
+        return values.astype(np.float64)
+    if is_text:  # id given as text
+        return values
+    if is_int:
+        ints = col.cast(pa.int64()).to_numpy(zero_copy_only=False)
+    else:
+        frac = ~np.isfinite(values) | (values != np.round(values))
+        if frac.any():
+            i = _first(frac)
+            return i, f"{float(values[i])!r} is not an integer"
+        ints = values.astype(np.int64)
+    return ints if kind == "int" else np.asarray([str(v) for v in ints.tolist()], dtype=object)
+
+
+# ----------------------------------------------------------------------------------------------
+# Writing
+
+def _arrow_column(name: str, a: Any) -> pa.Array:
+    a = np.asarray(a)
+    if a.ndim != 1:
+        raise ValueError(f"column {name!r} must be one-dimensional, got shape {a.shape}")
+    if a.dtype.kind in "US":
+        return pa.array(a.astype(str).tolist(), pa.string())
+    return pa.array(a, from_pandas=True)  # NaN (float or object) -> null
+
+
+def write_table(path: PathLike, columns: Mapping[str, Any], order: Sequence[str]) -> None:
+    """Write `columns` in `order` as CSV (UTF-8, header, NaN as an empty cell) or Parquet (NaN as
+    null), chosen by the extension, atomically."""
+    p = os.fspath(path)
+    suffix = _table_suffix(p)
+    missing = [n for n in order if n not in columns]
+    if missing:
+        raise ValueError(f"write_table: no column {missing[0]!r} to write")
+    arrays = [_arrow_column(n, columns[n]) for n in order]
+    if len({len(a) for a in arrays}) > 1:
+        raise ValueError(f"write_table: columns differ in length: "
+                         f"{ {n: len(a) for n, a in zip(order, arrays, strict=True)} }")
+    table = pa.Table.from_arrays(arrays, names=list(order))
+    with atomic_write(p, "wb") as f:
+        if suffix == ".csv":
+            pacsv.write_csv(table, f, pacsv.WriteOptions(quoting_style="needed"))
+        else:
+            import pyarrow.parquet as pq
+
+            pq.write_table(table, f)

@@ -1,0 +1,132 @@
+"""`rhythmjax simulate` + `rhythmjax classify`, in-process, and their bad-input behaviour."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from rhythmjax.cli import main
+from rhythmjax.io import read_table
+
+
+ORDER = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "label", "x", "y"]
+
+
+@pytest.fixture(scope="module")
+def tracks_csv(tmp_path_factory):
+    path = tmp_path_factory.mktemp("cli") / "tracks.csv"
+    assert main(["simulate", "-o", str(path), "--seed", "7", "--walkers", "16", "--bicycles",
+                 "4", "--dogs", "4", "--cars", "2", "--short", "2", "--quiet"]) == 0
+    return path
+
+
+def test_classify_reproduces_the_generator_labels(tracks_csv, tmp_path, capsys):
+    out = tmp_path / "verdicts.csv"
+    assert main(["classify", str(tracks_csv), "-o", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    v = read_table(out, required=["track_id", "verdict", "reason", "pace_hz", "n_samples",
+                                  "label"])
+    verdict, reason, label = (np.asarray(v[k]).astype(str) for k in ("verdict", "reason",
+                                                                       "label"))
+    tracks = read_table(tracks_csv, required=["track_id", "frame"])
+    ids, counts = np.unique(np.asarray(tracks["track_id"]).astype(str), return_counts=True)
+    n_frames = dict(zip(ids, counts))
+    long_enough = np.array([n_frames[i] >= 64 for i in np.asarray(v["track_id"]).astype(str)])
+    # every track with at least N frames is judged, every shorter one is 'too-short'
+    assert np.all((verdict == "unclassified") == ~long_enough)
+    assert np.all(reason[~long_enough] == "too-short")
+    judged = long_enough
+    walkers = label == "pedestrian"
+    assert np.all(verdict[judged & walkers] == "pedestrian")
+    assert np.all(verdict[judged & ~walkers] == "non-pedestrian")
+    assert summary["n_tracks"] == len(verdict) == 28
+    assert summary["labels"]["walkers_judged_pedestrian"] == np.sum(judged & walkers)
+    pace = np.asarray(v["pace_hz"], float)
+    assert np.all((pace[judged & walkers] > 1.5) & (pace[judged & walkers] < 2.7))
+
+
+def test_classify_parquet_equals_csv(tracks_csv, tmp_path):
+    pq = tmp_path / "tracks.parquet"
+    cols = read_table(tracks_csv, required=ORDER)
+    from rhythmjax.io import write_table
+
+    write_table(pq, cols, ORDER)
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    assert main(["classify", str(tracks_csv), "-o", str(a), "-q"]) == 0
+    assert main(["classify", str(pq), "-o", str(b), "-q"]) == 0
+    assert a.read_bytes() == b.read_bytes()
+
+
+def _bad(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+HEADER = "track_id,frame,t,u,v,width_px,intensity\n"
+
+
+@pytest.mark.parametrize(
+    "name, text, pattern",
+    [
+        ("missing.csv", None, r"missing\.csv: no such file"),
+        ("empty.csv", "", r"empty\.csv: empty file"),
+        ("nocol.csv", "track_id,frame,t,u,v,width_px\n1,0,0,1,1,1\n",
+         r"nocol\.csv: missing column 'intensity'"),
+        ("text.csv", HEADER + "1,0,0,10,10,5,1\n1,1,0.07,1O2,10,5,1\n",
+         r"text\.csv line 3, column 'u': '1O2' is not a number"),
+        ("nan_t.csv", HEADER + "1,0,0,10,10,5,1\n1,1,,10,10,5,1\n", r"nan_t\.csv line 3.*'t'"),
+        ("dec_t.csv", HEADER + "1,0,0.5,10,10,5,1\n1,1,0.2,10,10,5,1\n",
+         r"dec_t\.csv.*track 1: t decreases at frame 1"),
+        ("dup.csv", HEADER + "1,0,0,10,10,5,1\n1,0,0,10,10,5,1\n",
+         r"dup\.csv.*track 1: frame 0 appears twice \(lines 2 and 3\)"),
+        ("data.xlsx", "x", r"data\.xlsx.*unsupported table format '\.xlsx'"),
+    ],
+)
+def test_bad_tracks_exit_2_with_one_line(tmp_path, capsys, name, text, pattern):
+    path = tmp_path / name if text is None else _bad(tmp_path, name, text)
+    out = tmp_path / "v.csv"
+    out.write_text("previous\n")
+    assert main(["classify", str(path), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "Traceback" not in err
+    assert pytest.importorskip("re").search(pattern, err), err
+    assert out.read_text() == "previous\n"  # nothing half-written
+
+
+def test_one_row_track_is_unclassified_not_an_error(tmp_path, capsys):
+    p = _bad(tmp_path, "one.csv", HEADER + "7,0,0,250,300,30,100\n")
+    out = tmp_path / "v.csv"
+    assert main(["classify", str(p), "-o", str(out), "-q"]) == 0
+    v = read_table(out, required=["track_id", "verdict", "reason"])
+    assert list(np.asarray(v["reason"]).astype(str)) == ["too-short"]
+
+
+@pytest.mark.parametrize(
+    "config, pattern",
+    [
+        ('{"camera": {"theta_degs": 15}}', r"cfg\.json.*theta_degs.*did you mean 'theta_deg'"),
+        ('{"noise": {"r_std_px": [1, -2]}}', r"cfg\.json.*noise\.r_std_px"),
+        ('{"camera": {"h_m": 1,}}', r"cfg\.json line 1 col"),
+    ],
+)
+def test_bad_config_exit_2(tracks_csv, tmp_path, capsys, config, pattern):
+    cfg = _bad(tmp_path, "cfg.json", config)
+    assert main(["classify", str(tracks_csv), "--config", str(cfg), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert pytest.importorskip("re").search(pattern, err), err
+
+
+def test_unwritable_output_fails_before_work(tracks_csv, tmp_path, capsys):
+    target = tmp_path / "no_such_dir" / "v.csv"
+    assert main(["classify", str(tracks_csv), "-o", str(target), "-q"]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert not os.path.exists(target)
+
+
+def test_config_prints_valid_json_defaults(capsys):
+    assert main(["config"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["walking"]["pace_mean_hz"] == pytest.approx(2.05)
+    assert d["thresholds"]["ar_order"] == 15
