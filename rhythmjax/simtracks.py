@@ -9,8 +9,9 @@ Rhythm signal model (window B of Sec. 4.1, sum of absolute frame differences in 
   (a component at F/2) and noise; pace F ~ N(2.05, 0.183) Hz, stride T ~ N(0.72, 0.09) m
   (Table 1), speed F*T;
 - bicycle: 2.5-3.5 m/s along the road (faster ones would cross the range in fewer than N
-  frames and are `too-short`), the pedalling legs give a weak modulation at twice the cadence (0.9-1.5
-  rev/s), so its pace can look human while its stride (speed / F, over 1.4 m) cannot;
+  frames and are `too-short`); the pedalling legs give a weak modulation at twice the
+  cadence (0.9-1.5 rev/s), so its pace can look human while its stride (speed / F, over
+  1.4 m) cannot;
 - dog: trot at 3-5 Hz with 0.2-0.35 m steps;
 - car: 2-3.5 m/s, no rhythm, just noise on a constant.
 Every intensity scales with the window area (W x W/5 px, W the image width of a 0.5 m walker).

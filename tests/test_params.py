@@ -64,7 +64,8 @@ def test_params_are_pytrees_with_array_leaves():
 @pytest.mark.parametrize(
     "d, match",
     [
-        ({"camera": {"theta_degs": 15}}, r"camera\.theta_degs: unknown key \(did you mean 'theta_deg'\?\)"),
+        ({"camera": {"theta_degs": 15}},
+         r"camera\.theta_degs: unknown key \(did you mean 'theta_deg'\?\)"),
         ({"camra": {}}, r"camra: unknown section \(did you mean 'camera'\?\)"),
         ({"camera": {"h_m": -1}}, r"camera\.h_m: must be > 0"),
         ({"camera": {"theta_deg": 0.26}}, r"looks like radians"),
