@@ -1,0 +1,249 @@
+"""Moving-object detection and the rhythm signal, Sec. 2 and 4.1 of the rhythm paper (NumPy/OpenCV).
+
+Pipeline per frame (PAPERS.md, "Sobel"):
+
+1. D = |I(k) - I(k-1)|, the absolute difference of successive 8-bit grey frames.
+2. In parallel: the thresholded difference T = [D > diff_threshold], and the vertical-edge map
+   E = [|Sobel_x(D)| > edge_threshold]. The Sobel d/dx operator is applied to the DIFFERENCE image
+   (moving legs are vertical edges), not to the frame.
+3. The two binary maps are ADDED: motion M = T + E, values 0, 1, 2 (uint8).
+4. Vertical and horizontal projections of M, sliced at a fraction of their maximum, give the bottom
+   point (u_p = centre of the horizontal extent, v_p = lowest row) and the image width wid_IMG,
+   inside a small window centred on the predicted foot point (`detect_in_window`), or per connected
+   region for new objects elsewhere (`find_objects`).
+
+Image coordinates are px: u = column index, v = row index (downwards), pixel centres at integers.
+Biases, measured on synthetic frames (tests/test_detect.py): the extent of M is the union of the
+object's two positions, so wid_IMG exceeds the object's width by its displacement per frame |du| and
+u_p lags by du/2 (as in the paper). The 3x3 Sobel stencil spreads E one px beyond the thresholded
+difference at a vertical boundary (with the default edge_threshold = 4 diff_threshold a step that
+passes the difference threshold also fires the edge one px outside it), so wid_IMG is reported as
+the extent less `SOBEL_HALO_PX` on each side; v_p may sit up to 1 px below the drawn bottom.
+Everything returns plain NumPy / Python values; only this module and `video` import OpenCV
+(STYLE R11).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cv2
+import jax
+import numpy as np
+
+from .camera import ground_from_image, image_width
+from .params import Camera, WidthModel
+
+
+Box = tuple[int, int, int, int]  # x0, y0, width, height in px (OpenCV's convention)
+Number = float | int | np.floating | np.integer  # a px coordinate or size
+SOBEL_HALO_PX = 1  # the 3x3 Sobel stencil spreads E this far beyond the thresholded difference
+
+
+@dataclass(frozen=True)
+class Detection:
+    """A detected object: foot point (u, v) px (u = centre of the horizontal extent, v = lowest
+    row), image width wid_IMG px, bounding box (x0, y0, w, h) px of the sliced extent, and area (the
+    number of non-zero motion pixels in the box)."""
+
+    u: float
+    v: float
+    width: float
+    box: Box
+    area: int
+
+
+def frame_difference(prev: np.ndarray, cur: np.ndarray) -> np.ndarray:
+    """|cur - prev| of two (H, W) uint8 frames, uint8."""
+    if prev.shape != cur.shape:
+        raise ValueError(f"frame shapes differ: {prev.shape} and {cur.shape}")
+    return cv2.absdiff(prev, cur)
+
+
+def motion_from_diff(absdiff: np.ndarray, *, diff_threshold: Number,
+                     edge_threshold: Number | None = None) -> np.ndarray:
+    """Motion image M = [D > diff_threshold] + [|Sobel_x(D)| > edge_threshold], uint8 in {0, 1, 2}.
+
+    Sobel_x is the 3x3 d/dx kernel [[-1, 0, 1], [-2, 0, 2], [-1, 0, 1]] applied to the difference
+    image D (borders reflected without repeating the edge pixel, OpenCV's BORDER_REFLECT_101).
+    `edge_threshold` (grey levels of the Sobel response) defaults to 4 * diff_threshold, the
+    response to a step of height diff_threshold; it must be below 255."""
+    te = 4.0 * diff_threshold if edge_threshold is None else float(edge_threshold)
+    if not 0 <= te < 255 or not 0 <= diff_threshold < 255:
+        raise ValueError(f"thresholds must lie in [0, 255): diff {diff_threshold}, edge {te}")
+    # the difference, thresholded:
+    _, thr = cv2.threshold(absdiff, float(diff_threshold), 1, cv2.THRESH_BINARY)
+    sobel = cv2.convertScaleAbs(cv2.Sobel(absdiff, cv2.CV_16S, 1, 0, ksize=3))  # |d/dx D|, sat. 255
+    _, edges = cv2.threshold(sobel, te, 1, cv2.THRESH_BINARY)  # vertical edges of the difference
+    return cv2.add(thr, edges)  # the two maps added (Sec. 2: "in parallel", then added)
+
+
+def motion_image(prev: np.ndarray, cur: np.ndarray, *, diff_threshold: Number,
+                 edge_threshold: Number | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(M, D): the motion image of `motion_from_diff` and the absolute difference D (uint8), for
+    two successive (H, W) uint8 grey frames. D is what `window_b_intensity` sums."""
+    d = frame_difference(prev, cur)
+    return motion_from_diff(d, diff_threshold=diff_threshold, edge_threshold=edge_threshold), d
+
+
+def _extent(p: np.ndarray, fraction: Number) -> tuple[int, int] | None:
+    """First and last index where the projection p reaches fraction * max(p); None if p is 0."""
+    m = p.max() if p.size else 0
+    if m <= 0:
+        return None
+    idx = np.flatnonzero(p >= max(fraction * m, 1e-9))
+    return int(idx[0]), int(idx[-1])
+
+
+def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: int,
+                  halo: int) -> Detection | None:
+    """Projections of the motion crop `m` (top-left at (x0, y0) px) sliced into a Detection."""
+    cols = m.sum(axis=0, dtype=np.int64)  # vertical projection: one value per column
+    ext = _extent(cols, fraction)
+    if ext is None:
+        return None
+    c0, c1 = ext
+    rows = m[:, c0:c1 + 1].sum(axis=1, dtype=np.int64)  # horizontal projection within the extent
+    r0, r1 = _extent(rows, fraction) or (0, 0)  # never None: the extent holds motion
+    area = int(np.count_nonzero(m[r0:r1 + 1, c0:c1 + 1]))
+    if area < min_area:
+        return None
+    width = float(max(c1 - c0 + 1 - 2 * halo, 1))
+    return Detection(u=x0 + 0.5 * (c0 + c1), v=float(y0 + r1), width=width,
+                     box=(x0 + c0, y0 + r0, c1 - c0 + 1, r1 - r0 + 1), area=area)
+
+
+def _window(shape: tuple[int, ...], cu: float, cv: float, w: int, h: int) -> tuple[int, int, int,
+                                                                                   int]:
+    x0 = math.floor(cu - w / 2 + 0.5)
+    y0 = math.floor(cv - h / 2 + 0.5)
+    return max(x0, 0), max(y0, 0), min(x0 + w, shape[1]), min(y0 + h, shape[0])
+
+
+def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarray,
+                     window_size: Number | Sequence[Number] | np.ndarray, *,
+                     fraction: Number = 0.3, min_area: int = 10, halo: int = SOBEL_HALO_PX
+                     ) -> Detection | None:
+    """Detect the object in a window centred on the predicted foot point `center_uv` = (u, v) px.
+
+    `window_size` is (width, height) px or one number for a square; the window is clipped at the
+    image borders. The vertical projection (column sums of M) is sliced at `fraction` of its
+    maximum: the first and last columns reaching it give the horizontal extent, u_p its centre and
+    wid_IMG its length. The horizontal projection (row sums within that extent), sliced the same
+    way, gives v_p = its lowest row. None if the window is empty, outside the image, or holds
+    fewer than `min_area` motion pixels in the sliced box (no measurement). wid_IMG is the
+    extent less `halo` px on each side (see the module docstring; 0 to keep the raw extent)."""
+    u, v = (float(c) for c in center_uv)
+    if not (math.isfinite(u) and math.isfinite(v)):
+        return None
+    w, h = ((int(window_size),) * 2 if np.ndim(window_size) == 0
+            else (int(window_size[0]), int(window_size[1])))
+    x0, y0, x1, y1 = _window(motion.shape, u, v, w, h)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return _bottom_point(motion[y0:y1, x0:x1], x0, y0, fraction, min_area, halo)
+
+
+def _overlap(a: Box, b: Box) -> int:
+    ox = min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0])
+    oy = min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1])
+    return max(ox, 0) * max(oy, 0)
+
+
+def find_objects(motion: np.ndarray, *, min_area: int, exclude_boxes: Sequence[Box] = (),
+                 dilate_px: int = 3, fraction: Number = 0.3, max_objects: int = 64,
+                 halo: int = SOBEL_HALO_PX) -> list[Detection]:
+    """New objects anywhere in M: connected regions (8-connected) of the motion mask dilated by a
+    (2 dilate_px + 1)^2 square (to join legs and fragmented edges), each reduced to a Detection by
+    the projections of its own motion pixels. Regions with fewer than `min_area` motion pixels are
+    dropped, and so are regions whose foot point lies in a box of `exclude_boxes` (x0, y0, w, h) or
+    half of whose box overlaps one (objects already tracked). At most `max_objects`, largest first
+    (bounded work on a pathological frame, RELIABILITY item 16)."""
+    mask = (motion > 0).astype(np.uint8)
+    if dilate_px > 0:
+        k = np.ones((2 * dilate_px + 1, 2 * dilate_px + 1), np.uint8)
+        mask = cv2.dilate(mask, k)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    order = np.argsort(-stats[1:, cv2.CC_STAT_AREA]) + 1
+    out: list[Detection] = []
+    for k in order:
+        x, y, w, h, a = (int(s) for s in stats[k])
+        if a < min_area:
+            break  # sorted by (dilated) area, which bounds the motion area
+        crop = np.where(labels[y:y + h, x:x + w] == k, motion[y:y + h, x:x + w], 0)
+        det = _bottom_point(crop, x, y, fraction, min_area, halo)
+        if det is None or any(_inside(det, b) or 2 * _overlap(det.box, b) >= det.box[2] * det.box[3]
+                              for b in exclude_boxes):
+            continue
+        out.append(det)
+        if len(out) >= max_objects:
+            break
+    return out
+
+
+def _inside(det: Detection, b: Box) -> bool:
+    return b[0] <= det.u < b[0] + b[2] and b[1] <= det.v < b[1] + b[3]
+
+
+def window_b_rect(shape: tuple[int, ...], u_p: Number, v_p: Number, W: Number
+                  ) -> tuple[int, int, int, int]:
+    """Window B as (x0, y0, x1, y1) px, half-open and clipped to an image of `shape` (H, W).
+
+    Wb = max(1, round(W)) columns centred on u_p: x0 = floor(u_p - Wb / 2 + 0.5), x1 = x0 + Wb.
+    Hb = max(1, round(W / 5)) rows ending AT the foot row v_p (included), i.e. just above and
+    including the object's bottom: y1 = floor(v_p + 0.5) + 1, y0 = y1 - Hb.
+    Here round(x) = floor(x + 0.5)."""
+    wb = max(1, math.floor(W + 0.5))
+    hb = max(1, math.floor(W / 5 + 0.5))
+    x0 = math.floor(u_p - wb / 2 + 0.5)
+    y1 = math.floor(v_p + 0.5) + 1
+    return max(x0, 0), max(y1 - hb, 0), min(x0 + wb, shape[1]), min(y1, shape[0])
+
+
+def window_b_intensity(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number, *,
+                       mean: bool = False) -> float:
+    """The rhythm signal I(k) (Sec. 4.1): the sum of the absolute difference D (grey levels) over
+    window B (`window_b_rect`: W px wide, W/5 px high, bottom row at the foot row v_p), clipped at
+    the image borders. `mean=True` divides by the number of pixels of the clipped window (grey
+    levels per pixel). NaN if u_p, v_p or W is not finite or W <= 0; 0 if B lies outside the
+    image."""
+    if not (math.isfinite(u_p) and math.isfinite(v_p) and math.isfinite(W)) or W <= 0:
+        return math.nan
+    x0, y0, x1, y1 = window_b_rect(absdiff.shape, u_p, v_p, W)
+    if x1 <= x0 or y1 <= y0:
+        return 0.0
+    s = float(cv2.sumElems(absdiff[y0:y1, x0:x1])[0])
+    return s / ((x1 - x0) * (y1 - y0)) if mean else s
+
+
+@jax.jit
+def _walker_width(camera: Camera, width_m, u, v):
+    _, y, ok = ground_from_image(camera, u, v)
+    return image_width(camera, width_m, y), ok
+
+
+def walker_width_px(camera: Camera, width_model: WidthModel, u: Number | np.ndarray,
+                    v: Number | np.ndarray) -> float | np.ndarray:
+    """W (px): the image width of the mean walker width `width_model.mean` (m) at the ground
+    distance of the foot point (u, v) px, from the camera model (3). NaN on or above the horizon.
+    Scalars give a float; arrays (one call for all objects of a frame) a float64 array."""
+    uu, vv = np.asarray(u, np.float32), np.asarray(v, np.float32)
+    w, ok = _walker_width(camera, width_model.mean, uu, vv)
+    out = np.where(np.asarray(ok), np.asarray(w, np.float64), np.nan)
+    return float(out) if out.ndim == 0 else out
+
+
+def is_global_change(absdiff: np.ndarray, threshold: Number, fraction: Number = 0.5) -> bool:
+    """True if more than `fraction` of the pixels have D > threshold: a corrupt frame, camera jitter
+    or a sudden illumination change (RELIABILITY item 7-8). Such a frame is no measurement for
+    every object (each track predicts), and must yield no detection."""
+    n = cv2.countNonZero(cv2.threshold(absdiff, float(threshold), 1, cv2.THRESH_BINARY)[1])
+    return n > fraction * absdiff.size
+
+
+def is_duplicate(absdiff: np.ndarray) -> bool:
+    """True if the whole-frame difference is exactly 0: a duplicated frame (frame-rate conversion,
+    RELIABILITY item 9), to be dropped with a warning rather than taken as 'no motion'."""
+    return cv2.countNonZero(absdiff) == 0

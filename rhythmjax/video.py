@@ -1,0 +1,309 @@
+"""Video in and out: a file OpenCV decodes, or a folder of numbered frames (RELIABILITY.md
+section 3, items 1-6, 10, 13, 15).
+
+`open_video` checks the input before any work and yields `(index, t, frame)`: the 0-based frame
+index, its time t = index / fps in s, and the frame as 8-bit grey (H, W) uint8, or None for a frame
+of a folder that fails to decode (a missing measurement; recorded in `bad_frames`). Conversion to
+grey is explicit (BGR, BGRA, 16-bit or grey in; see `to_gray_u8`). `open_writer` opens an output
+video before any processing; it is written to a temp file that keeps the suffix and renamed over the
+target on `close()` (nothing half-written). This module and `detect` are the only ones that import
+OpenCV (STYLE R11).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections.abc import Iterator
+from typing import Any
+
+import cv2
+import numpy as np
+
+from .io_tables import BadInput, PathLike, atomic_path
+
+
+FRAME_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
+MAX_FPS = 1000.0  # a container frame rate above this (or 0, NaN) is taken as absurd
+WRITER_FOURCC = {".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v", ".avi": "MJPG"}
+_TRUNCATED_HINT = ("; if the recording was interrupted the file is probably truncated ('moov atom "
+                   "not found'): re-mux or repair it (e.g. ffmpeg -i in.mp4 -c copy out.mp4)")
+
+
+def to_gray_u8(frame: np.ndarray) -> np.ndarray:
+    """8-bit grey (H, W) uint8 from a grey (H, W) / (H, W, 1), BGR (H, W, 3) or BGRA (H, W, 4)
+    frame of uint8 or uint16. BGR(A) -> grey with OpenCV's weights (0.114 B + 0.587 G + 0.299 R,
+    alpha ignored); 16 bit -> 8 bit as round(g * 255 / 65535). Anything else: ValueError."""
+    if frame.dtype not in (np.uint8, np.uint16):
+        raise ValueError(f"unsupported frame dtype {frame.dtype} (need uint8 or uint16)")
+    if frame.ndim == 3 and frame.shape[2] == 1:
+        frame = frame[:, :, 0]
+    if frame.ndim == 3 and frame.shape[2] == 3:
+        frame = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    elif frame.ndim == 3 and frame.shape[2] == 4:
+        frame = cv2.cvtColor(frame, cv2.COLOR_BGRA2GRAY)
+    elif frame.ndim != 2:
+        raise ValueError(f"unsupported frame shape {frame.shape}")
+    if frame.dtype == np.uint16:
+        frame = ((frame.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
+    return np.ascontiguousarray(frame)
+
+
+def _natural_key(name: str) -> list[Any]:
+    return [(0, int(t), "") if t.isdigit() else (1, 0, t.lower()) for t in re.split(r"(\d+)", name)]
+
+
+def _fourcc_text(code: float) -> str:
+    c = int(code) if math.isfinite(code) else 0
+    s = "".join(chr((c >> 8 * i) & 0xFF) for i in range(4))
+    return s if c and s.isprintable() else f"0x{c:08x}"
+
+
+def _check_fps(path: str, fps: float | int | None) -> float | None:
+    if fps is None:
+        return None
+    f = float(fps)
+    if not math.isfinite(f) or f <= 0:
+        raise BadInput(path, f"--fps {fps!r}: need a positive frame rate (frames/s)")
+    return f
+
+
+class VideoSource:
+    """A checked video or frame folder; iterate for `(index, t_s, gray_uint8 | None)`.
+
+    Attributes: `path`, `fps` (frames/s used for t), `fps_container` (the file's, NaN for a folder),
+    `width`, `height` (px), `fourcc` ("" for a folder), `is_folder`, `n_frames` (announced by the
+    container, or the number of files; may lie), `n_frames_read` (frames yielded so far, None
+    frames included), `bad_frames` (indices yielded as None), `notes` (warnings for the run
+    summary, e.g. ``read 18 of 30 frames announced``). Iterating again restarts from frame 0.
+    A video file's stream ends at the first frame OpenCV fails to read (it cannot skip one, and
+    truncation looks the same); a folder yields None for an undecodable or wrongly sized frame.
+    """
+
+    def __init__(self, path: str, fps: float | int | None = None):
+        self.path = path
+        self.bad_frames: list[int] = []
+        self.notes: list[str] = []
+        self.n_frames_read = 0
+        self._cap: Any = None
+        self._first: list[np.ndarray] = []
+        override = _check_fps(path, fps)
+        if not os.path.exists(path):
+            raise BadInput(path, "no such file")
+        self.is_folder = os.path.isdir(path)
+        if self.is_folder:
+            self._open_folder(override)
+        else:
+            self._open_file(override)
+        self._n_open_notes = len(self.notes)
+
+    # -- opening ---------------------------------------------------------------------------------
+    def _open_folder(self, override: float | None) -> None:
+        names = [n for n in os.listdir(self.path) if n.lower().endswith(FRAME_SUFFIXES)
+                 and not n.startswith(".") and os.path.isfile(os.path.join(self.path, n))]
+        if not names:
+            raise BadInput(self.path, "is a directory with no frames "
+                           "(.jpg, .jpeg, .png, .bmp, .tif)")
+        self._files = [os.path.join(self.path, n) for n in sorted(names, key=_natural_key)]
+        self.n_frames = len(self._files)
+        if self.n_frames < 2:
+            raise BadInput(self.path, "video has 1 frame; need >= 2")
+        first = self._read_image(self._files[0])
+        if first is None:
+            raise BadInput(self._files[0], "first frame of the folder does not decode")
+        self.height, self.width = first.shape
+        self.fourcc, self.fps_container = "", math.nan
+        if override is None:
+            raise BadInput(self.path, "a folder of frames has no frame rate; give fps= (--fps)")
+        self.fps = override
+
+    def _open_file(self, override: float | None) -> None:
+        size = os.path.getsize(self.path)
+        if size == 0:
+            raise BadInput(self.path, "not a readable video (0 bytes)")
+        cap = cv2.VideoCapture(self.path)
+        if not cap.isOpened():
+            cap.release()
+            hint = _TRUNCATED_HINT if self.path.lower().endswith((".mp4", ".mov", ".m4v")) else ""
+            raise BadInput(self.path,
+                           f"not a readable video (OpenCV/FFMPEG could not open it){hint}")
+        self._cap = cap
+        try:
+            self._check_file(override)
+        except BaseException:
+            self.close()
+            raise
+
+    def _check_file(self, override: float | None) -> None:
+        cap = self._cap
+        self.fourcc = _fourcc_text(cap.get(cv2.CAP_PROP_FOURCC))
+        n = cap.get(cv2.CAP_PROP_FRAME_COUNT)
+        self.n_frames = int(n) if math.isfinite(n) and n > 0 else None
+        frames = []
+        for _ in range(2):
+            ok, f = cap.read()
+            if not ok or f is None:
+                break
+            frames.append(self._convert(f, len(frames)))
+        if not frames:
+            raise BadInput(self.path, f"the container opens but no frame decodes (fourcc "
+                           f"'{self.fourcc}'; codec missing from this OpenCV build?)")
+        if len(frames) < 2:
+            raise BadInput(self.path, "video has 1 frame; need >= 2")
+        self._first = frames
+        self.height, self.width = frames[0].shape
+        self.fps_container = float(cap.get(cv2.CAP_PROP_FPS))
+        good = math.isfinite(self.fps_container) and 0 < self.fps_container <= MAX_FPS
+        if override is None and not good:
+            raise BadInput(self.path, f"frame rate in the file is {self.fps_container!r} "
+                           "(0, NaN or absurd); give fps= (--fps)")
+        self.fps = override if override is not None else self.fps_container
+        if good and abs(self.fps - self.fps_container) > 0.01 * self.fps_container:
+            self.notes.append(f"fps {self.fps:g} used; the file says {self.fps_container:g}")
+
+    def _convert(self, frame: np.ndarray, index: int) -> np.ndarray:
+        try:
+            return to_gray_u8(frame)
+        except ValueError as e:
+            raise BadInput(self.path, f"frame {index}: {e}") from None
+
+    def _read_image(self, file: str) -> np.ndarray | None:
+        img = cv2.imread(file, cv2.IMREAD_UNCHANGED)  # no implicit conversion; see to_gray_u8
+        if img is None:
+            return None
+        return self._convert(img, 0)
+
+    # -- reading ---------------------------------------------------------------------------------
+    def __iter__(self) -> Iterator[tuple[int, float, np.ndarray | None]]:
+        self.n_frames_read = 0
+        self.bad_frames = []
+        self.notes = self.notes[:self._n_open_notes]  # a new pass reports its own reading
+        frames = self._folder_frames() if self.is_folder else self._file_frames()
+        for i, frame in enumerate(frames):
+            self.n_frames_read = i + 1
+            yield i, i / self.fps, frame
+
+    def _folder_frames(self) -> Iterator[np.ndarray | None]:
+        for i, file in enumerate(self._files):
+            img = self._read_image(file)
+            if img is not None and img.shape != (self.height, self.width):
+                self.notes.append(f"frame {i} ({os.path.basename(file)}): size {img.shape[1]}x"
+                                  f"{img.shape[0]}, not {self.width}x{self.height}; skipped")
+                img = None
+            elif img is None:
+                self.notes.append(f"frame {i} ({os.path.basename(file)}) does not decode; skipped")
+            if img is None:
+                self.bad_frames.append(i)
+            yield img
+
+    def _file_frames(self) -> Iterator[np.ndarray]:
+        first, self._first = self._first, []
+        if not first:  # a second pass: reopen
+            self.close()
+            self._cap = cv2.VideoCapture(self.path)
+        yield from first
+        i = len(first)
+        while self._cap is not None:
+            ok, f = self._cap.read()  # never loop on the header's frame count
+            if not ok or f is None:
+                break
+            yield self._convert(f, i)
+            i += 1
+        n = self.n_frames_read
+        if self.n_frames is not None and n < self.n_frames:
+            self.notes.append(f"read {n} of {self.n_frames} frames announced")
+        self.close()
+
+    def close(self) -> None:
+        """Release the capture (also done when iteration ends)."""
+        if self._cap is not None:
+            self._cap.release()
+            self._cap = None
+
+    def __enter__(self) -> VideoSource:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def open_video(path: PathLike, *, fps: float | int | None = None) -> VideoSource:
+    """Open and check a video file or a folder of numbered frames (natural sort of .jpg, .jpeg,
+    .png, .bmp, .tif); `fps` (frames/s, > 0) overrides the container's and is required for a
+    folder. Reads the first two frames now; raises `BadInput` with a one-line reason."""
+    return VideoSource(os.fspath(path), fps)
+
+
+class VideoWriter:
+    """An output video written atomically; see `open_writer`. `write(frame)` takes (H, W) or
+    (H, W, 3) uint8 of exactly the size given; `close()` commits, `abort()` removes the temp file.
+    As a context manager it commits on success and aborts on an exception."""
+
+    def __init__(self, path: str, fps: float | int, size: tuple[int, int]):
+        self.path = path
+        suffix = os.path.splitext(path)[1].lower()
+        if suffix not in WRITER_FOURCC:
+            raise BadInput(path, f"cannot write video: unknown extension '{suffix}' (use .mp4 "
+                           "with mp4v or .avi with MJPG)")
+        f = float(fps)
+        if not math.isfinite(f) or f <= 0:
+            raise BadInput(path, f"cannot write video at fps {fps!r}: need a positive frame rate")
+        w, h = (int(s) for s in size)
+        if w <= 0 or h <= 0:
+            raise BadInput(path, f"cannot write video of size {w}x{h}")
+        self.size, self.fourcc, self.n_written = (w, h), WRITER_FOURCC[suffix], 0
+        self._cm = atomic_path(path)  # BadInput now if the directory cannot be written
+        self.temp_path: str | None = self._cm.__enter__()
+        self._vw: Any = cv2.VideoWriter(self.temp_path, cv2.VideoWriter_fourcc(*self.fourcc), f,
+                                        (w, h), True)
+        if not self._vw.isOpened():
+            self.abort()
+            raise BadInput(path, f"cannot write video: codec '{self.fourcc}' did not open (use "
+                           "mp4v/.mp4 or MJPG/.avi)")
+
+    def write(self, frame: np.ndarray) -> None:
+        """Append one frame: (H, W) grey or (H, W, 3) BGR uint8 of the writer's size (checked)."""
+        if self._vw is None:
+            raise ValueError(f"{self.path}: writer is closed")
+        w, h = self.size
+        if frame.dtype != np.uint8 or frame.shape not in ((h, w), (h, w, 3)):
+            raise ValueError(f"{self.path}: frame {frame.shape} {frame.dtype} does not match the "
+                             f"writer's ({h}, {w}[, 3]) uint8")
+        self._vw.write(cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR) if frame.ndim == 2 else frame)
+        self.n_written += 1
+
+    def close(self) -> None:
+        """Finish the file and rename it over `path`."""
+        if self._vw is None:
+            return
+        self._vw.release()
+        self._vw = None
+        self._cm.__exit__(None, None, None)
+        self.temp_path = None
+
+    def abort(self) -> None:
+        """Stop and remove the temp file; `path` is left as it was."""
+        if self._vw is not None:
+            self._vw.release()
+            self._vw = None
+        if self.temp_path is not None:
+            err = RuntimeError("video writing aborted")
+            self._cm.__exit__(RuntimeError, err, None)
+            self.temp_path = None
+
+    def __enter__(self) -> VideoWriter:
+        return self
+
+    def __exit__(self, exc_type: object, exc: object, tb: object) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+
+def open_writer(path: PathLike, fps: float | int, size: tuple[int, int]) -> VideoWriter:
+    """Open an output video of `size` = (width, height) px at `fps` frames/s before any processing:
+    .mp4/.m4v/.mov with mp4v, .avi with MJPG. Raises `BadInput` naming `path` if the directory,
+    the extension or the codec cannot be written."""
+    return VideoWriter(os.fspath(path), fps, size)

@@ -1,0 +1,214 @@
+"""Detection (Sec. 2) and the window-B rhythm signal (Sec. 4.1) on synthetic frames, against NumPy
+references written again here."""
+
+from __future__ import annotations
+
+import math
+import os
+
+import cv2
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from rhythmjax.camera import project
+from rhythmjax.detect import (
+    detect_in_window,
+    find_objects,
+    frame_difference,
+    is_duplicate,
+    is_global_change,
+    motion_from_diff,
+    motion_image,
+    walker_width_px,
+    window_b_intensity,
+    window_b_rect,
+)
+from rhythmjax.params import Camera, WidthModel
+
+
+S = 256
+CASIA = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data", "real", "casia_b_090",
+                     "001-nm-01-090.avi")
+
+
+def _background(textured: bool, seed: int = 0) -> np.ndarray:
+    if not textured:
+        return np.full((S, S), 150, np.uint8)
+    rng = np.random.default_rng(seed)
+    noise = rng.normal(0, 1, (S // 8, S // 8))
+    tex = cv2.resize(noise, (S, S), interpolation=cv2.INTER_CUBIC)
+    return np.clip(150 + 25 * tex, 90, 210).astype(np.uint8)
+
+
+def _walker(img: np.ndarray, x: int, bottom: int, k: int, width: int = 24,
+            height: int = 70) -> tuple[float, int]:
+    """Draw a dark body (columns x .. x+width-1) on two swinging legs whose feet stay inside the
+    body's columns; the lowest drawn row is `bottom`. Returns the drawn bottom centre (u, v)."""
+    hip = bottom - 30
+    cv2.rectangle(img, (x, bottom - height + 1), (x + width - 1, hip), 40, -1)
+    swing = int(round(5 * math.sin(0.9 * k)))
+    for hx, s in ((x + 3, swing), (x + width - 10, -swing)):
+        foot = min(max(hx + s, x), x + width - 7)
+        leg = np.array([[hx, hip], [hx + 6, hip], [foot + 6, bottom], [foot, bottom]], np.int32)
+        cv2.fillPoly(img, [leg], 55)
+    return x + (width - 1) / 2, bottom
+
+
+def _scene(n: int, textured: bool, dx: int = 2, x0: int = 60, bottom: int = 200,
+           noise: float = 2.0, seed: int = 0):
+    rng = np.random.default_rng(seed)
+    bg = _background(textured, seed)
+    frames, truth = [], []
+    for k in range(n):
+        f = bg.copy()
+        truth.append(_walker(f, x0 + dx * k, bottom, k))
+        f = np.clip(f + rng.normal(0, noise, f.shape), 0, 255).astype(np.uint8)
+        frames.append(f)
+    return frames, truth
+
+
+def _motion_ref(prev: np.ndarray, cur: np.ndarray, t: float, te: float) -> np.ndarray:
+    """[D > t] + [min(|Sobel_x D|, 255) > te], Sobel by hand on a reflect-101 padded D."""
+    d = np.abs(cur.astype(np.int32) - prev.astype(np.int32))
+    p = np.pad(d, 1, mode="reflect")  # numpy 'reflect' == OpenCV BORDER_REFLECT_101
+    kx = np.array([[-1, 0, 1], [-2, 0, 2], [-1, 0, 1]])
+    sx = sum(kx[i, j] * p[i:i + d.shape[0], j:j + d.shape[1]] for i in range(3) for j in range(3))
+    return (d > t).astype(np.uint8) + (np.minimum(np.abs(sx), 255) > te).astype(np.uint8)
+
+
+@pytest.mark.parametrize("textured", [False, True])
+def test_motion_image_matches_numpy_reference_exactly(textured):
+    frames, _ = _scene(3, textured)
+    for t, te in ((20, None), (12.5, 30), (0, 0)):
+        m, d = motion_image(frames[1], frames[2], diff_threshold=t, edge_threshold=te)
+        ref = _motion_ref(frames[1], frames[2], t, 4 * t if te is None else te)
+        assert m.dtype == np.uint8 and np.array_equal(m, ref)
+        assert np.array_equal(d, np.abs(frames[2].astype(int) - frames[1].astype(int)))
+    with pytest.raises(ValueError):
+        motion_from_diff(d, diff_threshold=70)  # default edge threshold 280 > 255
+    with pytest.raises(ValueError):
+        frame_difference(frames[0], frames[0][:-1])
+
+
+@pytest.mark.parametrize("textured", [False, True])
+def test_foot_point_and_width_in_window(textured):
+    frames, truth = _scene(20, textured, dx=2)
+    for k in range(1, 20):
+        m, _ = motion_image(frames[k - 1], frames[k], diff_threshold=20)
+        u, v = truth[k]
+        pred = (u + 7, v - 10)  # a prediction a few px off
+        det = detect_in_window(m, pred, (80, 120))
+        assert det is not None
+        # wid_IMG spans both positions: the drawn width plus |dx| (2 px), u lags dx/2; the Sobel
+        # halo (1 px a side) is removed
+        assert abs(det.u - u) <= 2 and abs(det.v - v) <= 2, (k, det, truth[k])
+        assert abs(det.width - 24) <= 3, (k, det)
+        x0, y0, w, h = det.box
+        assert x0 <= det.u <= x0 + w and det.v == y0 + h - 1 and det.area > 0
+
+
+def test_projection_slicing_on_a_block():
+    m = np.zeros((100, 100), np.uint8)
+    m[30:61, 40:51] = 1  # rows 30..60, columns 40..50
+    m[55:61, 42:49] = 2  # 'edges' add on top
+    det = detect_in_window(m, (45, 60), 60, halo=0)
+    assert (det.u, det.v, det.width, det.box) == (45.0, 60.0, 11.0, (40, 30, 11, 31))
+    assert detect_in_window(m, (45, 60), 60).width == 9.0  # less the 1 px halo each side
+    assert det.area == 31 * 11
+    m[90:, :] = 0
+    assert detect_in_window(m, (10, 95), 10) is None  # empty window
+    assert detect_in_window(m, (500, 500), 20) is None  # outside the image
+    assert detect_in_window(m, (math.nan, 10), 20) is None
+    assert detect_in_window(m, np.array([45.0, 60.0]), np.int64(60), halo=0) == det
+
+
+def test_find_objects_two_separated_and_exclusion():
+    a, _ = _scene(2, True, x0=40, seed=1)
+    b = [f.copy() for f in a]
+    for k, f in enumerate(b):  # a second, smaller walker further right and higher
+        _walker(f, 170 + 3 * k, 150, k, width=16, height=50)
+    m, _ = motion_image(b[0], b[1], diff_threshold=20)
+    objs = find_objects(m, min_area=30)
+    assert len(objs) == 2
+    objs.sort(key=lambda o: o.u)
+    assert abs(objs[0].u - (41 + 23 / 2)) <= 2 and abs(objs[0].v - 200) <= 2
+    assert abs(objs[1].u - (173 + 15 / 2)) <= 2.5 and abs(objs[1].v - 150) <= 2
+    assert objs[0].area > objs[1].area
+    left = find_objects(m, min_area=30, exclude_boxes=[objs[0].box])
+    assert len(left) == 1 and left[0] == objs[1]
+    assert find_objects(m, min_area=10**6) == []
+    assert len(find_objects(m, min_area=30, max_objects=1)) == 1
+
+
+def test_window_b_intensity_is_a_numpy_sum():
+    rng = np.random.default_rng(3)
+    d = rng.integers(0, 256, (240, 320), dtype=np.uint8)
+    # W = 37.4: 37 columns from floor(100.3 - 18.5 + 0.5) = 82, round(7.48) = 7 rows ending at
+    # row round(200.6) = 201 (the foot row is inside B)
+    assert window_b_rect(d.shape, 100.3, 200.6, 37.4) == (82, 195, 119, 202)
+    assert window_b_intensity(d, 100.3, 200.6, 37.4) == float(d[195:202, 82:119].sum())
+    assert window_b_intensity(d, 100.3, 200.6, 37.4, mean=True) == pytest.approx(
+        d[195:202, 82:119].mean())
+    # clipped at the borders: x0 = floor(5 - 20 + 0.5) = -15 -> 0, rows 232..239 -> 232..239
+    assert window_b_intensity(d, 5, 239, 40) == float(d[232:240, 0:25].sum())
+    assert window_b_intensity(d, 5, 239, 40, mean=True) == pytest.approx(d[232:240, 0:25].mean())
+    assert window_b_intensity(d, 1000, 1000, 40) == 0.0
+    assert math.isnan(window_b_intensity(d, math.nan, 10, 40))
+    assert math.isnan(window_b_intensity(d, 10, 10, 0))
+    # the walker's legs make B's intensity move with the gait
+    frames, truth = _scene(16, True)
+    sig = []
+    for k in range(1, 16):
+        m, dd = motion_image(frames[k - 1], frames[k], diff_threshold=20)
+        det = detect_in_window(m, truth[k], 100)
+        sig.append(window_b_intensity(dd, det.u, det.v, 26))
+    assert np.std(sig) > 0.05 * np.mean(sig) > 0
+
+
+def test_walker_width_from_camera():
+    cam, wm = Camera(), WidthModel()
+    for y in (3.0, 10.0, 20.0):
+        u, v = (float(c) for c in project(cam, jnp.float32(0.4), jnp.float32(y)))
+        f, h, th, af = 0.008, 1.0, math.radians(15), 0.008 * 1e5
+        want = af * 0.5 / (f + y * math.cos(th) + h * math.sin(th))
+        assert walker_width_px(cam, wm, u, v) == pytest.approx(want, rel=1e-4)
+    assert math.isnan(walker_width_px(cam, wm, 256, 0))  # above the horizon (v ~ 41.6 px)
+    ws = walker_width_px(cam, wm, np.array([256.0, 256.0]), np.array([0.0, 300.0]))
+    assert ws.shape == (2,) and math.isnan(ws[0])
+    assert ws[1] == pytest.approx(walker_width_px(cam, wm, 256, 300.0), rel=1e-6)
+
+
+def test_global_change_and_duplicates():
+    frames, _ = _scene(3, True)
+    d = frame_difference(frames[1], frames[2])
+    assert not is_global_change(d, 20) and not is_duplicate(d)
+    bright = cv2.add(frames[2], 60)  # sudden illumination change
+    assert is_global_change(frame_difference(frames[1], bright), 20)
+    garbage = np.random.default_rng(0).integers(0, 256, frames[0].shape, dtype=np.uint8)
+    assert is_global_change(frame_difference(frames[1], garbage), 20)
+    assert not is_global_change(frame_difference(frames[1], garbage), 20, fraction=0.95)
+    assert is_duplicate(frame_difference(frames[1], frames[1].copy()))
+
+
+@pytest.mark.data
+def test_casia_smoke():
+    if not os.path.isfile(CASIA):
+        pytest.skip("CASIA-B clip not present")
+    from rhythmjax.video import open_video
+
+    src = open_video(CASIA)
+    assert src.fps == 25.0 and (src.width, src.height) == (320, 240)
+    prev, found = None, []
+    for _, _, f in src:
+        if prev is not None:
+            m, _ = motion_image(prev, f, diff_threshold=15)
+            objs = find_objects(m, min_area=100)
+            found.append(bool(objs) and objs[0].width > 10)
+        prev = f
+    n = len(found)
+    assert n == src.n_frames_read - 1 >= 50
+    # the background is empty until the walker enters; from then on it is found in most frames
+    first = found.index(True)
+    assert 10 < first < n // 2
+    assert np.mean(found[first:]) >= 0.9, (first, found)
