@@ -265,7 +265,7 @@ def config_from_dict(d: Any) -> Config:
     c, n, w, k, t = (full[s] for s in SECTIONS)
 
     theta_deg = _num("camera", "theta_deg", c["theta_deg"], lo=0.0, hi=90.0)
-    if "theta_deg" in d.get("camera", {}) and theta_deg < 1.6:
+    if "theta_deg" in d.get("camera", {}) and theta_deg < 0.6:
         raise ConfigError("camera.theta_deg", f"{theta_deg} looks like radians; give degrees")
     camera = Camera(
         f=_num("camera", "f_m", c["f_m"], lo=0.0), h=_num("camera", "h_m", c["h_m"], lo=0.0),

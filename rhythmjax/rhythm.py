@@ -1,9 +1,10 @@
 """Rhythm features and model matching, Sec. 4 of the rhythm paper, batched over tracks.
 
-For each track: the EKF with the paper's gates tracks the foot point; the rhythm window is the
-first N frames from the frame the track started (DETECT -> OBSERVE); the window-B intensity I(k)
-of those frames goes through the Burg MEM spectrum (`mem.spectrum`); the peaks give pace F and,
-with the ground speed, stride T (12); (13)-(15) decide Pedestrian or Non-pedestrian.
+For each track: the EKF with the paper's gates tracks the foot point; rhythm windows are runs of
+N frames from the frame the track started (DETECT -> OBSERVE); the window-B intensity I(k) of a
+window goes through the Burg MEM spectrum (`mem.spectrum`); the peaks give pace F and, with the
+ground speed, stride T (12); (13)-(15) decide Pedestrian or Non-pedestrian. Matching repeats on
+each new window until Pedestrian, then stops (Sec. 4.2).
 
 Conventions fixed here (the paper is silent):
 - I(k) is normalised per window to zero mean and unit standard deviation before Burg, and P(f)
@@ -163,10 +164,13 @@ def classify_track(
     dt: Float[Array, " T"],
     present: Bool[Array, " T"],
 ) -> RhythmResult:
-    """Track one padded track with the paper's gates, then classify its first rhythm window.
+    """Track one padded track with the paper's gates, then match its rhythm windows.
 
-    T must be >= N (pad with present=False). Reasons: `no-measurements` when no measurement is
-    finite; `too-short` when fewer than N frames follow the start (Sec. 5: never guess)."""
+    The windows are successive runs of N frames from the frame the track started; as in the
+    paper, matching goes on window after window until one says Pedestrian, and then stops. The
+    result is that window's, or the first window's when none matched. T must be >= N (pad with
+    present=False). Reasons: `no-measurements` when no measurement is finite; `too-short` when
+    fewer than N frames follow the start (Sec. 5: never guess)."""
     n = cfg.thresholds.n
     T = z.shape[0]
     if T < n:
@@ -177,15 +181,22 @@ def classify_track(
     k0 = jnp.argmax(out.started)
     started = out.started[k0]
     n_tracked = jnp.sum(present & out.started)
-    complete = started & (n_tracked >= n)
-    start = jnp.clip(k0, 0, T - n)
-    window = lambda a: jax.lax.dynamic_slice_in_dim(a, start, n)
     t = jnp.cumsum(jnp.where(idx == 0, 0.0, dt))
     xy = out.mean[:, jnp.array([0, 2])]
-    res = classify_window(cfg, window(intensity), window(t), window(xy), complete)
+    j = jnp.arange(T // n)
+    complete = started & (n_tracked >= n * (j + 1))
+
+    def one_window(start, usable):
+        window = lambda a: jax.lax.dynamic_slice_in_dim(a, jnp.clip(start, 0, T - n), n)
+        return classify_window(cfg, window(intensity), window(t), window(xy), usable)
+
+    every = jax.vmap(one_window)(k0 + n * j, complete)
+    matched = complete & (every.verdict == Verdict.PEDESTRIAN)
+    pick = jnp.where(jnp.any(matched), jnp.argmax(matched), 0)
+    res = jax.tree.map(lambda a: a[pick], every)
     any_meas = jnp.any(out.available)
     short_reason = jnp.where(any_meas, Reason.TOO_SHORT, Reason.NO_MEASUREMENTS)
-    reason = jnp.where(complete, res.reason, short_reason).astype(jnp.int32)
+    reason = jnp.where(complete[0], res.reason, short_reason).astype(jnp.int32)
     n_samples = n_tracked.astype(jnp.int32)
     return eqx.tree_at(lambda r: (r.reason, r.n_samples), res, (reason, n_samples))
 

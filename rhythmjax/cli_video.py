@@ -1,0 +1,183 @@
+"""Video verbs of the command line: `track`, `run` and `demo` (registered by `rhythmjax.cli`)."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import numpy as np
+
+
+TRACK_ORDER = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",
+               "state"]
+VERDICT_ORDER = ["track_id", "verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps",
+                 "n_samples"]
+
+
+def _progress(total, enabled, desc):
+    if enabled and sys.stderr.isatty():
+        from tqdm import tqdm
+
+        return tqdm(total=total or None, unit="frame", desc=desc, file=sys.stderr)
+    return None
+
+
+def check_config_fits_image(cfg, width: int, height: int) -> None:
+    """Some of the detection range must be visible: its rows (near end low in the image, far end
+    higher up) must overlap the image, else every detection is refused and nothing is tracked."""
+    import jax.numpy as jnp
+
+    from .camera import project
+    from .params import ConfigError
+
+    thr = cfg.thresholds
+    vs = [float(project(cfg.camera, jnp.float32(0.0), jnp.float32(float(y)))[1])
+          for y in (thr.range_min, thr.range_max)]
+    if not (vs[1] < height and vs[0] >= 0):
+        raise ConfigError("camera", f"the detection range {float(thr.range_min):g}-"
+                          f"{float(thr.range_max):g} m projects to rows {vs[0]:.0f}-{vs[1]:.0f}, "
+                          f"outside the {width}x{height} image; check h_m, theta_deg, vc_px")
+
+
+def track_frames(cfg, frames, *, n_frames=None, overlay=None, progress=True, options=None):
+    """Run the online tracker over `(index, t, frame)` items; returns (tracks, verdicts, objs,
+    tracker). Draws into the open `overlay` writer when given."""
+    from .overlay import draw_frame
+    from .tracker import OnlineTracker
+
+    tracker = OnlineTracker(cfg, options)
+    bar = _progress(n_frames, progress, "track")
+    for index, t, frame in frames:
+        tracker.update(index, t, frame)
+        if overlay is not None and frame is not None:
+            overlay.write(draw_frame(frame, tracker.snapshot(), index))
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    tracks, verdicts, objs = tracker.finish()
+    return tracks, verdicts, objs, tracker
+
+
+def _open_source(args, cfg):
+    from .video import open_video
+
+    fps = args.fps if args.fps is not None else None
+    src = open_video(args.video, fps=fps if fps is not None else None)
+    if not np.isfinite(src.fps):
+        from .io import BadInput
+
+        raise BadInput(args.video, "no frame rate; give --fps")
+    check_config_fits_image(cfg, src.width, src.height)
+    return src
+
+
+def _write_outputs(out_dir, cfg, tracks, verdicts, objs, *, tracks_name="tracks.parquet"):
+    from .io import write_table
+    from .overlay import spectrum_figure
+
+    write_table(os.path.join(out_dir, tracks_name), tracks, TRACK_ORDER)
+    write_table(os.path.join(out_dir, "verdicts.csv"), verdicts, VERDICT_ORDER)
+    spectrum_figure(os.path.join(out_dir, "spectra.png"), cfg, tracks, verdicts, objs)
+
+
+def _summary(tracker, verdicts, src=None) -> dict:
+    v = list(verdicts["verdict"])
+    s = {"n_frames": tracker.n_frames, "n_tracks": len(v),
+         "verdicts": {k: v.count(k) for k in ("pedestrian", "non-pedestrian", "unclassified")},
+         "glitch_frames": len(tracker.glitch_frames),
+         "duplicate_frames": len(tracker.duplicate_frames)}
+    if src is not None:
+        s.update(bad_frames=len(src.bad_frames), notes=list(src.notes))
+    return s
+
+
+def _report(args, summary, verdicts) -> None:
+    from .cli import _emit_json, _print_verdicts
+
+    if args.json:
+        _emit_json(summary)
+        return
+    _print_verdicts(verdicts)
+    v = summary["verdicts"]
+    print(f"{summary['n_frames']} frames, {summary['n_tracks']} tracks: {v['pedestrian']} "
+          f"pedestrian, {v['non-pedestrian']} non-pedestrian, {v['unclassified']} unclassified",
+          file=sys.stderr)
+
+
+def cmd_track(args) -> int:
+    """Track the moving objects of a video (Fig. 3 state machine, EKF + gates (10)(11)) and
+    write the tracks file; classification happens as in `run` and is in the summary."""
+    from .cli import _load_config
+    from .io import check_writable, write_table
+    from .video import open_writer
+
+    check_writable(args.output)
+    cfg = _load_config(args.config)
+    with _open_source(args, cfg) as src:
+        overlay = (open_writer(args.overlay, src.fps, (src.width, src.height))
+                   if args.overlay else None)
+        try:
+            tracks, verdicts, objs, tracker = track_frames(
+                cfg, src, n_frames=src.n_frames, overlay=overlay,
+                progress=not (args.quiet or args.json))
+        except BaseException:
+            if overlay is not None:
+                overlay.abort()
+            raise
+        write_table(args.output, tracks, TRACK_ORDER)
+        if overlay is not None:
+            overlay.close()
+        _report(args, _summary(tracker, verdicts, src), verdicts)
+    return 0
+
+
+def cmd_run(args) -> int:
+    """The main job: track and classify the objects of a video; writes DIR/tracks.parquet,
+    DIR/verdicts.csv, DIR/spectra.png and DIR/overlay.mp4 (annotated video)."""
+    from .cli import _load_config
+    from .io import check_writable
+    from .video import open_writer
+
+    os.makedirs(args.output, exist_ok=True)
+    check_writable(os.path.join(args.output, "verdicts.csv"))
+    cfg = _load_config(args.config)
+    with _open_source(args, cfg) as src:
+        overlay = (None if args.no_overlay else
+                   open_writer(os.path.join(args.output, "overlay.mp4"), src.fps,
+                               (src.width, src.height)))
+        try:
+            tracks, verdicts, objs, tracker = track_frames(
+                cfg, src, n_frames=src.n_frames, overlay=overlay,
+                progress=not (args.quiet or args.json))
+        except BaseException:
+            if overlay is not None:
+                overlay.abort()
+            raise
+        _write_outputs(args.output, cfg, tracks, verdicts, objs)
+        if overlay is not None:
+            overlay.close()
+        _report(args, _summary(tracker, verdicts, src), verdicts)
+    return 0
+
+
+def register(sub, formatter, common) -> None:
+    p = sub.add_parser("track", formatter_class=formatter, help="track the moving objects "
+                       "of a video", description=cmd_track.__doc__)
+    p.add_argument("video", metavar="VIDEO", help="video file, or a folder of numbered frames")
+    p.add_argument("-o", "--output", required=True, metavar="TRACKS",
+                   help="tracks file (.parquet or .csv)")
+    p.add_argument("--overlay", metavar="OUT.mp4", help="also write an annotated video")
+    p.add_argument("--fps", type=float, help="frame rate (overrides the file's; needed for "
+                   "frame folders)")
+    common(p)
+    p.set_defaults(func=cmd_track)
+
+    p = sub.add_parser("run", formatter_class=formatter, help="track and classify the "
+                       "objects of a video", description=cmd_run.__doc__)
+    p.add_argument("video", metavar="VIDEO", help="video file, or a folder of numbered frames")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--fps", type=float, help="frame rate (overrides the file's)")
+    p.add_argument("--no-overlay", action="store_true", help="skip the annotated video")
+    common(p)
+    p.set_defaults(func=cmd_run)

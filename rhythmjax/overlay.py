@@ -1,0 +1,91 @@
+"""What a person looks at: annotated frames and per-track spectrum figures (edge I/O, OpenCV and
+matplotlib; the numeric core never imports this)."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import jax.numpy as jnp
+import numpy as np
+
+from . import mem
+from .io import atomic_path
+from .params import Config
+from .rhythm import N_FREQS, fill_gaps, normalise_window
+
+
+_COLOURS = {"pedestrian": (60, 200, 60), "non-pedestrian": (40, 40, 230),
+            "unclassified": (200, 200, 200)}
+
+
+def draw_frame(gray: np.ndarray, objects: list[dict], index: int) -> np.ndarray:
+    """BGR copy of a grey frame with each object's foot point, window, id, state and verdict.
+
+    `objects`: dicts with track_id, u, v, width (px), state, verdict (label or None)."""
+    img = cv2.cvtColor(gray, cv2.COLOR_GRAY2BGR)
+    for o in objects:
+        if not (math.isfinite(o["u"]) and math.isfinite(o["v"])):
+            continue
+        verdict = o.get("verdict") or "unclassified"
+        c = _COLOURS.get(verdict, (200, 200, 200))
+        W = o["width"] if math.isfinite(o["width"]) else 20.0
+        H = W * 1.7 / 0.5
+        u, v = int(round(o["u"])), int(round(o["v"]))
+        cv2.rectangle(img, (int(u - W / 2), int(v - H)), (int(u + W / 2), v), c, 1)
+        cv2.circle(img, (u, v), 3, c, -1)
+        label = f"{o['track_id']} {o['state'][:3]}" + (f" {verdict[:3]}" if o.get("verdict")
+                                                       else "")
+        cv2.putText(img, label, (int(u - W / 2), max(10, int(v - H) - 3)),
+                    cv2.FONT_HERSHEY_SIMPLEX, 0.4, c, 1, cv2.LINE_AA)
+    cv2.putText(img, f"frame {index}", (5, 15), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 0), 1,
+                cv2.LINE_AA)
+    return img
+
+
+def spectrum_figure(path, cfg: Config, tracks: dict, verdicts: dict, objs, *,
+                    max_tracks: int = 12) -> None:
+    """One panel per track: the MEM spectrum (P relative to white noise) of its deciding window,
+    P_thr, the walking-model pace band (mean +/- k_sigma3 sd) and the verdict; written atomically."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    chosen = [o for o in objs if o.result is not None][:max_tracks]
+    n = max(1, len(chosen))
+    cols = min(3, n)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.8 * rows), squeeze=False)
+    walk, thr = cfg.walking, cfg.thresholds
+    lo = float(walk.pace_mean - thr.k_sigma3 * walk.pace_std)
+    hi = float(walk.pace_mean + thr.k_sigma3 * walk.pace_std)
+    for ax, o in zip(axes.ravel(), chosen):
+        a, b = o.result["window"]
+        rows_ = np.asarray([r[1:8] for r in o.rows[a:b]], np.float64)
+        t, inten = rows_[:, 0], rows_[:, 4]
+        dt = float(np.median(np.diff(t)))
+        x, _ = normalise_window(fill_gaps(jnp.asarray(inten, jnp.float32),
+                                          jnp.isfinite(jnp.asarray(inten))))
+        spec = mem.spectrum(x, dt, thr.m, n_freqs=N_FREQS)
+        ax.semilogy(np.asarray(spec.freqs), np.maximum(np.asarray(spec.psd) / dt, 1e-3), lw=1)
+        ax.axhline(float(thr.p_thr), color="k", ls=":", lw=0.8)
+        ax.axvspan(lo, hi, color="g", alpha=0.1)
+        ax.set_title(f"track {o.track_id}: {_label(o)}", fontsize=9)
+        ax.set_xlabel("frequency (Hz)", fontsize=8)
+        ax.set_ylabel("P / white level", fontsize=8)
+    for ax in axes.ravel()[len(chosen):]:
+        ax.axis("off")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=90)
+    plt.close(fig)
+
+
+def _label(o) -> str:
+    from .status import REASON_LABELS, VERDICT_LABELS
+
+    r = o.result
+    pace = float(r["pace_hz"])
+    extra = f", F={pace:.2f} Hz, T={float(r['stride_m']):.2f} m" if math.isfinite(pace) else ""
+    return f"{VERDICT_LABELS[int(r['verdict'])]} ({REASON_LABELS[int(r['reason'])]}{extra})"

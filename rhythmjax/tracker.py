@@ -1,0 +1,296 @@
+"""The online tracker: Fig. 3's NONE/DETECT/OBSERVE/PREDICT state machine per object over video.
+
+Per frame (norfair's readable loop, STYLE R11): the motion image of Sec. 2; for each tracked
+object a detection inside a small window centred on its predicted foot point; connected regions
+elsewhere start new objects (DETECT). Then ONE jitted call advances every object slot with the
+core's `ekf.step` and the paper's gates (10) and (11) (`gates.PaperGates`), so the per-frame cost
+is arithmetic, not tracing. A DETECT becomes OBSERVE when the first measurement lies in the
+detection range, else NONE; OBSERVE/PREDICT follow the gate decision; PREDICT ends (NONE) after
+`predict_timeout_s` or when the estimate leaves the range. Each tracked frame samples the rhythm
+signal I(k) in window B at the foot point; each completed run of N frames is matched with
+`rhythm.classify_window` until one says Pedestrian (then matching stops, tracking goes on), the
+same windows `rhythm.classify_track` uses on stored tracks, so `rhythmjax classify` re-judges the
+written tracks alike.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import detect
+from .camera import image_width, measure
+from .ekf import Carry, empty_carry, predict, step
+from .gates import PaperGates
+from .params import Config
+from .rhythm import classify_window
+from .status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
+
+
+@dataclass(frozen=True)
+class TrackerOptions:
+    """Detection settings (px, grey levels) and capacity."""
+
+    diff_threshold: float = 15.0  # |frame difference| threshold, grey levels
+    min_area: int = 40  # motion pixels for a new object
+    max_objects: int = 8  # object slots advanced together in one jitted call
+    window_widths: float = 3.0  # detection window width, in walker widths W
+    window_heights: float = 1.0  # detection window height, in walker heights (1.7 m)
+    global_change_fraction: float = 0.5  # more than this of the frame changed: a glitch frame
+
+
+@dataclass
+class _Object:
+    track_id: int
+    state: TrackState
+    rows: list[tuple] = field(default_factory=list)
+    predict_time: float = 0.0
+    windows_done: int = 0
+    result: dict | None = None  # the deciding (or first) window's outcome
+    decided: bool = False
+    last_uv: tuple[float, float] = (math.nan, math.nan)  # foot point used for window B, px
+    last_W: float = math.nan  # window-B width W, px
+
+
+def _advance(cfg: Config, carry: Carry, reset, z, width, dt, present):
+    """Every slot one frame: reset new slots, `ekf.step` with the paper's gates, and what the
+    next frame needs (predicted foot point) and this frame's window-B size W (px)."""
+    empty = empty_carry(z.dtype)
+    carry = jax.vmap(lambda r, c: jax.tree.map(lambda a, b: jnp.where(r, b, a), c, empty))(
+        reset, carry)
+    gates = PaperGates(cfg.width, cfg.thresholds)
+    run = jax.vmap(step, in_axes=(None, None, None, 0, 0, 0, None, 0))
+    carry, out = run(cfg.camera, cfg.noise, gates, carry, z, width, dt, present)
+    nxt = jax.vmap(lambda s: predict(cfg.noise, s, jnp.asarray(cfg.camera.dt, z.dtype)))(
+        carry.state)
+    next_uv = jax.vmap(lambda m: measure(cfg.camera, m))(nxt.mean)
+    est_uv = jax.vmap(lambda m: measure(cfg.camera, m))(out.mean)
+    W = image_width(cfg.camera, cfg.width.mean, out.mean[:, 2])
+    return carry, (out.valid, out.started, out.mean, next_uv, est_uv, W)
+
+
+def _split(tree):
+    """Array leaves (a flat tuple) and the hashable rest, so jax's C++ dispatch skips the Python
+    flattening of Config and Carry pytrees that dominates a per-frame call (~3 ms to ~0.1 ms)."""
+    dyn, static = eqx.partition(tree, eqx.is_array)
+    leaves, treedef = jax.tree.flatten(dyn)
+    return tuple(leaves), (treedef, static)
+
+
+def _join(leaves, structure):
+    treedef, static = structure
+    return eqx.combine(jax.tree.unflatten(treedef, leaves), static)
+
+
+@functools.partial(jax.jit, static_argnums=(0, 1))
+def _advance_flat(cfg_structure, carry_structure, cfg_leaves, carry_leaves, *args):
+    carry, host = _advance(_join(cfg_leaves, cfg_structure), _join(carry_leaves,
+                                                                   carry_structure), *args)
+    return _split(carry)[0], host
+
+
+_classify = eqx.filter_jit(classify_window)
+
+
+class OnlineTracker:
+    """Feed frames with `update(index, t, frame)`; `finish()` returns tracks and verdicts."""
+
+    def __init__(self, cfg: Config, options: TrackerOptions | None = None):
+        self.cfg, self.opt = cfg, options or TrackerOptions()
+        S = self.opt.max_objects
+        carry = jax.tree.map(lambda a: jnp.broadcast_to(a, (S,) + a.shape).copy(),
+                             empty_carry())
+        self._cfg_leaves, self._cfg_structure = _split(cfg)
+        self._carry, self._carry_structure = _split(carry)
+        self._slots: list[_Object | None] = [None] * S
+        self._next_uv = np.full((S, 2), np.nan)
+        self._prev: np.ndarray | None = None
+        self._last_t: float | None = None
+        self._next_id = 1
+        self.finished: list[_Object] = []
+        self.glitch_frames: list[int] = []
+        self.duplicate_frames: list[int] = []
+        self.n_frames = 0
+
+    # ------------------------------------------------------------------------------------------
+    def update(self, index: int, t: float, frame: np.ndarray | None) -> None:
+        """Process one frame (None: undecodable, every object predicts)."""
+        self.n_frames += 1
+        if frame is not None and self._prev is None:
+            self._prev, self._last_t = frame, t
+            return
+        if self._last_t is None:
+            return
+        dt = t - self._last_t
+        self._last_t = t
+        S, opt = self.opt.max_objects, self.opt
+        z, width = np.full((S, 2), np.nan, np.float32), np.full(S, np.nan, np.float32)
+        present, reset = np.zeros(S, bool), np.zeros(S, bool)
+        D = M = None
+        glitch = frame is None
+        if frame is not None:
+            M, D = detect.motion_image(self._prev, frame, diff_threshold=opt.diff_threshold)
+            self._prev = frame
+            if detect.is_duplicate(D):
+                self.duplicate_frames.append(index)
+                glitch = True
+            elif detect.is_global_change(D, opt.diff_threshold, opt.global_change_fraction):
+                self.glitch_frames.append(index)
+                glitch = True
+        boxes = []
+        for s, obj in enumerate(self._slots):
+            if obj is None:
+                continue
+            present[s] = True
+            box_w, box_h = self._window_size(self._next_uv[s])
+            boxes.append(_box(self._next_uv[s], box_w, box_h))
+            if glitch or not np.all(np.isfinite(self._next_uv[s])):
+                continue
+            det = detect.detect_in_window(M, self._next_uv[s], (box_w, box_h))
+            if det is not None:
+                z[s], width[s] = (det.u, det.v), det.width
+        if not glitch:
+            free = [s for s, o in enumerate(self._slots) if o is None]
+            for det in detect.find_objects(M, min_area=opt.min_area, exclude_boxes=boxes,
+                                           max_objects=len(free)):
+                s = free.pop(0)
+                self._slots[s] = _Object(track_id=0, state=TrackState.DETECT)
+                present[s], reset[s] = True, True
+                z[s], width[s] = (det.u, det.v), det.width
+        self._carry, host = _advance_flat(self._cfg_structure, self._carry_structure,
+                                          self._cfg_leaves, self._carry, reset, z, width,
+                                          np.float32(dt), present)
+        valid, started, mean, next_uv, est_uv, W = (np.asarray(a) for a in host)
+        self._next_uv = next_uv
+        for s, obj in enumerate(self._slots):
+            if obj is not None:
+                self._after_step(s, obj, index, t, dt, z[s], width[s], bool(valid[s]),
+                                 bool(started[s]), mean[s], est_uv[s], float(W[s]), D, glitch)
+
+    def _window_size(self, uv) -> tuple[float, float]:
+        Wp = detect.walker_width_px(self.cfg.camera, self.cfg.width, uv[0], uv[1])
+        if not math.isfinite(Wp):
+            return 0.0, 0.0
+        height_px = Wp * 1.7 / float(self.cfg.width.mean)
+        return self.opt.window_widths * Wp, self.opt.window_heights * height_px
+
+    def _after_step(self, s, obj, index, t, dt, z, width, valid, started, mean, est_uv, W, D,
+                    glitch):
+        thr = self.cfg.thresholds
+        if obj.state == TrackState.DETECT:
+            if not started:  # outside the detection range: back to NONE, nothing recorded
+                self._slots[s] = None
+                return
+            obj.track_id, self._next_id = self._next_id, self._next_id + 1
+            obj.state = TrackState.OBSERVE
+        elif valid:
+            obj.state, obj.predict_time = TrackState.OBSERVE, 0.0
+        else:
+            obj.state = TrackState.PREDICT
+            obj.predict_time += dt
+        measured = bool(np.all(np.isfinite(z)))
+        fu, fv = (z if measured else est_uv)
+        obj.last_uv, obj.last_W = (float(fu), float(fv)), W
+        intensity = math.nan if glitch or D is None else detect.window_b_intensity(D, fu, fv, W)
+        obj.rows.append((index, t, float(z[0]), float(z[1]), float(width), intensity,
+                         float(mean[0]), float(mean[2]), int(obj.state)))
+        self._match(obj)
+        out_of_range = not (float(thr.range_min) <= mean[2] <= float(thr.range_max))
+        if out_of_range or obj.predict_time > float(thr.predict_timeout):
+            self._end(s)
+
+    def _match(self, obj: _Object) -> None:
+        """(13)-(15) on each completed run of N frames until Pedestrian (Sec. 4.2)."""
+        n = self.cfg.thresholds.n
+        if obj.decided or len(obj.rows) < n * (obj.windows_done + 1):
+            return
+        k = n * obj.windows_done
+        rows = np.asarray([r[1:8] for r in obj.rows[k:k + n]], np.float64)
+        t, intensity, xy = rows[:, 0], rows[:, 4], rows[:, 5:7]
+        res = _classify(self.cfg, jnp.asarray(intensity, jnp.float32),
+                        jnp.asarray(t - t[0], jnp.float32), jnp.asarray(xy, jnp.float32),
+                        jnp.asarray(True))
+        obj.windows_done += 1
+        pedestrian = int(res.verdict) == Verdict.PEDESTRIAN
+        if obj.result is None or pedestrian:
+            obj.result = {k_: np.asarray(getattr(res, k_)) for k_ in (
+                "verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "peak_freq",
+                "peak_power", "peak_mask")}
+            obj.result["window"] = (k, k + n)
+        obj.decided = pedestrian
+
+    def snapshot(self) -> list[dict]:
+        """The objects being tracked now, for drawing: id, foot point, W, state, verdict."""
+        out = []
+        for o in self._slots:
+            if o is None or o.state == TrackState.DETECT:
+                continue
+            verdict = None if o.result is None else VERDICT_LABELS[int(o.result["verdict"])]
+            out.append({"track_id": o.track_id, "u": o.last_uv[0], "v": o.last_uv[1],
+                        "width": o.last_W, "state": o.state.name.lower(), "verdict": verdict})
+        return out
+
+    def _end(self, s: int) -> None:
+        self.finished.append(self._slots[s])
+        self._slots[s] = None
+
+    # ------------------------------------------------------------------------------------------
+    def finish(self) -> tuple[dict, dict, list[_Object]]:
+        """End every track; return (tracks columns, verdict columns, the objects)."""
+        for s, obj in enumerate(self._slots):
+            if obj is not None:
+                self._end(s)
+        objs = sorted(self.finished, key=lambda o: o.track_id)
+        return tracks_columns(objs), verdict_columns(objs, self.cfg.thresholds.n), objs
+
+
+def _box(uv, w, h) -> tuple[int, int, int, int]:
+    if not np.all(np.isfinite(uv)) or w <= 0:
+        return (0, 0, 0, 0)
+    return (int(uv[0] - w / 2), int(uv[1] - h / 2), int(w), int(h))
+
+
+TRACK_COLUMNS = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",
+                 "state"]
+
+
+def tracks_columns(objs: list[_Object]) -> dict[str, np.ndarray]:
+    """The tracks format (ARCHITECTURE.md) plus the filter's ground estimate and the state."""
+    rows = [(o.track_id, *r) for o in objs for r in o.rows]
+    cols = list(zip(*rows)) if rows else [[] for _ in TRACK_COLUMNS]
+    out = {k: np.asarray(c) for k, c in zip(TRACK_COLUMNS, cols)}
+    out["track_id"] = out["track_id"].astype(np.int64)
+    out["frame"] = out["frame"].astype(np.int64)
+    out["state"] = np.asarray([TrackState(int(s)).name.lower() for s in out["state"]],
+                              dtype=object)
+    for k in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est"):
+        out[k] = out[k].astype(np.float64)
+    return out
+
+
+def verdict_columns(objs: list[_Object], n: int) -> dict[str, np.ndarray]:
+    """One row per track, the columns of the verdicts format."""
+    cols: dict[str, list] = {k: [] for k in ("track_id", "verdict", "reason", "pace_hz",
+                                             "stride_m", "ratio", "speed_mps", "n_samples")}
+    for o in objs:
+        r = o.result
+        cols["track_id"].append(o.track_id)
+        cols["n_samples"].append(len(o.rows))
+        if r is None:
+            cols["verdict"].append(VERDICT_LABELS[Verdict.UNCLASSIFIED])
+            cols["reason"].append(REASON_LABELS[Reason.TOO_SHORT])
+            for k in ("pace_hz", "stride_m", "ratio", "speed_mps"):
+                cols[k].append(math.nan)
+            continue
+        cols["verdict"].append(VERDICT_LABELS[int(r["verdict"])])
+        cols["reason"].append(REASON_LABELS[int(r["reason"])])
+        for k in ("pace_hz", "stride_m", "ratio", "speed_mps"):
+            cols[k].append(float(r[k]))
+    return {k: np.asarray(v, dtype=object if k in ("verdict", "reason") else None)
+            for k, v in cols.items()}
