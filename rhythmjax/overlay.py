@@ -46,7 +46,8 @@ def draw_frame(gray: np.ndarray, objects: list[dict], index: int) -> np.ndarray:
 def spectrum_figure(path, cfg: Config, tracks: dict, verdicts: dict, objs, *,
                     max_tracks: int = 12) -> None:
     """One panel per track: the MEM spectrum (P relative to white noise) of its deciding window,
-    P_thr, the walking-model pace band (mean +/- k_sigma3 sd) and the verdict; written atomically."""
+    P_thr, the walking-model pace band (mean +/- k_sigma3 sd) and the verdict; written
+    atomically."""
     import matplotlib
 
     matplotlib.use("Agg")
