@@ -1,0 +1,206 @@
+"""Synthetic scenes: determinism, geometry against (3), gait truth, and the rhythm at the feet."""
+
+import math
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from rhythmjax import synth, synth_actors as sa
+from rhythmjax.camera import project
+from rhythmjax.detect import frame_difference, walker_width_px, window_b_intensity
+from rhythmjax.params import Camera, WidthModel
+
+
+CAM = Camera()
+
+
+def _lone(actor, n_frames, **kw):
+    kw.setdefault("noise_std", 0.0)
+    return synth.render_scene(11, synth.SceneSpec(n_frames=n_frames, actors=(actor,), **kw))
+
+
+def test_deterministic_given_seed():
+    spec = synth.random_spec(3, 2, 1, 1, n_frames=24, jitter_px=0.7)
+    assert spec == synth.random_spec(3, 2, 1, 1, n_frames=24, jitter_px=0.7)
+    a, b = synth.render_scene(7, spec), synth.render_scene(7, spec)
+    np.testing.assert_array_equal(a.frames, b.frames)
+    np.testing.assert_array_equal(a.truth[0].u, b.truth[0].u)
+    c = synth.render_scene(8, spec)
+    assert np.any(a.frames != c.frames)
+    assert spec != synth.random_spec(4, 2, 1, 1, n_frames=24, jitter_px=0.7)
+    # a JAX key (raw or typed) works too, and deterministically
+    k1 = synth.render_scene(jax.random.PRNGKey(1), spec).frames
+    k2 = synth.render_scene(jax.random.PRNGKey(1), spec).frames
+    k3 = synth.render_scene(jax.random.key(1), spec).frames
+    np.testing.assert_array_equal(k1, k2)
+    np.testing.assert_array_equal(k1, k3)
+
+
+def test_project_3d_ground_is_equation_3():
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(-5, 5, 200), rng.uniform(1, 40, 200)
+    with jax.enable_x64(True):
+        cam64 = Camera()
+        u_ref, v_ref = (np.asarray(q) for q in project(cam64, jnp.asarray(x), jnp.asarray(y)))
+    u, v = synth.project_3d(cam64, x, y, 0.0)
+    np.testing.assert_allclose(u, u_ref, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(v, v_ref, atol=1e-6, rtol=0)
+    # a point h above the ground sits on the horizon row's ... camera-height plane: v = Vc - b f
+    # tan-free check: z = h projects to v = Vc - b f y sin / (f + y cos) (optical centre height)
+    _, v_h = synth.project_3d(CAM, 0.0, 10.0, 1.0)
+    th = math.radians(15)
+    assert v_h == pytest.approx(256 - 800 * 10 * math.sin(th) / (0.008 + 10 * math.cos(th)))
+    # higher points are higher in the image
+    _, v1 = synth.project_3d(CAM, 0.0, 10.0, 0.5)
+    assert v_h < v1 < synth.project_3d(CAM, 0.0, 10.0, 0.0)[1]
+
+
+@pytest.mark.parametrize("actor", [
+    synth.walker(-1.5, 8.0, 0.0, pace_hz=2.0, step_length_m=0.7, phase=0.13),
+    synth.walker(1.0, 12.0, math.pi, pace_hz=1.8, step_length_m=0.8, bag=True),
+    synth.bicycle(-2.0, 10.0, 0.0, speed_mps=3.0, cadence_hz=1.1),
+    synth.dog(1.0, 6.0, math.pi, pace_hz=4.0, step_length_m=0.25),
+])
+def test_truth_foot_point_is_lowest_pixels(actor):
+    sc = _lone(actor, 24)
+    tr = sc.truth[0]
+    for k in range(0, 24, 3):
+        mask = np.abs(sc.frames[k].astype(int) - sc.background.astype(int)) > 12
+        rows = np.flatnonzero(mask.any(1))
+        assert rows.size
+        low = rows.max()
+        assert abs(low - tr.v[k]) <= 2.0, (k, low, tr.v[k])
+        W = walker_width_px(CAM, WidthModel(), tr.u[k], tr.v[k])
+        band = mask[max(0, low - int(round(W / 5)) + 1):low + 1]
+        cols = np.flatnonzero(band.any(0))
+        assert abs(0.5 * (cols.min() + cols.max()) - tr.u[k]) <= 2.0, (k, cols, tr.u[k])
+        allc = np.flatnonzero(mask.any(0))
+        assert abs((allc.max() - allc.min()) - tr.width_px[k]) <= 3.0
+
+
+def test_walker_stance_feet_planted_and_step_count():
+    pace, L, fps = 2.1, 0.74, 200.0  # fine time grid
+    t = np.arange(0, 6.0, 1 / fps)
+    c = pace * t / 2 + 0.3
+    body = pace * L * t
+    onsets = 0
+    for o in (0.0, 0.5):
+        rel, lift, swinging = sa.gait(c, o, sa.WALKER_SWING, L)
+        ground = body + rel
+        stance = ~swinging
+        # each stance run: the foot does not move on the ground
+        edges = np.flatnonzero(np.diff(stance.astype(int)) != 0) + 1
+        for run in np.split(np.arange(len(t)), edges):
+            if stance[run[0]]:
+                assert np.ptp(ground[run]) < 1e-3
+                assert np.all(lift[run] == 0)
+        # each swing moves the foot forward 2 L
+        starts = np.flatnonzero(np.diff(swinging.astype(int)) == 1) + 1
+        onsets += len(starts)
+        assert np.all(np.diff(ground) >= -1e-12)
+        # swing lasts 0.8 of a step period
+        ends = np.flatnonzero(np.diff(swinging.astype(int)) == -1) + 1
+        e = ends[ends > starts[0]][0]
+        assert (e - starts[0]) / fps == pytest.approx(0.8 / pace, abs=2 / fps)
+        assert ground[e] - ground[starts[0] - 1] == pytest.approx(2 * L, abs=1e-3)
+    assert abs(onsets - pace * t[-1]) <= 1.0
+    # mean speed of the truth foot point is pace * step length
+    spec_speed = synth.walker(0.0, 8.0, 0.0, pace_hz=pace, step_length_m=L).speed_mps
+    assert spec_speed == pytest.approx(pace * L)
+
+
+def _dominant(sig, fps):
+    sig = np.asarray(sig) - np.mean(sig)
+    p = np.abs(np.fft.rfft(sig)) ** 2
+    f = np.fft.rfftfreq(len(sig), 1 / fps)
+    return f[1 + np.argmax(p[1:])], f[1] - f[0]
+
+
+@pytest.mark.parametrize("actor", [
+    synth.walker(-3.5, 14.0, 0.0, pace_hz=2.0, step_length_m=0.7, grey_legs=40),
+    synth.walker(0.3, 6.0, math.radians(80), pace_hz=2.3, step_length_m=0.65, grey_legs=200,
+                 phase=0.4),
+    synth.walker(3.6, 13.0, math.pi, pace_hz=1.75, step_length_m=0.8, bag=True, phase=0.7),
+])
+def test_window_b_rhythm_at_walkers_pace(actor):
+    n = 72
+    sc = _lone(actor, n + 1, noise_std=2.0)
+    tr = sc.truth[0]
+    assert tr.visible.all()
+    sig = []
+    for k in range(1, n + 1):
+        d = frame_difference(sc.frames[k - 1], sc.frames[k])
+        W = walker_width_px(CAM, WidthModel(), tr.u[k], tr.v[k])
+        sig.append(window_b_intensity(d, tr.u[k], tr.v[k], W))
+    f, df = _dominant(sig, sc.fps)
+    assert abs(f - actor.pace_hz) <= df + 1e-9, (f, actor.pace_hz, df)
+
+
+def test_bicycle_and_dog_truth():
+    b = synth.bicycle(-3.0, 12.0, 0.1, speed_mps=4.5, cadence_hz=1.2)
+    d = synth.dog(2.0, 7.0, math.pi - 0.2, pace_hz=3.6, step_length_m=0.3)
+    sc = synth.render_scene(2, synth.SceneSpec(n_frames=30, actors=(b, d)))
+    tb, td = sc.truth
+    assert (tb.kind, td.kind) == ("bicycle", "dog")
+    assert tb.speed_mps == pytest.approx(4.5) and tb.pace_hz == pytest.approx(2.4)
+    assert tb.step_length_m == pytest.approx(4.5 / 2.4)
+    assert td.pace_hz == 3.6 and td.step_length_m == 0.3 and td.speed_mps == pytest.approx(1.08)
+    for tr in (tb, td):  # measured ground speed over the scene
+        dist = math.hypot(tr.body_x[-1] - tr.body_x[0], tr.body_y[-1] - tr.body_y[0])
+        assert dist / (29 / sc.fps) == pytest.approx(tr.speed_mps, rel=1e-9)
+        u, v = synth.project_3d(CAM, tr.x, tr.y, 0.0)
+        np.testing.assert_allclose(u, tr.u, atol=1e-9)  # no jitter
+        assert np.all((tr.v >= v - 0.5) & (tr.v <= v + 4.0))  # lowest row: the nearest contact
+    # the dog trots: diagonal pairs swing together, step onsets at `pace`
+    c = 3.6 * np.arange(0, 5, 0.001) / 2
+    onsets = sum(int(np.sum(np.diff(sa.gait(c, o, sa.DOG_SWING, 0.3)[2].astype(int)) == 1))
+                 for o in (0.0, 0.5))
+    assert abs(onsets - 3.6 * 5) <= 1
+
+
+def test_random_spec_and_tracks_truth():
+    spec = synth.random_spec(5, 6, 2, 2, n_frames=160)
+    kinds = [a.kind for a in spec.actors]
+    assert kinds.count("pedestrian") == 6 and kinds.count("bicycle") == 2
+    for a in spec.actors:
+        assert a.start_frame + a.n_frames <= 160
+        if a.kind == "bicycle":
+            assert 3.0 <= a.speed_mps <= 6.0 and 1.8 <= a.pace_hz <= 3.0
+        if a.kind == "dog":
+            assert 3.0 <= a.pace_hz <= 5.0 and 0.2 <= a.step_length_m <= 0.35
+    assert len({a.start_frame for a in spec.actors}) > 3  # staggered
+    sc = synth.render_scene(0, synth.SceneSpec(n_frames=160, actors=spec.actors, noise_std=0.0))
+    for tr in sc.truth:
+        y = tr.y[tr.alive]
+        assert np.all((y > 3.0) & (y < 20.0))
+        assert tr.visible[tr.alive].mean() > 0.95
+    cols = synth.scene_to_tracks_truth(sc)
+    assert set(cols) == {"track_id", "frame", "t", "u", "v", "width_px", "intensity", "label",
+                         "x", "y"}
+    n = sum(int(tr.visible.sum()) for tr in sc.truth)
+    assert all(len(v) == n for v in cols.values())
+    assert np.all(np.isnan(cols["intensity"])) and np.all(np.isfinite(cols["width_px"]))
+    np.testing.assert_allclose(cols["t"], cols["frame"] / 15.0)
+    assert set(cols["label"]) == {"pedestrian", "bicycle", "dog"}
+
+
+def test_noise_and_jitter_levels():
+    spec = synth.SceneSpec(n_frames=3, noise_std=2.0, jitter_px=0.0)
+    sc = synth.render_scene(1, spec)
+    d = sc.frames[1].astype(float) - sc.frames[0].astype(float)
+    assert np.std(d[100:]) / math.sqrt(2) == pytest.approx(2.0, rel=0.1)
+    js = synth.render_scene(1, synth.SceneSpec(n_frames=40, jitter_px=1.5, noise_std=0.0))
+    assert np.std(js.jitter) == pytest.approx(1.5, rel=0.3)
+    assert np.any(js.frames[0] != js.frames[1])
+
+
+def test_render_speed():
+    spec = synth.random_spec(9, 3, 1, 1, n_frames=60, min_life=60, max_life=60)
+    synth.render_scene(0, synth.SceneSpec(n_frames=2, actors=spec.actors))
+    t0 = time.perf_counter()
+    synth.render_scene(0, spec)
+    fps = 60 / (time.perf_counter() - t0)
+    assert fps > 25  # >= 100 on an idle core; a loose bound on a shared machine
