@@ -9,10 +9,11 @@ Y = (u_p, v_p) through the camera of (3). Every step runs the same three calls (
 
 Only the source of `valid` differs: `FromAnnotations` (fitting: the measurement is present) or
 `gates.PaperGates` (inference: the width gate (10) and the outlier gate (11) exactly as written).
-The covariance update is the Joseph form, symmetrised, with Cholesky solves and no inverse, so P
-stays symmetric positive definite in float32. A NaN or missing measurement is replaced by the
-predicted measurement *before* it is used (double where), so it becomes a prediction step with
-finite gradients.
+The covariance update is the Joseph form, symmetrised, so P stays symmetric positive definite in
+float32; the 2x2 innovation covariance S is inverted in closed form (adjugate over determinant,
+guarded: S >= R > 0), and small products are written so that XLA fuses them under vmap. A NaN
+or missing measurement is replaced by the predicted measurement *before* it is used (double
+where), so it becomes a prediction step with finite gradients.
 """
 
 from __future__ import annotations
@@ -23,7 +24,6 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import jax.scipy.linalg as jsl
 from jaxtyping import Array, Bool, Float
 
 from .camera import ground_from_image, in_front, measure, measure_jacobian
@@ -46,6 +46,7 @@ class Update(eqx.Module):
     posterior: Gaussian
     innovation: Float[Array, "2"]  # nu = Y - h(X(k|k-1)), px
     innovation_cov: Float[Array, "2 2"]  # S = H P H^T + R, px^2
+    prior_meas_cov: Float[Array, "2 2"]  # H P(k|k-1) H^T, px^2
     nis: Float[Array, ""]  # nu^T S^-1 nu
     loglik: Float[Array, ""]  # log N(nu; 0, S)
     ok: Bool[Array, ""]  # S finite and positive definite, prior in front of the camera
@@ -53,6 +54,26 @@ class Update(eqx.Module):
 
 def _symmetrise(P):
     return 0.5 * (P + P.T)
+
+
+def _mm(a, b):
+    """Small matrix product as broadcast-multiply-sum. Under vmap XLA fuses it into one loop,
+    where a batched dot of 4x4 matrices becomes a library call per step (several times slower on
+    CPU at thousands of tracks)."""
+    return jnp.sum(a[:, :, None] * b[None, :, :], axis=1)
+
+
+def _mv(a, x):
+    return jnp.sum(a * x[None, :], axis=1)
+
+
+def inverse_2x2(S: Float[Array, "2 2"]) -> tuple[Float[Array, "2 2"], Float[Array, ""]]:
+    """Closed-form inverse and determinant of a symmetric 2x2 matrix (no LAPACK call)."""
+    a, b, c = S[0, 0], 0.5 * (S[0, 1] + S[1, 0]), S[1, 1]
+    det = a * c - b * b
+    safe = jnp.where(det > 0, det, 1.0)
+    inv = jnp.stack([jnp.stack([c, -b]), jnp.stack([-b, a])]) / safe
+    return inv, det
 
 
 def transition(dt: Float[Array, ""]) -> Float[Array, "4 4"]:
@@ -66,7 +87,7 @@ def transition(dt: Float[Array, ""]) -> Float[Array, "4 4"]:
 def predict(noise: Noise, state: Gaussian, dt: Float[Array, ""]) -> Gaussian:
     """(5) and (8): X(k+1|k) = F X(k|k), P(k+1|k) = F P(k|k) F^T + Q."""
     F = transition(dt)
-    return Gaussian(F @ state.mean, _symmetrise(F @ state.cov @ F.T + noise.Q(dt)))
+    return Gaussian(_mv(F, state.mean), _symmetrise(_mm(_mm(F, state.cov), F.T) + noise.Q(dt)))
 
 
 def update(camera: Camera, noise: Noise, prior: Gaussian, z: Float[Array, "2"]) -> Update:
@@ -79,24 +100,23 @@ def update(camera: Camera, noise: Noise, prior: Gaussian, z: Float[Array, "2"]) 
     P = prior.cov
     H = measure_jacobian(camera, prior.mean)
     zhat = measure(camera, prior.mean)
-    S = _symmetrise(H @ P @ H.T + R)
-    # PX4-style sanity check before the factorisation; a failed check means "do not update".
-    ok = (jnp.all(jnp.isfinite(S)) & in_front(camera, prior.mean[2])
-          & jnp.all(jnp.diag(S) >= jnp.diag(R) * (1.0 - 1e-3)))
-    L = jnp.linalg.cholesky(jnp.where(ok, S, jnp.eye(2, dtype=S.dtype)))
-    ok = ok & jnp.all(jnp.isfinite(L))
-    L = jnp.where(ok, L, jnp.eye(2, dtype=S.dtype))
-    PHt = P @ H.T
-    K = jsl.cho_solve((L, True), PHt.T).T  # (6) as a solve: K = P H^T S^-1
+    PHt = _mm(P, H.T)
+    HPHt = _symmetrise(_mm(H, PHt))
+    S = HPHt + R
+    Sinv, det = inverse_2x2(S)
+    # PX4-style sanity check; a failed check means "do not update" (the gate switch predicts).
+    ok = (jnp.isfinite(det) & (det > 0) & (S[0, 0] > 0) & in_front(camera, prior.mean[2])
+          & jnp.all(jnp.diag(S) >= jnp.diag(R) * (1.0 - 1e-3)) & jnp.all(jnp.isfinite(Sinv)))
+    Sinv = jnp.where(ok, Sinv, jnp.eye(2, dtype=S.dtype))
+    K = _mm(PHt, Sinv)  # (6): K = P H^T S^-1
     nu = z - zhat
-    mean = prior.mean + K @ nu
-    IKH = jnp.eye(4, dtype=P.dtype) - K @ H
-    cov = _symmetrise(IKH @ P @ IKH.T + K @ R @ K.T)
-    w = jsl.solve_triangular(L, nu, lower=True)
-    nis = w @ w
-    logdet = 2.0 * jnp.sum(jnp.log(jnp.diag(L)))
+    mean = prior.mean + _mv(K, nu)
+    IKH = jnp.eye(4, dtype=P.dtype) - _mm(K, H)
+    cov = _symmetrise(_mm(_mm(IKH, P), IKH.T) + _mm(_mm(K, R), K.T))
+    nis = jnp.sum(nu * _mv(Sinv, nu))
+    logdet = jnp.log(jnp.where(ok, det, 1.0))
     loglik = -0.5 * (nis + logdet + 2.0 * _LOG_2PI)
-    return Update(Gaussian(mean, cov), nu, S, nis, loglik, ok)
+    return Update(Gaussian(mean, cov), nu, S, HPHt, nis, loglik, ok)
 
 
 def select(valid: Bool[Array, ""], cand: Gaussian, prior: Gaussian) -> Gaussian:
@@ -141,8 +161,9 @@ class AbstractValidity(eqx.Module):
 
     @abc.abstractmethod
     def accept_initial(self, camera: Camera, z: Float[Array, "2"], width: Float[Array, ""],
-                       ground: Gaussian) -> Bool[Array, ""]:
-        """Whether a first measurement may start a track (DETECT -> OBSERVE)."""
+                       ground_xy: Float[Array, "2"]) -> Bool[Array, ""]:
+        """Whether a first measurement z, whose ground point is `ground_xy` (m), may start a
+        track (DETECT -> OBSERVE)."""
 
     @abc.abstractmethod
     def __call__(self, camera: Camera, prior: Gaussian, cand: Update, z: Float[Array, "2"],
@@ -154,7 +175,7 @@ class FromAnnotations(AbstractValidity):
     """Fitting: every present, finite measurement is used, so the loss is smooth in the
     parameters. Absence is already expressed by NaN or the `present` mask."""
 
-    def accept_initial(self, camera, z, width, ground):
+    def accept_initial(self, camera, z, width, ground_xy):
         return jnp.asarray(True)
 
     def __call__(self, camera, prior, cand, z, width):
@@ -189,6 +210,31 @@ def empty_carry(dtype=None) -> Carry:
     return Carry(Gaussian(jnp.zeros(4, dtype), jnp.eye(4, dtype=dtype)), jnp.asarray(False))
 
 
+def _tracked_step(camera, noise, validity, state, z, width, dt, available):
+    """Predict, candidate update, gate, select: the part of every step after the start."""
+    prior = predict(noise, state, dt)
+    z_safe = jnp.where(available, z, measure(camera, prior.mean))  # double where, module doc
+    cand = update(camera, noise, prior, z_safe)
+    valid = available & cand.ok & validity(camera, prior, cand, z_safe, width)
+    return prior, cand, valid, select(valid, cand.posterior, prior)
+
+
+def _can_start(camera, validity, z, width, available):
+    """Whether a measurement may start a track: it has a ground point the validity accepts."""
+    x, y, ok = ground_from_image(camera, z[0], z[1])
+    return available & ok & validity.accept_initial(camera, z, width, jnp.stack([x, y]))
+
+
+def _output(state, prior, cand, valid, available, started_before, started):
+    zero = jnp.zeros((), prior.mean.dtype)
+    seen = available & started_before
+    return StepOutput(
+        mean=state.mean, cov=state.cov, pred_mean=prior.mean,
+        innovation=jnp.where(seen, cand.innovation, 0.0), nis=jnp.where(seen, cand.nis, zero),
+        loglik=jnp.where(valid, cand.loglik, zero), available=available, valid=valid,
+        started=started)
+
+
 def step(
     camera: Camera,
     noise: Noise,
@@ -199,29 +245,19 @@ def step(
     dt: Float[Array, ""],
     present: Bool[Array, ""],
 ) -> tuple[Carry, StepOutput]:
-    """One frame: initialise on the first usable measurement, then predict-update-select."""
-    prior = predict(noise, carry.state, dt)
+    """One frame of one object (the online tracker): start on the first usable measurement,
+    then predict-update-select. `filter_track` runs the same logic over a whole track."""
     available = present & jnp.all(jnp.isfinite(z))
-    z_safe = jnp.where(available, z, measure(camera, prior.mean))  # double where, see module doc
-    cand = update(camera, noise, prior, z_safe)
-    gate = validity(camera, prior, cand, z_safe, width)  # a NaN width is the validity's call
-    valid = carry.started & available & cand.ok & gate
-
-    init, init_ok = initial_state(camera, noise, z_safe)
-    start_now = (~carry.started & available & init_ok
-                 & validity.accept_initial(camera, z_safe, width, init))
-    tracked = select(valid, cand.posterior, prior)
+    prior, cand, valid, tracked = _tracked_step(camera, noise, validity, carry.state, z, width,
+                                                dt, available)
+    valid = valid & carry.started
+    z_safe = jnp.where(available, z, 0.0)
+    init, _ = initial_state(camera, noise, z_safe)
+    start_now = ~carry.started & _can_start(camera, validity, z_safe, width, available)
     state = select(start_now, init, select(carry.started, tracked, carry.state))
     started = carry.started | start_now
-    zero = jnp.zeros((), prior.mean.dtype)
-    out = StepOutput(
-        mean=state.mean, cov=state.cov, pred_mean=prior.mean,
-        innovation=jnp.where(available & carry.started, cand.innovation, 0.0),
-        nis=jnp.where(available & carry.started, cand.nis, zero),
-        loglik=jnp.where(valid, cand.loglik, zero),
-        available=available, valid=valid, started=started,
-    )
-    return Carry(state, started), out
+    return Carry(state, started), _output(state, prior, cand, valid, available, carry.started,
+                                          started)
 
 
 class FilterOutput(eqx.Module):
@@ -240,13 +276,32 @@ def filter_track(
     dt: Float[Array, " T"],
     present: Bool[Array, " T"],
 ) -> FilterOutput:
-    """Run one (padded) track through `step` by `lax.scan`; dt[k] is t[k] - t[k-1] in s."""
+    """Run one (padded) track: the start (the first measurement `step` would start on) is found
+    for all frames at once, then `lax.scan` runs the tracked steps; dt[k] = t[k] - t[k-1] (s).
+    Same results as scanning `step`, without the start logic inside the sequential loop."""
     z, width, dt = (jnp.asarray(a, jnp.result_type(float)) for a in (z, width, dt))
+    present = jnp.asarray(present)
+    available = present & jnp.all(jnp.isfinite(z), axis=-1)
+    z0 = jnp.where(available[:, None], z, 0.0)
+    can = jax.vmap(_can_start, in_axes=(None, None, 0, 0, 0))(camera, validity, z0, width,
+                                                             available)
+    k0 = jnp.argmax(can)
+    has_start = can[k0]
+    init, _ = initial_state(camera, noise, z0[k0])
+    first = empty_carry(z.dtype).state
 
-    def body(carry, inp):
-        return step(camera, noise, validity, carry, *inp)
+    def body(state, inp):
+        k, zk, wk, dtk, ak = inp
+        before = has_start & (k > k0)
+        prior, cand, valid, tracked = _tracked_step(camera, noise, validity, state, zk, wk, dtk,
+                                                    ak)
+        valid = valid & before
+        now = has_start & (k == k0)
+        new = select(now, init, select(before, tracked, state))
+        return new, _output(new, prior, cand, valid, ak, before, before | now)
 
-    _, out = jax.lax.scan(body, empty_carry(z.dtype), (z, width, dt, jnp.asarray(present)))
+    ks = jnp.arange(z.shape[0])
+    _, out = jax.lax.scan(body, first, (ks, z, width, dt, available))
     return FilterOutput(out, jnp.sum(out.loglik))
 
 
