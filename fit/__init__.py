@@ -3,4 +3,14 @@
 Depends on `rhythmjax`; `rhythmjax` never imports `fit`.
 """
 
-__all__: list[str] = []
+from fit.camera import (
+    CameraFit as CameraFit,
+    CameraParams as CameraParams,
+    fit_camera as fit_camera,
+    reprojection_rms as reprojection_rms,
+)
+from fit.noise import NoiseFit as NoiseFit, fit_noise as fit_noise, simulate as simulate
+
+
+__all__ = ["CameraFit", "CameraParams", "NoiseFit", "fit_camera", "fit_noise",
+           "reprojection_rms", "simulate"]
