@@ -124,8 +124,8 @@ def _window(shape: tuple[int, ...], cu: float, cv: float, w: int, h: int) -> tup
 
 def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarray,
                      window_size: Number | Sequence[Number] | np.ndarray, *,
-                     fraction: Number = 0.3, min_area: int = 10, halo: int = SOBEL_HALO_PX
-                     ) -> Detection | None:
+                     fraction: Number = 0.3, min_area: int = 10, halo: int = SOBEL_HALO_PX,
+                     core: Box | None = None, dilate_px: int = 3) -> Detection | None:
     """Detect the object in a window centred on the predicted foot point `center_uv` = (u, v) px.
 
     `window_size` is (width, height) px or one number for a square; the window is clipped at the
@@ -134,7 +134,14 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
     wid_IMG its length. The horizontal projection (row sums within that extent), sliced the same
     way, gives v_p = its lowest row. None if the window is empty, outside the image, or holds
     fewer than `min_area` motion pixels in the sliced box (no measurement). wid_IMG is the
-    extent less `halo` px on each side (see the module docstring; 0 to keep the raw extent)."""
+    extent less `halo` px on each side (see the module docstring; 0 to keep the raw extent).
+
+    `core` (x0, y0, w, h) px, the box where the object is expected (its predicted body): when
+    given, only the connected regions of the window's motion (dilated by `dilate_px`, as in
+    `find_objects`) that belong to the object are kept: the region with the most motion pixels
+    inside `core`, and every other region at least half inside it. Another object that enters
+    the window (a walker passing nearer or farther) then no longer widens the extent or moves
+    the bottom point."""
     u, v = (float(c) for c in center_uv)
     if not (math.isfinite(u) and math.isfinite(v)):
         return None
@@ -143,7 +150,37 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
     x0, y0, x1, y1 = _window(motion.shape, u, v, w, h)
     if x1 <= x0 or y1 <= y0:
         return None
-    return _bottom_point(motion[y0:y1, x0:x1], x0, y0, fraction, min_area, halo)
+    crop = motion[y0:y1, x0:x1]
+    if core is not None:
+        crop = _object_regions(crop, (core[0] - x0, core[1] - y0, core[2], core[3]), dilate_px)
+        if crop is None:
+            return None
+    return _bottom_point(crop, x0, y0, fraction, min_area, halo)
+
+
+def _object_regions(crop: np.ndarray, core: Box, dilate_px: int) -> np.ndarray | None:
+    """The motion of `crop` restricted to the regions that belong to the object in `core` (crop
+    coordinates): the region with the most motion pixels inside `core`, and every other region
+    at least half inside it; None if no region touches it."""
+    mask = (crop > 0).astype(np.uint8)
+    if dilate_px > 0:
+        mask = cv2.dilate(mask, np.ones((2 * dilate_px + 1,) * 2, np.uint8))
+    n, labels = cv2.connectedComponents(mask, connectivity=8)
+    if n <= 2:  # one region (or none): nothing to choose
+        return crop if n == 2 else None
+    moving = np.where(crop > 0, labels, 0)
+    total = np.bincount(moving.ravel(), minlength=n)
+    cx0, cy0 = max(core[0], 0), max(core[1], 0)
+    cx1, cy1 = min(core[0] + core[2], crop.shape[1]), min(core[1] + core[3], crop.shape[0])
+    if cx1 <= cx0 or cy1 <= cy0:
+        return None
+    inside = np.bincount(moving[cy0:cy1, cx0:cx1].ravel(), minlength=n)
+    inside[0] = total[0] = 0
+    if inside.max() <= 0:
+        return None
+    keep = (2 * inside >= total) & (total > 0)
+    keep[int(np.argmax(inside))] = True
+    return np.where(keep[labels], crop, 0).astype(crop.dtype)
 
 
 def _overlap(a: Box, b: Box) -> int:
@@ -154,13 +191,21 @@ def _overlap(a: Box, b: Box) -> int:
 
 def find_objects(motion: np.ndarray, *, min_area: int, exclude_boxes: Sequence[Box] = (),
                  dilate_px: int = 3, fraction: Number = 0.3, max_objects: int = 64,
-                 halo: int = SOBEL_HALO_PX) -> list[Detection]:
+                 halo: int = SOBEL_HALO_PX, downscale: int = 1) -> list[Detection]:
     """New objects anywhere in M: connected regions (8-connected) of the motion mask dilated by a
     (2 dilate_px + 1)^2 square (to join legs and fragmented edges), each reduced to a Detection by
     the projections of its own motion pixels. Regions with fewer than `min_area` motion pixels are
     dropped, and so are regions whose foot point lies in a box of `exclude_boxes` (x0, y0, w, h) or
     half of whose box overlaps one (objects already tracked). At most `max_objects`, largest first
-    (bounded work on a pathological frame, RELIABILITY item 16)."""
+    (bounded work on a pathological frame, RELIABILITY item 16).
+
+    `downscale` s > 1 labels the regions on an s-times smaller mask (a block is set when any of
+    its pixels moves; dilated by ceil(dilate_px / s)), s^2 times less labelling work (the
+    full-frame labelling was most of the tracker's per-frame cost); each region's Detection is
+    still measured on the full-resolution motion pixels of its blocks."""
+    if downscale > 1:
+        return _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction,
+                                    max_objects, halo, int(downscale))
     mask = (motion > 0).astype(np.uint8)
     if dilate_px > 0:
         k = np.ones((2 * dilate_px + 1, 2 * dilate_px + 1), np.uint8)
@@ -174,6 +219,39 @@ def find_objects(motion: np.ndarray, *, min_area: int, exclude_boxes: Sequence[B
             break  # sorted by (dilated) area, which bounds the motion area
         crop = np.where(labels[y:y + h, x:x + w] == k, motion[y:y + h, x:x + w], 0)
         det = _bottom_point(crop, x, y, fraction, min_area, halo)
+        if det is None or any(_inside(det, b) or 2 * _overlap(det.box, b) >= det.box[2] * det.box[3]
+                              for b in exclude_boxes):
+            continue
+        out.append(det)
+        if len(out) >= max_objects:
+            break
+    return out
+
+
+def _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction, max_objects,
+                         halo, s) -> list[Detection]:
+    H, W = motion.shape
+    Hs, Ws = -(-H // s), -(-W // s)
+    binary = cv2.threshold(motion, 0, 255, cv2.THRESH_BINARY)[1]
+    if (Hs * s, Ws * s) != (H, W):
+        binary = cv2.copyMakeBorder(binary, 0, Hs * s - H, 0, Ws * s - W, cv2.BORDER_CONSTANT, 0)
+    # the block mean of 0/255 is > 0 exactly when some pixel of the block moves
+    small = (cv2.resize(binary, (Ws, Hs), interpolation=cv2.INTER_AREA) > 0).astype(np.uint8)
+    r = -(-dilate_px // s)
+    if r > 0:
+        small = cv2.dilate(small, np.ones((2 * r + 1, 2 * r + 1), np.uint8))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(small, connectivity=8)
+    order = np.argsort(-stats[1:, cv2.CC_STAT_AREA]) + 1
+    out: list[Detection] = []
+    for k in order:
+        x, y, w, h, a = (int(q) for q in stats[k])
+        if a * s * s < min_area:
+            break  # block area bounds the motion area
+        x0, y0 = x * s, y * s
+        x1, y1 = min((x + w) * s, W), min((y + h) * s, H)
+        lab = np.repeat(np.repeat(labels[y:y + h, x:x + w] == k, s, 0), s, 1)
+        crop = np.where(lab[:y1 - y0, :x1 - x0], motion[y0:y1, x0:x1], 0)
+        det = _bottom_point(crop, x0, y0, fraction, min_area, halo)
         if det is None or any(_inside(det, b) or 2 * _overlap(det.box, b) >= det.box[2] * det.box[3]
                               for b in exclude_boxes):
             continue

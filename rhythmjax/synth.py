@@ -393,12 +393,13 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                 n_frames: int = 150, *, camera: Camera | None = None, occlusion: bool = False,
                 min_life: int = 80, max_life: int = 120, range_m: tuple[float, float] = (3.5, 19.5),
                 bicycle_speed: tuple[float, float] = (3.0, 6.0), bag_fraction: float = 0.2,
-                noise_std: float = 2.0, jitter_px: float = 0.0, margin_px: float = 8.0
-                ) -> SceneSpec:
+                noise_std: float = 2.0, jitter_px: float = 0.0, margin_px: float = 8.0,
+                crossing_fraction: float = 0.85) -> SceneSpec:
     """A random scene: walkers with the paper's pace N(2.05, 0.183) Hz and step length
     N(0.72, 0.09) m, bicycles at `bicycle_speed` m/s pedalling at 0.9-1.5 rev/s, dogs trotting
     at 3-5 Hz with 0.2-0.35 m steps. Each lives min_life..max_life frames (fewer for a bicycle
-    that would cross the range faster), starts at a random frame, and moves on a straight path
+    that would cross the range faster: at most `crossing_fraction` of the time it needs to cover
+    the range's depth at its speed), starts at a random frame, and moves on a straight path
     whose foot point stays in the image and within `range_m` (ground distance, m) for its whole
     life. Without `occlusion`, paths are re-drawn (up to 300 times) until the objects' image
     boxes never overlap; with it, overlaps are left as drawn. Deterministic given `seed`."""
@@ -414,7 +415,8 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
         kw = sa.sample_params(kind, rng, bicycle_speed, bag_fraction)
         speed = kw["pace_hz"] * kw["step_length_m"]
         life = int(rng.integers(min_life, max_life + 1))
-        life = min(life, n_frames, max(16, int(0.85 * (range_m[1] - range_m[0]) / speed * fps)))
+        life = min(life, n_frames, max(16, int(crossing_fraction * (range_m[1] - range_m[0])
+                                               / speed * fps)))
         start = int(rng.integers(0, n_frames - life + 1))
         alive = (k >= start) & (k < start + life)
         best = None

@@ -40,8 +40,19 @@ class TrackerOptions:
     diff_threshold: float = 15.0  # |frame difference| threshold, grey levels
     min_area: int = 40  # motion pixels for a new object
     max_objects: int = 8  # object slots advanced together in one jitted call
-    window_widths: float = 3.0  # detection window width, in walker widths W
-    window_heights: float = 1.0  # detection window height, in walker heights (1.7 m)
+    window_widths: float = 2.5  # detection window width, in walker widths W
+    window_heights: float = 1.45  # detection window height, in walker heights (1.7 m)
+    window_raise: float = 0.42  # window centre above the predicted foot point, walker heights
+    # (so the window holds the whole body, not only the legs: a legs-only window measured widths
+    # of 1-3 px when the legs cross and the width gate (10) rejected them)
+    core_widths: float = 1.2  # the predicted body box (W wide, walker height 1.7 m high at the
+    core_heights: float = 1.1  # foot point): only motion regions that belong to it are measured
+    fraction: float = 0.1  # projection slice, fraction of its maximum (0.3 lost the feet: v noisy)
+    near_widths: float = 1.0  # a new object whose foot point lies within this many W of a
+    # tracked object's predicted foot point is that object, not a new one
+    merge_widths: float = 0.5  # two tracks whose estimated foot points stay within this many W
+    merge_frames: int = 2  # for this many frames in a row follow one object: the younger ends
+    downscale: int = 4  # new objects are labelled on a 4x smaller mask (detect.find_objects)
     global_change_fraction: float = 0.5  # more than this of the frame changed: a glitch frame
 
 
@@ -56,6 +67,7 @@ class _Object:
     decided: bool = False
     last_uv: tuple[float, float] = (math.nan, math.nan)  # foot point used for window B, px
     last_W: float = math.nan  # window-B width W, px
+    close_frames: int = 0  # frames in a row its estimate coincided with an older track's
 
 
 def _advance(cfg: Config, carry: Carry, reset, z, width, dt, present):
@@ -72,7 +84,27 @@ def _advance(cfg: Config, carry: Carry, reset, z, width, dt, present):
     next_uv = jax.vmap(lambda m: measure(cfg.camera, m))(nxt.mean)
     est_uv = jax.vmap(lambda m: measure(cfg.camera, m))(out.mean)
     W = image_width(cfg.camera, cfg.width.mean, out.mean[:, 2])
-    return carry, (out.valid, out.started, out.mean, next_uv, est_uv, W)
+    W_next = image_width(cfg.camera, cfg.width.mean, nxt.mean[:, 2])
+    host = jnp.concatenate([out.valid[:, None].astype(z.dtype), out.started[:, None].astype(
+        z.dtype), out.mean, next_uv, est_uv, W[:, None], W_next[:, None]], axis=1)
+    return carry, host  # one (S, 13) array: one device-to-host transfer per frame
+
+
+class _Structure:
+    """The hashable rest of a pytree, its hash computed once: jit hashes static arguments on
+    every call, and hashing an equinox Module walks its fields in Python."""
+
+    __slots__ = ("value", "_hash")
+
+    def __init__(self, value):
+        self.value, self._hash = value, hash(value)
+
+    def __hash__(self):
+        return self._hash
+
+    def __eq__(self, other):
+        return isinstance(other, _Structure) and (self.value is other.value
+                                                  or self.value == other.value)
 
 
 def _split(tree):
@@ -80,11 +112,11 @@ def _split(tree):
     flattening of Config and Carry pytrees that dominates a per-frame call (~3 ms to ~0.1 ms)."""
     dyn, static = eqx.partition(tree, eqx.is_array)
     leaves, treedef = jax.tree.flatten(dyn)
-    return tuple(leaves), (treedef, static)
+    return tuple(leaves), _Structure((treedef, static))
 
 
 def _join(leaves, structure):
-    treedef, static = structure
+    treedef, static = structure.value
     return eqx.combine(jax.tree.unflatten(treedef, leaves), static)
 
 
@@ -110,9 +142,14 @@ class OnlineTracker:
         self._carry, self._carry_structure = _split(carry)
         self._slots: list[_Object | None] = [None] * S
         self._next_uv = np.full((S, 2), np.nan)
+        self._next_W = np.full(S, np.nan)  # W (px) at the predicted ground point
         self._prev: np.ndarray | None = None
         self._last_t: float | None = None
         self._next_id = 1
+        thr = cfg.thresholds  # host copies: a float() of a device scalar costs ~0.1 ms a frame
+        self._range = (float(thr.range_min), float(thr.range_max))
+        self._timeout = float(thr.predict_timeout)
+        self._height_per_W = 1.7 / float(cfg.width.mean)
         self.finished: list[_Object] = []
         self.glitch_frames: list[int] = []
         self.duplicate_frames: list[int] = []
@@ -143,22 +180,33 @@ class OnlineTracker:
             elif detect.is_global_change(D, opt.diff_threshold, opt.global_change_fraction):
                 self.glitch_frames.append(index)
                 glitch = True
-        boxes = []
+        boxes, near = [], []
         for s, obj in enumerate(self._slots):
             if obj is None:
                 continue
             present[s] = True
-            box_w, box_h = self._window_size(self._next_uv[s])
-            boxes.append(_box(self._next_uv[s], box_w, box_h))
-            if glitch or not np.all(np.isfinite(self._next_uv[s])):
+            uv = self._next_uv[s]
+            box_w, box_h, Wp = self._window_size(uv, self._next_W[s])
+            centre = (uv[0], uv[1] - opt.window_raise * box_h / opt.window_heights)
+            boxes.append(_box(centre, box_w, box_h))
+            if math.isfinite(Wp):
+                near.append((uv[0], uv[1], opt.near_widths * Wp))
+            if glitch or not np.all(np.isfinite(uv)):
                 continue
-            det = detect.detect_in_window(M, self._next_uv[s], (box_w, box_h))
+            core_h = opt.core_heights * box_h / opt.window_heights
+            core = _box((uv[0], uv[1] - 0.45 * core_h), opt.core_widths * Wp, core_h)
+            det = detect.detect_in_window(M, centre, (box_w, box_h), fraction=opt.fraction,
+                                          core=core)
             if det is not None:
                 z[s], width[s] = (det.u, det.v), det.width
         if not glitch:
             free = [s for s, o in enumerate(self._slots) if o is None]
-            for det in detect.find_objects(M, min_area=opt.min_area, exclude_boxes=boxes,
-                                           max_objects=len(free)):
+            found = detect.find_objects(M, min_area=opt.min_area, exclude_boxes=boxes,
+                                        max_objects=len(free) + len(near),
+                                        fraction=opt.fraction, downscale=opt.downscale)
+            found = [d for d in found
+                     if not any(math.hypot(d.u - nu, d.v - nv) < r for nu, nv, r in near)]
+            for det in found[:len(free)]:
                 s = free.pop(0)
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT)
                 present[s], reset[s] = True, True
@@ -166,23 +214,52 @@ class OnlineTracker:
         self._carry, host = _advance_flat(self._cfg_structure, self._carry_structure,
                                           self._cfg_leaves, self._carry, reset, z, width,
                                           np.float32(dt), present)
-        valid, started, mean, next_uv, est_uv, W = (np.asarray(a) for a in host)
+        host = np.asarray(host)
+        valid, started, mean = host[:, 0] > 0.5, host[:, 1] > 0.5, host[:, 2:6]
+        next_uv, est_uv, W = host[:, 6:8], host[:, 8:10], host[:, 10]
         self._next_uv = next_uv
+        self._next_W = host[:, 11]
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._after_step(s, obj, index, t, dt, z[s], width[s], bool(valid[s]),
                                  bool(started[s]), mean[s], est_uv[s], float(W[s]), D, glitch)
+        self._merge(est_uv, W)
 
-    def _window_size(self, uv) -> tuple[float, float]:
-        Wp = detect.walker_width_px(self.cfg.camera, self.cfg.width, uv[0], uv[1])
-        if not math.isfinite(Wp):
-            return 0.0, 0.0
-        height_px = Wp * 1.7 / float(self.cfg.width.mean)
-        return self.opt.window_widths * Wp, self.opt.window_heights * height_px
+    def _merge(self, est_uv, W) -> None:
+        """Two slots following one object (their estimated foot points within merge_widths W
+        for merge_frames frames in a row): the younger one ends; if it has fewer than N samples
+        it is dropped unrecorded (a duplicate, not a track of its own)."""
+        live = [s for s, o in enumerate(self._slots)
+                if o is not None and o.state != TrackState.DETECT]
+        close = set()
+        for i, a in enumerate(live):
+            for b in live[i + 1:]:
+                r = self.opt.merge_widths * float(W[a])
+                if math.isfinite(r) and math.hypot(*(est_uv[a] - est_uv[b])) < r:
+                    oa, ob = self._slots[a], self._slots[b]
+                    close.add(b if len(ob.rows) < len(oa.rows) else a)
+        for s in live:
+            obj = self._slots[s]
+            if obj is None:
+                continue
+            obj.close_frames = obj.close_frames + 1 if s in close else 0
+            if obj.close_frames >= self.opt.merge_frames:
+                if len(obj.rows) < self.cfg.thresholds.n and obj.result is None:
+                    self._slots[s] = None
+                else:
+                    self._end(s)
+
+    def _window_size(self, uv, Wp) -> tuple[float, float, float]:
+        """(width, height) px of the detection window at the predicted foot point uv, and W
+        (px, the walker width at the predicted ground point, from the jitted step)."""
+        Wp = float(Wp)
+        if not np.all(np.isfinite(uv)) or not math.isfinite(Wp) or Wp <= 0:
+            return 0.0, 0.0, math.nan
+        height_px = Wp * self._height_per_W
+        return self.opt.window_widths * Wp, self.opt.window_heights * height_px, Wp
 
     def _after_step(self, s, obj, index, t, dt, z, width, valid, started, mean, est_uv, W, D,
                     glitch):
-        thr = self.cfg.thresholds
         if obj.state == TrackState.DETECT:
             if not started:  # outside the detection range: back to NONE, nothing recorded
                 self._slots[s] = None
@@ -201,8 +278,8 @@ class OnlineTracker:
         obj.rows.append((index, t, float(z[0]), float(z[1]), float(width), intensity,
                          float(mean[0]), float(mean[2]), int(obj.state)))
         self._match(obj)
-        out_of_range = not (float(thr.range_min) <= mean[2] <= float(thr.range_max))
-        if out_of_range or obj.predict_time > float(thr.predict_timeout):
+        out_of_range = not (self._range[0] <= mean[2] <= self._range[1])
+        if out_of_range or obj.predict_time > self._timeout:
             self._end(s)
 
     def _match(self, obj: _Object) -> None:

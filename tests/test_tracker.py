@@ -1,0 +1,119 @@
+"""The online tracker: Fig. 3's state machine on small synthetic scenes, and its verdicts
+reproduced by `rhythmjax classify` on the tracks it writes."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rhythmjax import synth
+from rhythmjax.params import Config, config_from_dict
+from rhythmjax.tracker import OnlineTracker
+
+
+CFG = Config()
+
+
+def _walker_scene(n_frames=90, y=12.0, life=None, seed=3):
+    """One walker crossing from left to right at `y` m (lateral), alive `life` frames."""
+    act = synth.walker(-3.4, y, 0.0, pace_hz=1.9, step_length_m=0.62, n_frames=life)
+    return synth.render_scene(seed, synth.SceneSpec(n_frames=n_frames, actors=(act,),
+                                                    camera=CFG.camera))
+
+
+@pytest.fixture(scope="module")
+def walker_scene():
+    return _walker_scene()
+
+
+def _run(cfg, frames, fps=15.0):
+    tr = OnlineTracker(cfg)
+    for i, f in enumerate(frames):
+        tr.update(i, i / fps, f)
+    return tr
+
+
+def test_detect_outside_range_gives_no_track(walker_scene):
+    """DETECT -> NONE when the first measurement lies outside the detection range: nothing
+    is recorded (the walker is at 8 m, the range 3-5 m)."""
+    cfg = config_from_dict({"thresholds": {"range_min_m": 3.0, "range_max_m": 5.0}})
+    tr = _run(cfg, walker_scene.frames[:20])
+    tracks, verdicts, objs = tr.finish()
+    assert len(tracks["track_id"]) == 0 and len(objs) == 0
+
+
+def test_walker_tracked_as_one_track(walker_scene):
+    tr = _run(CFG, walker_scene.frames)
+    tracks, verdicts, _ = tr.finish()
+    assert len(np.unique(tracks["track_id"])) == 1
+    truth = walker_scene.truth[0]
+    fr = tracks["frame"]
+    ok = np.isfinite(tracks["u"])
+    assert np.median(np.abs(tracks["u"][ok] - truth.u[fr[ok]])) < 6.0
+    assert np.median(np.abs(tracks["y_est"] - truth.y[fr])) < 1.0
+
+
+def test_none_frame_makes_every_object_predict(walker_scene):
+    frames = list(walker_scene.frames[:30])
+    frames[20] = None
+    tr = _run(CFG, frames)
+    tracks, _, _ = tr.finish()
+    at = tracks["frame"] == 20
+    assert at.sum() >= 1
+    assert np.all(tracks["state"][at] == "predict")
+    assert np.all(np.isnan(tracks["u"][at]))
+    # and the track goes on after it
+    assert np.any(tracks["frame"] > 20)
+
+
+def test_duplicate_frames_recorded_and_predicted(walker_scene):
+    frames = list(walker_scene.frames[:30])
+    frames.insert(21, frames[20].copy())
+    tr = _run(CFG, frames)
+    assert tr.duplicate_frames == [21]
+    tracks, _, _ = tr.finish()
+    assert np.all(tracks["state"][tracks["frame"] == 21] == "predict")
+
+
+def test_predict_timeout_ends_track():
+    """The walker vanishes at frame 40: the track predicts, and ends once in PREDICT longer
+    than predict_timeout (1 s = 15 frames), before the video ends."""
+    scene = _walker_scene(n_frames=80, life=40)
+    tr = _run(CFG, scene.frames)
+    assert len(tr.finished) == 1  # ended by the time-out, not by finish()
+    rows = tr.finished[0].rows
+    last = rows[-1][0]
+    assert 40 + 14 <= last <= 40 + 18
+    assert all(r[-1] == int(tr.finished[0].state) for r in rows[-10:])  # predicting at the end
+    tracks, _, _ = tr.finish()
+    tail = tracks["state"][tracks["frame"] > 42]
+    assert len(tail) and np.all(tail == "predict")
+
+
+def test_classify_reproduces_tracker_verdicts(tmp_path):
+    """Tracks written by the tracker, read back and batch-classified (`rhythmjax classify`),
+    give the tracker's own verdicts, pace and stride."""
+    from rhythmjax.batch import classify_tracks
+    from rhythmjax.cli_video import TRACK_ORDER
+    from rhythmjax.io import read_tracks, to_batch, write_table
+
+    scene = _walker_scene(n_frames=120)
+    tr = _run(CFG, scene.frames)
+    tracks, verdicts, _ = tr.finish()
+    assert any(n >= CFG.thresholds.n for n in verdicts["n_samples"])
+    path = tmp_path / "tracks.csv"
+    write_table(str(path), tracks, TRACK_ORDER)
+    back = read_tracks(str(path), fps=CFG.camera.fps)
+    n = CFG.thresholds.n
+    batch = to_batch(back, max_gap_frames=max(1, round(float(CFG.thresholds.predict_timeout)
+                                                        * CFG.camera.fps)), min_len=n)
+    again = classify_tracks(CFG, batch, progress=False)
+    ids = [int(i) for i in again["track_id"]]
+    for i, tid in enumerate(verdicts["track_id"]):
+        j = ids.index(int(tid))
+        assert again["verdict"][j] == verdicts["verdict"][i]
+        if verdicts["verdict"][i] != "unclassified":
+            assert math.isclose(float(again["pace_hz"][j]), float(verdicts["pace_hz"][i]),
+                                abs_tol=1e-3)
+            assert math.isclose(float(again["stride_m"][j]), float(verdicts["stride_m"][i]),
+                                abs_tol=1e-3)
