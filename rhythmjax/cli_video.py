@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 
@@ -44,6 +45,24 @@ def check_config_fits_image(cfg, width: int, height: int) -> None:
         raise ConfigError("camera", f"the detection range {float(thr.range_min):g}-"
                           f"{float(thr.range_max):g} m projects to rows {vs[0]:.0f}-{vs[1]:.0f}, "
                           f"outside the {width}x{height} image; check h_m, theta_deg, vc_px")
+
+
+@contextlib.contextmanager
+def overlay_writer(path, fps, size):
+    """The annotated-video writer, opened before any work (a bad path fails fast), committed
+    (renamed into place) when the block succeeds and removed when it fails; None for no path."""
+    if path is None:
+        yield None
+        return
+    from .video import open_writer
+
+    writer = open_writer(path, fps, size)
+    try:
+        yield writer
+    except BaseException:
+        writer.abort()
+        raise
+    writer.close()
 
 
 def track_frames(cfg, frames, *, n_frames=None, overlay=None, progress=True, options=None):
@@ -117,25 +136,16 @@ def cmd_track(args) -> int:
     write the tracks file; classification happens as in `run` and is in the summary."""
     from .cli import _load_config
     from .io import check_writable, write_table
-    from .video import open_writer
 
     check_writable(args.output)
     cfg = _load_config(args.config)
-    with _open_source(args, cfg) as src:
-        overlay = (open_writer(args.overlay, src.fps, (src.width, src.height))
-                   if args.overlay else None)
-        try:
-            tracks, verdicts, objs, tracker = track_frames(
-                cfg, src, n_frames=src.n_frames, overlay=overlay,
-                progress=not (args.quiet or args.json))
-        except BaseException:
-            if overlay is not None:
-                overlay.abort()
-            raise
+    with _open_source(args, cfg) as src, overlay_writer(
+            args.overlay, src.fps, (src.width, src.height)) as overlay:
+        tracks, verdicts, objs, tracker = track_frames(
+            cfg, src, n_frames=src.n_frames, overlay=overlay,
+            progress=not (args.quiet or args.json))
         write_table(args.output, tracks, TRACK_ORDER)
-        if overlay is not None:
-            overlay.close()
-        _report(args, _summary(tracker, verdicts, src), verdicts)
+    _report(args, _summary(tracker, verdicts, src), verdicts)
     return 0
 
 
@@ -144,27 +154,18 @@ def cmd_run(args) -> int:
     DIR/verdicts.csv, DIR/spectra.png and DIR/overlay.mp4 (annotated video)."""
     from .cli import _load_config
     from .io import check_writable
-    from .video import open_writer
 
     os.makedirs(args.output, exist_ok=True)
     check_writable(os.path.join(args.output, "verdicts.csv"))
     cfg = _load_config(args.config)
-    with _open_source(args, cfg) as src:
-        overlay = (None if args.no_overlay else
-                   open_writer(os.path.join(args.output, "overlay.mp4"), src.fps,
-                               (src.width, src.height)))
-        try:
-            tracks, verdicts, objs, tracker = track_frames(
-                cfg, src, n_frames=src.n_frames, overlay=overlay,
-                progress=not (args.quiet or args.json))
-        except BaseException:
-            if overlay is not None:
-                overlay.abort()
-            raise
+    path = None if args.no_overlay else os.path.join(args.output, "overlay.mp4")
+    with _open_source(args, cfg) as src, overlay_writer(path, src.fps,
+                                                        (src.width, src.height)) as overlay:
+        tracks, verdicts, objs, tracker = track_frames(
+            cfg, src, n_frames=src.n_frames, overlay=overlay,
+            progress=not (args.quiet or args.json))
         _write_outputs(args.output, cfg, tracks, verdicts, objs)
-        if overlay is not None:
-            overlay.close()
-        _report(args, _summary(tracker, verdicts, src), verdicts)
+    _report(args, _summary(tracker, verdicts, src), verdicts)
     return 0
 
 
@@ -177,7 +178,6 @@ def cmd_demo(args) -> int:
     from .io import check_writable, write_table
     from .params import config_from_dict
     from .synth import random_spec, render_scene, scene_to_tracks_truth
-    from .video import open_writer
 
     os.makedirs(args.output, exist_ok=True)
     check_writable(os.path.join(args.output, "verdicts.csv"))
@@ -188,21 +188,14 @@ def cmd_demo(args) -> int:
     truth_cols = scene_to_tracks_truth(scene)
     frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
     size = (scene.frames.shape[2], scene.frames.shape[1])
-    overlay = None if args.no_overlay else open_writer(
-        os.path.join(args.output, "overlay.mp4"), scene.fps, size)
-    try:
+    path = None if args.no_overlay else os.path.join(args.output, "overlay.mp4")
+    with overlay_writer(path, scene.fps, size) as overlay:
         tracks, verdicts, objs, tracker = track_frames(
             cfg, frames, n_frames=len(scene.frames), overlay=overlay,
             progress=not (args.quiet or args.json))
-    except BaseException:
-        if overlay is not None:
-            overlay.abort()
-        raise
-    _write_outputs(args.output, cfg, tracks, verdicts, objs)
-    write_table(os.path.join(args.output, "truth.csv"), truth_cols,
-                ["track_id", "frame", "t", "u", "v", "width_px", "label", "x", "y"])
-    if overlay is not None:
-        overlay.close()
+        _write_outputs(args.output, cfg, tracks, verdicts, objs)
+        write_table(os.path.join(args.output, "truth.csv"), truth_cols,
+                    ["track_id", "frame", "t", "u", "v", "width_px", "label", "x", "y"])
     result = score(tracks, verdicts, scene.truth)
     summary = {**_summary(tracker, verdicts), "output": args.output,
                **{k: v for k, v in result.items() if k != "objects"},
