@@ -212,13 +212,21 @@ def find_objects(motion: np.ndarray, *, min_area: int, exclude_boxes: Sequence[B
         mask = cv2.dilate(mask, k)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     order = np.argsort(-stats[1:, cv2.CC_STAT_AREA]) + 1
+    def regions():
+        for k in order:
+            x, y, w, h, a = (int(s) for s in stats[k])
+            if a < min_area:
+                return  # sorted by (dilated) area, which bounds the motion area
+            crop = np.where(labels[y:y + h, x:x + w] == k, motion[y:y + h, x:x + w], 0)
+            yield _bottom_point(crop, x, y, fraction, min_area, halo)
+
+    return _keep(regions(), exclude_boxes, max_objects)
+
+
+def _keep(dets, exclude_boxes, max_objects) -> list[Detection]:
+    """The first `max_objects` detections not inside (or half covered by) an excluded box."""
     out: list[Detection] = []
-    for k in order:
-        x, y, w, h, a = (int(s) for s in stats[k])
-        if a < min_area:
-            break  # sorted by (dilated) area, which bounds the motion area
-        crop = np.where(labels[y:y + h, x:x + w] == k, motion[y:y + h, x:x + w], 0)
-        det = _bottom_point(crop, x, y, fraction, min_area, halo)
+    for det in dets:
         if det is None or any(_inside(det, b) or 2 * _overlap(det.box, b) >= det.box[2] * det.box[3]
                               for b in exclude_boxes):
             continue
@@ -242,23 +250,18 @@ def _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction, m
         small = cv2.dilate(small, np.ones((2 * r + 1, 2 * r + 1), np.uint8))
     n, labels, stats, _ = cv2.connectedComponentsWithStats(small, connectivity=8)
     order = np.argsort(-stats[1:, cv2.CC_STAT_AREA]) + 1
-    out: list[Detection] = []
-    for k in order:
-        x, y, w, h, a = (int(q) for q in stats[k])
-        if a * s * s < min_area:
-            break  # block area bounds the motion area
-        x0, y0 = x * s, y * s
-        x1, y1 = min((x + w) * s, W), min((y + h) * s, H)
-        lab = np.repeat(np.repeat(labels[y:y + h, x:x + w] == k, s, 0), s, 1)
-        crop = np.where(lab[:y1 - y0, :x1 - x0], motion[y0:y1, x0:x1], 0)
-        det = _bottom_point(crop, x0, y0, fraction, min_area, halo)
-        if det is None or any(_inside(det, b) or 2 * _overlap(det.box, b) >= det.box[2] * det.box[3]
-                              for b in exclude_boxes):
-            continue
-        out.append(det)
-        if len(out) >= max_objects:
-            break
-    return out
+    def regions():
+        for k in order:
+            x, y, w, h, a = (int(q) for q in stats[k])
+            if a * s * s < min_area:
+                return  # block area bounds the motion area
+            x0, y0 = x * s, y * s
+            x1, y1 = min((x + w) * s, W), min((y + h) * s, H)
+            lab = np.repeat(np.repeat(labels[y:y + h, x:x + w] == k, s, 0), s, 1)
+            crop = np.where(lab[:y1 - y0, :x1 - x0], motion[y0:y1, x0:x1], 0)
+            yield _bottom_point(crop, x0, y0, fraction, min_area, halo)
+
+    return _keep(regions(), exclude_boxes, max_objects)
 
 
 def _inside(det: Detection, b: Box) -> bool:
