@@ -143,14 +143,15 @@ def main() -> None:
     sp, sm = peers["spectrum"], peers["statsmodels"]
     print("| signals | jax signals/s | jax run (ms) | compile (s) | jax GFLOP/s "
           "| spectrum.arburg+NumPy signals/s | statsmodels burg+NumPy signals/s "
-          "| jax / spectrum |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "| jax / spectrum | jax / statsmodels |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for b, (comp, run) in jr.items():
         rate = b / run
         ratio = f"{rate / sp:,.0f}x" if sp else "n/a"
+        ratio_sm = f"{rate / sm:,.0f}x" if sm else "n/a"
         print(f"| {b:,} | {rate:,.0f} | {1e3 * run:,.2f} | {comp:.2f} | "
               f"{rate * fl['total'] / 1e9:.2f} | {sp or float('nan'):,.0f} | "
-              f"{sm or float('nan'):,.0f} | {ratio} |")
+              f"{sm or float('nan'):,.0f} | {ratio} | {ratio_sm} |")
     print(f"\nPeer rates: a Python loop over {n_peer} signals (best of 3), float64, one core, "
           "extrapolated per signal: the same rate on every row, since a loop's rate does not "
           f"depend on the batch size. JAX: best of {repeats} runs after compilation, float32, "

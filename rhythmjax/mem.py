@@ -1,7 +1,9 @@
 """Maximum-entropy (Burg AR) power spectrum of the rhythm signal I(k), Sec. 4.1 of the rhythm paper.
 
 Pure JAX with fixed shapes: `burg` is a `lax.scan` over the M orders of an N-sample window, so it
-jits once per (N, M), vmaps over tracks and differentiates with respect to the signal.
+jits once per (N, M), vmaps over tracks and differentiates with respect to the signal. `spectrum`
+= `burg` (default: Kaveh-Lippert parabolic taper) + `lattice_psd` (from the reflection
+coefficients: float32-safe for sharp peaks) + `find_peaks` (top-k interior maxima, refined).
 
 Sign convention (everywhere in this module): the AR model is
 ``x[t] + sum_{k=1..M} a_k x[t-k] = e[t]``, so ``a = -rho`` of statsmodels' `burg` and ``a`` equals

@@ -95,10 +95,13 @@ def test_matches_float64_reference(dtype, window):
 # ---------------------------------------------------------------- 3. peer libraries
 def test_agrees_with_statsmodels_burg():
     lm = pytest.importorskip("statsmodels.regression.linear_model")
+    st_ = pytest.importorskip("statsmodels.tsa.stattools")
     xs = _ar_cases(seed=1).astype(np.float32).astype(np.float64)
     for order in ORDERS:
         r = _burg(xs, order, jnp.float32)
         for i, x in enumerate(xs):
+            pacf = st_.pacf_burg(x, order, demean=True).pacf[1:]
+            assert _close(r.reflection[i], -pacf, TOL[jnp.float32])  # k = -pacf
             rho, sigma2 = lm.burg(x, order, demean=True)
             a, _, s2fb, _ = burg_reference(x, order)
             assert _close(a, -rho, 1e-10) and s2fb == pytest.approx(sigma2, rel=1e-10)
@@ -158,15 +161,16 @@ def test_find_peaks_refines_gaussian_bumps_exactly():
 
 @pytest.mark.parametrize("window", WINDOWS)
 def test_pure_tone_peak_within_grid_step(window):
-    t = jnp.arange(N) * DT
+    t = jnp.arange(N, dtype=jnp.float32) * DT
     freqs = jnp.array([0.8, 1.5, 2.05, 2.6, 3.3, 4.7, 6.1])
     phases = jnp.linspace(0, jnp.pi, 6, endpoint=False)
     x = jnp.sin(2 * jnp.pi * freqs[:, None, None] * t[None, None, :] + phases[None, :, None])
     s = jax.jit(jax.vmap(jax.vmap(lambda v: mem.spectrum(v, DT, M, window=window))))(x)
     err = np.abs(np.asarray(s.peaks.freq[..., 0]) - np.asarray(freqs)[:, None])
-    # measured max/mean (Hz): none 0.085/0.015, hamming 0.012/0.004, parabolic 0.007/0.003
+    # measured mean/max (Hz): none 0.0193/0.089 (plain Burg's phase-dependent bias),
+    # hamming 0.0047/0.0113, parabolic 0.0031/0.0074; the grid step is 0.0147
     assert np.all(np.asarray(s.ok))
-    assert err.mean() <= {"none": 0.02, "hamming": STEP / 2, "parabolic": STEP / 2}[window]
+    assert err.mean() <= {"none": 0.025, "hamming": STEP / 2, "parabolic": STEP / 2}[window]
     assert err.max() <= {"none": 0.1, "hamming": STEP, "parabolic": STEP}[window]
 
 
@@ -176,7 +180,7 @@ def _foot_signal(key):
     the RMS + white noise at SNR 5..20 dB. Returns (F, x)."""
     kf, kph, kp, kh, ks, kn = jr.split(key, 6)
     F = jr.uniform(kf, (), minval=1.6, maxval=2.6)
-    t = jnp.arange(N) * DT
+    t = jnp.arange(N, dtype=jnp.float32) * DT
     s = jnp.abs(jnp.sin(jnp.pi * F * t + jr.uniform(kph, (), maxval=jnp.pi)))
     s = s ** jr.uniform(kp, (), minval=1.0, maxval=2.0)
     s = s - jnp.mean(s)
@@ -378,13 +382,14 @@ def test_grad_is_finite_and_matches_finite_differences(getkey):
 
 # ---------------------------------------------------------------- float32 vs float64
 def test_float32_matches_float64_on_1000_signals(getkey):
-    """Order 15 on N = 64, 1000 signals (white noise, AR(2..6), walking signals). Measured
-    worst: |da| <= 1.9e-4 (|a| up to 6, i.e. 3.4e-5 relative), |dk| <= 1.8e-5, sigma2 1.6e-5."""
+    """Order 15 on N = 64, 1000 signals (white noise, walking signals, AR(2..6)), the float64
+    reference on the same (float32) samples. Measured worst, plain / parabolic: |da| 1.4e-5 /
+    1.6e-5 (|a| up to 4.4), |dk| 2.8e-6 / 3.0e-6, sigma2 3.0e-6 / 4.1e-6 relative."""
     rng = np.random.default_rng(11)
     walk = np.asarray(_batch(getkey(), 334))
     xs = np.concatenate([rng.standard_normal((333, N)), walk,
                          [simulate_ar(rng, stable_ar(rng, int(rng.integers(2, 7))), N)
-                          for _ in range(333)]])
+                          for _ in range(333)]]).astype(np.float32).astype(np.float64)
     for window in ("none", mem.DEFAULT_WINDOW):
         r = _jburg(jnp.asarray(xs, jnp.float32), M, window)
         ref = [burg_reference(x, M, window) for x in xs]
