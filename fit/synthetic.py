@@ -67,6 +67,21 @@ def ground_error_m(cam: Camera, u, v, x, y) -> np.ndarray:
         return np.hypot(np.asarray(gx) - x, np.asarray(gy) - y)
 
 
+def se_over_spread(cam: Camera, camera0: Camera, fit: tuple[str, ...], n_draws: int,
+                   seed: int) -> np.ndarray:
+    """Mean reported standard error over the sample spread of the estimates, per fitted
+    parameter, over `n_draws` fresh noise draws of the footprints (1 = honest error bars)."""
+    from .camera import fit_camera
+
+    est, ses = [], []
+    for i in range(n_draws):
+        u, v, x, y, _ = footprints(cam, np.random.default_rng(seed + i))
+        r = fit_camera(u, v, x, y, camera0, fit=fit)
+        est.append([r.values[k] for k in fit])
+        ses.append([r.se[k] for k in fit])
+    return np.mean(ses, axis=0) / np.std(est, axis=0, ddof=1)
+
+
 def study(n_cameras: int = 20, seed: int = 0) -> None:  # pragma: no cover - a script
     from fit.camera import fit_camera, reprojection_rms
 
@@ -96,13 +111,7 @@ def study(n_cameras: int = 20, seed: int = 0) -> None:  # pragma: no cover - a s
     cam = random_camera(np.random.default_rng(seed + 1))
     fit = ("af", "bf", "h", "theta")
     c0 = Camera(uc=float(cam.uc), vc=float(cam.vc))
-    est, ses = [], []
-    for i in range(200):
-        u, v, x, y, _ = footprints(cam, np.random.default_rng(1000 + i))
-        r = fit_camera(u, v, x, y, c0, fit=fit)
-        est.append([r.values[k] for k in fit])
-        ses.append([r.se[k] for k in fit])
-    ratio = np.mean(ses, axis=0) / np.std(est, axis=0, ddof=1)
+    ratio = se_over_spread(cam, c0, fit, 200, seed=1000)
     print("reported SE / Monte-Carlo spread (200 draws):",
           ", ".join(f"{k} {q:.3f}" for k, q in zip(fit, ratio, strict=True)))
     u, v, x, y, _ = footprints(cam, np.random.default_rng(7), n=10_000, n_walkers=500)

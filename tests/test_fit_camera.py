@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fit.camera import NAMES, fit_camera, reprojection_rms, residuals
-from fit.synthetic import footprints, random_camera, truth
+from fit.synthetic import footprints, random_camera, se_over_spread, truth
 from rhythmjax.params import Camera
 
 
@@ -48,13 +48,7 @@ def test_standard_errors_match_monte_carlo():
     # (the sample std of 60 draws is itself uncertain by about 9 %).
     cam = random_camera(np.random.default_rng(3))
     c0 = _start(truth(cam), FIT4)
-    est, ses = [], []
-    for i in range(60):
-        u, v, x, y, _ = footprints(cam, np.random.default_rng(100 + i))
-        r = fit_camera(u, v, x, y, c0, fit=FIT4)
-        est.append([r.values[k] for k in FIT4])
-        ses.append([r.se[k] for k in FIT4])
-    ratio = np.mean(ses, axis=0) / np.std(est, axis=0, ddof=1)
+    ratio = se_over_spread(cam, c0, FIT4, 60, seed=100)
     assert np.all(np.abs(ratio - 1) < 0.3), ratio
 
 
