@@ -43,19 +43,20 @@ AF, S15, C15, F_M, H_M, UC, VC = 800.0, math.sin(math.radians(15)), math.cos(mat
 SIZES = (1, 64, 1024, 16384)
 FILTERPY_MAX_TRACKS = 64
 
-# Flops of one EKF step of `ekf.step` (dense counting, multiply-add = 2 flops), as written:
+# Flops of one tracked step of `ekf.filter_track` as now written (entry by entry, structural
+# zeros of F, H and I - K H skipped; a multiply-add counts 2): the arithmetic floor per step.
 FLOPS = {
-    "predict: F x, F P F^T + Q (4x4)": 32 + 2 * 128 + 16,
-    "h(x) of (3) and H by jacfwd (4 tangents)": 15 + 4 * 15,
-    "S = H P H^T + R (2x4, 4x4)": 64 + 32 + 4,
-    "Cholesky of S (2x2) and checks": 10,
-    "K = P H^T S^-1 (two 2x2 triangular solves on 2x4)": 64 + 32,
-    "mean update x + K nu": 16 + 4 + 2,
-    "I - K H (4x2 . 2x4)": 64 + 16,
-    "Joseph (I-KH) P (I-KH)^T + K R K^T, symmetrise": 2 * 128 + 32 + 64 + 16 + 32,
+    "predict: F x and F P F^T + Q on the 10 upper entries": 4 + 29,
+    "h(x) of (3) and its 4 non-zero H entries (two jvps)": 15 + 20,
+    "P H^T (4x2) and H P H^T (2x2, 3 entries), S = . + R": 24 + 9 + 3,
+    "det, closed-form S^-1, checks": 12,
+    "K = P H^T S^-1 (4x2)": 24,
+    "innovation and mean update": 2 + 16,
+    "I - K H (8 non-trivial entries)": 32,
+    "(I - K H) P (4x4, 2-3 terms each)": 56,
+    "Joseph: (.) (I - K H)^T + K R K^T, 10 upper entries": 24 + 10 * 8,
     "NIS and log-likelihood": 12,
-    "initial_state (inverse perspective, its 2x2 Jacobian, J R J^T)": 25 + 2 * 25 + 24,
-    "select (where over mean and cov, twice)": 2 * 20,
+    "select (where over 14 entries) and outputs": 14,
 }
 FLOPS_PER_STEP = sum(FLOPS.values())
 

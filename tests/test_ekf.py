@@ -273,6 +273,20 @@ def test_filter_batch_traces_once_per_shape(monkeypatch, getkey):
     assert len(traces) == 2  # the counter does see a new shape (traced, not compiled)
 
 
+def test_filter_batch_chunks_equal_one_vmap(getkey):
+    """Chunked batches (padded to a multiple of `chunk`, mapped over chunks) give exactly the
+    results of one vmap over the whole batch, including the absent padding being dropped."""
+    B, T = 7, 12
+    z = 256.0 + 20.0 * jax.random.normal(getkey(), (B, T, 2))
+    present = jax.random.uniform(getkey(), (B, T)) > 0.2
+    args = (z, jnp.full((B, T), 40.0), jnp.full((B, T), 1.0 / 15.0), present)
+    whole = ekf.filter_batch(Camera(), Noise(), FROM_ANN, *args)
+    chunked = ekf.filter_batch(Camera(), Noise(), FROM_ANN, *args, chunk=3)
+    for a, b in zip(jax.tree.leaves(whole), jax.tree.leaves(chunked)):
+        assert a.shape == b.shape
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
 # ----------------------------------------------------------------------------------------------
 # (e) missing measurements
 
@@ -359,7 +373,7 @@ def test_gradient_is_finite_through_gaps():
     assert 0.1 < float(jnp.isnan(z).mean()) < 0.4
     loss, grads = _value_and_grad(_params(), z, w, dt)
     leaves = jax.tree.leaves(grads)
-    assert np.isfinite(float(loss)) and len(leaves) == 11  # 7 camera + 4 noise arrays
+    assert np.isfinite(float(loss)) and len(leaves) == 12  # 8 camera (roll too) + 4 noise arrays
     assert all(np.isfinite(np.asarray(g)).all() for g in leaves)
     cam_g, noise_g = grads
     assert abs(float(cam_g.h)) > 0 and abs(float(noise_g.log_r_diag[0])) > 0
