@@ -20,6 +20,17 @@ b f (h / cos(theta) + f tan(theta)) / cos(theta)), exact even with f in the dept
 principal point free, b/a must be held (fit "af" without "bf"); fitting all six is flagged
 ill-determined, with the singular direction named. Any member of that family projects and
 back-projects identically.
+
+Extensions (issue 5, real footprints): "roll" (deg; the image of (3) rotated about (Uc, Vc),
+see `rhythmjax.camera`), and with ``world=True`` a planar rigid transform from the data's
+world frame (m) to the ground frame of (3) (camera foot at the origin, y ahead),
+
+    x = cos(yaw) X - sin(yaw) s Y + tx,    y = sin(yaw) X + cos(yaw) s Y + ty,
+
+s = +-1 (a mirrored world frame, fixed at the start), fitted with the camera ("tx", "ty",
+"yaw"). The start then comes from a DLT homography decomposed with the principal point held.
+A fit that ends at a bound (a f above `af_max_factor` image sizes: a near-affine camera with
+meaningless h and theta; theta or roll at the edge of their range) is reported ill-determined.
 """
 
 from __future__ import annotations
@@ -39,14 +50,17 @@ from rhythmjax.camera import project
 from rhythmjax.params import Camera
 
 
-NAMES = ("af", "bf", "h", "theta", "uc", "vc")
-UNITS = {"af": "px", "bf": "px", "h": "m", "theta": "deg", "uc": "px", "vc": "px"}
+NAMES = ("af", "bf", "h", "theta", "uc", "vc", "roll", "tx", "ty", "yaw")
+UNITS = {"af": "px", "bf": "px", "h": "m", "theta": "deg", "uc": "px", "vc": "px",
+         "roll": "deg", "tx": "m", "ty": "m", "yaw": "deg"}
+WORLD = ("tx", "ty", "yaw")
 
 
 class CameraParams(eqx.Module):
     """The fitted camera, unconstrained: log a f (px), log(b/a), log h (m), theta logit
-    (theta = 90 deg * sigmoid), Uc and Vc (px). Holding `log_ba` fixed keeps b/a (pixel aspect)
-    at the start camera's while a f moves."""
+    (theta = 90 deg * sigmoid), Uc and Vc (px), roll (rad), and the world-to-ground transform
+    tx, ty (m), yaw (rad). Holding `log_ba` fixed keeps b/a (pixel aspect) at the start
+    camera's while a f moves. `mirror` (+-1, static) flips the world Y axis."""
 
     log_af: jax.Array
     log_ba: jax.Array
@@ -54,25 +68,39 @@ class CameraParams(eqx.Module):
     theta_logit: jax.Array
     uc: jax.Array
     vc: jax.Array
+    roll: jax.Array
+    tx: jax.Array
+    ty: jax.Array
+    yaw: jax.Array
+    mirror: float = eqx.field(static=True, default=1.0)
 
     def natural(self) -> jax.Array:
-        """(a f px, b f px, h m, theta deg, Uc px, Vc px)."""
+        """Values in `NAMES` order and `UNITS` (px, m, deg)."""
         theta = 90.0 * jax.nn.sigmoid(self.theta_logit)
         return jnp.stack([jnp.exp(self.log_af), jnp.exp(self.log_af + self.log_ba),
-                          jnp.exp(self.log_h), theta, self.uc, self.vc])
+                          jnp.exp(self.log_h), theta, self.uc, self.vc,
+                          jnp.rad2deg(self.roll), self.tx, self.ty, jnp.rad2deg(self.yaw)])
 
     def camera(self, like: Camera, f) -> Camera:
         """A `Camera` with these values, focal length f (m) and `like`'s static fields."""
-        af, bf, h, theta_deg, uc, vc = self.natural()
+        af, bf, h, theta_deg, uc, vc = self.natural()[:6]
         return Camera(f=f, h=h, theta=jnp.deg2rad(theta_deg), a=af / f, b=bf / f, uc=uc, vc=vc,
-                      fps=like.fps, image_width=like.image_width,
+                      roll=self.roll, fps=like.fps, image_width=like.image_width,
                       image_height=like.image_height)
 
+    def ground(self, X, Y):
+        """World (X, Y) m -> ground (x, y) m of (3); the identity at tx = ty = yaw = 0."""
+        c, s = jnp.cos(self.yaw), jnp.sin(self.yaw)
+        Ym = self.mirror * Y
+        return c * X - s * Ym + self.tx, s * X + c * Ym + self.ty
 
-def _params(af, bf, h, theta_deg, uc, vc) -> CameraParams:
+
+def _params(af, bf, h, theta_deg, uc, vc, roll_deg=0.0, tx=0.0, ty=0.0, yaw_deg=0.0,
+            mirror=1.0) -> CameraParams:
     p = theta_deg / 90.0
     return CameraParams(*(jnp.asarray(v, jnp.float64) for v in (
-        math.log(af), math.log(bf / af), math.log(h), math.log(p / (1 - p)), uc, vc)))
+        math.log(af), math.log(bf / af), math.log(h), math.log(p / (1 - p)), uc, vc,
+        math.radians(roll_deg), tx, ty, math.radians(yaw_deg))), mirror=float(mirror))
 
 
 @dataclass
@@ -95,6 +123,15 @@ class CameraFit:
     reasons: list[str] = field(default_factory=list)
     n_points: int = 0
     loss: str = "l2"
+    mirror: float = 1.0
+
+    def to_ground(self, X, Y) -> tuple[np.ndarray, np.ndarray]:
+        """World (X, Y) m -> the ground frame of `camera` (m), by the fitted transform (the
+        identity unless fitted with ``world=True``)."""
+        yaw = math.radians(self.values["yaw"])
+        c, s = math.cos(yaw), math.sin(yaw)
+        X, Ym = np.asarray(X, np.float64), self.mirror * np.asarray(Y, np.float64)
+        return c * X - s * Ym + self.values["tx"], s * X + c * Ym + self.values["ty"]
 
     def summary(self) -> str:
         lines = [f"{k:6s} = {self.values[k]:11.4f} +- {self.se[k]:.4f} {UNITS[k]}"
@@ -114,7 +151,7 @@ class CameraFit:
                 "weak_direction": self.weak_direction, "result": self.result or "successful",
                 "success": self.success, "num_steps": self.num_steps,
                 "ill_determined": self.ill_determined, "reasons": self.reasons,
-                "n_points": self.n_points, "loss": self.loss}
+                "n_points": self.n_points, "loss": self.loss, "mirror": self.mirror}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -136,9 +173,9 @@ def _robust(r, loss: str, k):
 
 def residuals(dynamic: CameraParams, args) -> jax.Array:
     """Reprojection residuals (u, v stacked, px) of (3), robustly transformed."""
-    static, like, f, u, v, x, y, loss, k = args
-    cam = eqx.combine(dynamic, static).camera(like, f)
-    pu, pv = project(cam, x, y)
+    static, like, f, u, v, X, Y, loss, k = args
+    p = eqx.combine(dynamic, static)
+    pu, pv = project(p.camera(like, f), *p.ground(X, Y))
     return _robust(jnp.concatenate([pu - u, pv - v]), loss, k)
 
 
@@ -182,7 +219,7 @@ def _grid_starts(f, u, v, x, y, uc0, vc0, fit_center):
 
 # ----------------------------------------------------------------------------------------------
 
-def _check_input(u, v, x, y, n_par):
+def _check_input(u, v, x, y, n_par, world=False):
     arrs = [np.asarray(a, np.float64).ravel() for a in (u, v, x, y)]
     if len({a.size for a in arrs}) != 1:
         raise ValueError("u, v, x, y must have the same length")
@@ -199,7 +236,7 @@ def _check_input(u, v, x, y, n_par):
     if sv[1] <= 1e-6 * max(sv[0], 1e-12):
         raise ValueError("all footprints lie on one line on the ground: the camera is not "
                          "determined (annotate walkers spread across the view)")
-    if np.any(arrs[3] <= 0):
+    if not world and np.any(arrs[3] <= 0):
         raise ValueError("ground y (distance ahead, m) must be > 0 for every footprint")
     return arrs
 
@@ -208,6 +245,8 @@ def fit_camera(
     u, v, x, y, camera0: Camera | None = None, *,
     fit: tuple[str, ...] = ("af", "bf", "h", "theta"),
     f: float | None = None,
+    world: bool = False,
+    af_max_factor: float = 8.0,
     loss: Literal["l2", "huber", "cauchy"] = "l2",
     scale_px: float | None = None,
     n_starts: int = 3,
@@ -222,31 +261,45 @@ def fit_camera(
     transformed residual sign(r) sqrt(2 rho(r)) with scale `scale_px` (default: 1.345 (Huber) or
     2.385 (Cauchy) times the MAD of an L2 fit's residuals). Starts: the best `n_starts` points of
     a (h, theta) grid and the start camera. Holding "bf" holds b/a. Runs in float64.
-    Raises ValueError for unusable input (non-finite values, fewer points than parameters,
-    all ground points on one line, y <= 0).
+    ``world=True``: (x, y) are in the data's own world frame; (tx, ty, yaw) are fitted too and
+    the start is the pose of a DLT homography (principal point held at `camera0`'s).
+    A f above `af_max_factor` times the larger image side is reported as a near-affine,
+    ill-determined fit. Raises ValueError for unusable input (non-finite values, fewer points
+    than parameters, all ground points on one line, y <= 0 without `world`).
     """
     camera0 = camera0 if camera0 is not None else Camera()
-    fit = tuple(fit)
+    fit = tuple(fit) + tuple(k for k in WORLD if world and k not in fit)
     unknown = [k for k in fit if k not in NAMES]
     if unknown or len(set(fit)) != len(fit):
         raise ValueError(f"unknown parameter(s) {unknown}; choose from {NAMES}")
     if loss not in ("l2", "huber", "cauchy"):
         raise ValueError(f"loss must be 'l2', 'huber' or 'cauchy', not {loss!r}")
-    u, v, x, y = _check_input(u, v, x, y, len(fit))
+    if not world and any(k in fit for k in WORLD):
+        raise ValueError("tx, ty, yaw are fitted with world=True")
+    u, v, x, y = _check_input(u, v, x, y, len(fit), world)
     f = float(camera0.f) if f is None else float(f)
     c0 = dict(zip(NAMES, (float(camera0.a) * float(camera0.f), float(camera0.b) * float(camera0.f),
                           float(camera0.h), math.degrees(float(camera0.theta)),
-                          float(camera0.uc), float(camera0.vc)), strict=True))
+                          float(camera0.uc), float(camera0.vc),
+                          math.degrees(float(camera0.roll)), 0.0, 0.0, 0.0), strict=True))
+    mirror = 1.0
+    if world:  # the pose of the DLT homography; parameters not fitted keep camera0's values
+        pose, mirror = pose_from_homography(dlt_homography(x, y, u, v), c0, x, y)
+        c0 = {**c0, **{k: pose[k] for k in ("af", "h", "theta", "roll") + WORLD if k in fit}}
+        c0["bf"] = c0["af"] * float(camera0.b) / float(camera0.a)
+        c0["theta"] = min(max(c0["theta"], 0.5), 89.5)
     with jax.enable_x64(True):
         data = tuple(jnp.asarray(a) for a in (u, v, x, y))
-        spec = CameraParams(*(k in fit for k in NAMES))
+        spec = CameraParams(*(k in fit for k in NAMES), mirror=mirror)
         fc = "uc" in fit and "vc" in fit
-        sub = np.linspace(0, len(u) - 1, min(len(u), 512)).astype(int)  # starts need no more
-        sse, par = (np.asarray(a) for a in _grid_starts(
-            jnp.float64(f), *(a[sub] for a in data), c0["uc"], c0["vc"], jnp.asarray(fc)))
-        order = np.argsort(sse)[:max(n_starts - 1, 0)]
-        starts = [c0] + [dict(zip(NAMES, par[i], strict=True)) for i in order
-                         if np.isfinite(sse[i])]
+        starts = [c0]
+        if not world:
+            sub = np.linspace(0, len(u) - 1, min(len(u), 512)).astype(int)  # starts need no more
+            sse, par = (np.asarray(a) for a in _grid_starts(
+                jnp.float64(f), *(a[sub] for a in data), c0["uc"], c0["vc"], jnp.asarray(fc)))
+            order = np.argsort(sse)[:max(n_starts - 1, 0)]
+            starts += [{**c0, **dict(zip(NAMES[:6], par[i], strict=True))} for i in order
+                       if np.isfinite(sse[i])]
         for s in starts[1:]:  # fixed parameters stay at the start camera's values (b/a for bf)
             s.update({k: c0[k] for k in NAMES if k not in fit})
             if "bf" not in fit:
@@ -254,7 +307,7 @@ def fit_camera(
             s["theta"] = min(max(s["theta"], 0.5), 89.5)
 
         def run(start, loss_, k):
-            p0 = _params(*(start[k_] for k_ in NAMES))
+            p0 = _params(*(start[k_] for k_ in NAMES), mirror=mirror)
             dyn, static = eqx.partition(p0, spec)
             args = (static, camera0, jnp.float64(f), *data, loss_, jnp.float64(k))
             val, res, steps = _solve(dyn, args, rtol, atol, max_steps)
@@ -271,14 +324,70 @@ def fit_camera(
             start = dict(zip(NAMES, np.asarray(eqx.combine(val, static).natural()), strict=True))
             best = run(start, loss, max(k, 1e-6))
         out = _report(best, fit, loss, len(u))
+    out.mirror = mirror
+    af_max = af_max_factor * max(camera0.image_width, camera0.image_height)
+    if out.values["af"] > af_max:  # fit ended at the bound: near-affine, h and theta meaningless
+        out.ill_determined = True
+        out.reasons.append(f"a f {out.values['af']:.4g} px above its bound {af_max:.4g} px "
+                           "(near-affine camera: h and theta are not determined)")
+    elif out.values["af"] < 0.05 * af_max / af_max_factor:
+        out.ill_determined = True
+        out.reasons.append(f"a f {out.values['af']:.4g} px below 5 % of the image size")
     out.camera = _camera(out.values, f, camera0)  # float32 outside the x64 context
     return out
 
 
 def _camera(values: dict[str, float], f: float, like: Camera) -> Camera:
     return Camera(f=f, h=values["h"], theta=math.radians(values["theta"]), a=values["af"] / f,
-                  b=values["bf"] / f, uc=values["uc"], vc=values["vc"], fps=like.fps,
+                  b=values["bf"] / f, uc=values["uc"], vc=values["vc"],
+                  roll=math.radians(values["roll"]), fps=like.fps,
                   image_width=like.image_width, image_height=like.image_height)
+
+
+def dlt_homography(X, Y, u, v) -> np.ndarray:
+    """Least-squares plane-to-image homography (normalised DLT): [u, v, 1] ~ M [X, Y, 1]."""
+    def norm(a, b):
+        m, s = np.array([a.mean(), b.mean()]), np.sqrt(2) / np.mean(np.hypot(a - a.mean(),
+                                                                             b - b.mean()))
+        return np.array([[s, 0, -s * m[0]], [0, s, -s * m[1]], [0, 0, 1.0]])
+    Tw, Ti = norm(X, Y), norm(u, v)
+    P = np.stack([X, Y, np.ones_like(X)]).T @ Tw.T
+    q = np.stack([u, v, np.ones_like(u)]).T @ Ti.T
+    z = np.zeros_like(P)
+    A = np.concatenate([np.hstack([P, z, -q[:, :1] * P]), np.hstack([z, P, -q[:, 1:2] * P])])
+    M = np.linalg.svd(A)[2][-1].reshape(3, 3)
+    return np.linalg.inv(Ti) @ M @ Tw
+
+
+def pose_from_homography(M: np.ndarray, c0: dict[str, float], X, Y
+                         ) -> tuple[dict[str, float], float]:
+    """Start values (a f, h, theta, roll, tx, ty, yaw; `NAMES` units) and the mirror sign from a
+    plane-to-image homography, with the principal point (and b/a) of `c0`: K^-1 M = [r1 r2 t]
+    up to scale; a f from the orthogonality of r1, r2 (else `c0`'s)."""
+    ba = c0["bf"] / c0["af"]
+    B = np.array([[1, 0, -c0["uc"]], [0, 1 / ba, -c0["vc"] / ba], [0, 0, 1.0]]) @ M
+    (h11, h12, _), (h21, h22, _), (h31, h32, _) = B
+    a = np.array([h11 * h12 + h21 * h22, h11**2 + h21**2 - h12**2 - h22**2])
+    b = np.array([h31 * h32, h31**2 - h32**2])
+    w = -(a @ b) / max(a @ a, 1e-300)  # 1 / af^2
+    af = 1 / math.sqrt(w) if w > 0 else c0["af"]
+    B = np.diag([1 / af, 1 / af, 1.0]) @ B
+    lam = 2.0 / (np.linalg.norm(B[:, 0]) + np.linalg.norm(B[:, 1]))
+    if np.median(M[2, 0] * X + M[2, 1] * Y + M[2, 2]) < 0:  # the points in front of the camera
+        lam = -lam
+    r1, r2, t = lam * B[:, 0], lam * B[:, 1], lam * B[:, 2]
+    U, _, Vt = np.linalg.svd(np.stack([r1, r2, np.cross(r1, r2)], 1))
+    R = U @ Vt  # rows: camera x (right), y (down), z (axis) in world coordinates
+    C = -R.T @ t
+    mirror = 1.0
+    if C[2] < 0:  # world Z = X x Y points down: mirror Y
+        mirror, R, C = -1.0, R @ np.diag([1, -1, -1.0]), C * np.array([1, -1, -1.0])
+    th = math.asin(np.clip(-R[2, 2], -1, 1))
+    roll = math.asin(np.clip(R[0, 2] / math.cos(th), -1, 1))
+    fx, fy = R[2, :2] / np.hypot(*R[2, :2])
+    tx, ty = -(C[0] * fy - C[1] * fx), -(C[0] * fx + C[1] * fy)
+    return {"af": af, "h": float(C[2]), "theta": math.degrees(th), "roll": math.degrees(roll),
+            "tx": float(tx), "ty": float(ty), "yaw": math.degrees(math.atan2(fx, fy))}, mirror
 
 
 def _report(best, fit, loss, n) -> CameraFit:
@@ -319,7 +428,10 @@ def _report(best, fit, loss, n) -> CameraFit:
     if not np.all(np.isfinite(se_arr)) or cond > 1e8:
         reasons.append(f"singular Jacobian (condition number {cond:.3g})")
     huge = {"h": 0.5 * values["h"], "theta": 10.0, "af": 0.5 * values["af"],
-            "bf": 0.5 * values["bf"], "uc": 200.0, "vc": 200.0}
+            "bf": 0.5 * values["bf"], "uc": 200.0, "vc": 200.0, "roll": 10.0, "tx": 50.0,
+            "ty": 50.0, "yaw": 20.0}
+    if "roll" in fit and abs(values["roll"]) > 45.0:
+        reasons.append(f"roll {values['roll']:.3g} deg beyond +-45 deg")
     reasons += [f"standard error of {k} {se[k]:.3g} {UNITS[k]} is huge" for k in fit
                 if se[k] > huge[k]]
     raw = np.asarray(residuals(val, args[:-2] + ("l2", args[-1])))

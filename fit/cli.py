@@ -1,5 +1,5 @@
-"""`rhythmjax-fit`: calibrate the camera of (3) from footprints, or Q and R of the EKF (4)-(9)
-from tracks, and write the updated config.
+"""`rhythmjax-fit`: calibrate the camera of (3) from footprints, Q and R of the EKF (4)-(9) from
+tracks, or the walking and width models and thresholds from labelled tracks; write the config.
 
 Exit codes: 0 fitted and written; 1 the solver failed or the fit is ill-determined (the result
 code and the best point are printed, the output config is not written); 2 bad input (one line
@@ -37,7 +37,17 @@ def _parser() -> argparse.ArgumentParser:
                    help="also fit the initial speed spread")
     n.add_argument("--max-gap-frames", type=int, default=5)
     n.add_argument("--max-steps", type=int, default=200)
-    for s in (c, n):
+    w = sub.add_parser("walking", help="fit the walking and width models and P_thr, R_thr, "
+                       "k_sigma3 from labelled tracks (balanced accuracy, held-out split)")
+    w.add_argument("tracks", help="tracks .csv/.parquet with a 'label' column ('pedestrian' is "
+                   "the positive class, every other label the negative one)")
+    w.add_argument("--test-fraction", type=float, default=0.3,
+                   help="share of each class held out for the reported accuracy (default 0.3)")
+    w.add_argument("--seed", type=int, default=0, help="seed of the held-out split")
+    w.add_argument("--max-gap-frames", type=int, default=5)
+    w.add_argument("--max-iter", type=int, default=20,
+                   help="re-centring iterations of the walking model")
+    for s in (c, n, w):
         s.add_argument("--config", "-c", metavar="C", help="config JSON (default: Table 1)")
         s.add_argument("-o", "--output", required=True, metavar="C2", help="config to write")
         s.add_argument("--json", action="store_true", help="machine-readable summary on stdout")
@@ -77,6 +87,23 @@ def _noise(args, cfg):
     return r, cfg.__class__(cfg.camera, r.noise, cfg.width, cfg.walking, cfg.thresholds)
 
 
+def _walking(args, cfg):
+    from fit.walking import fit_walking
+    from rhythmjax.io import BadInput, read_tracks, to_batch
+
+    tr = read_tracks(args.tracks, fps=cfg.camera.fps)
+    if tr.label is None:
+        raise BadInput(args.tracks, "no 'label' column: the walking fit needs labelled tracks")
+    b = to_batch(tr, max_gap_frames=args.max_gap_frames, min_len=cfg.thresholds.n,
+                 fps=cfg.camera.fps)
+    try:
+        r = fit_walking(cfg, b, test_fraction=args.test_fraction, seed=args.seed,
+                        max_iter=args.max_iter)
+    except ValueError as e:
+        raise BadInput(args.tracks, str(e)) from None
+    return r, r.config
+
+
 def main(argv: list[str] | None = None) -> int:
     from rhythmjax.io import BadInput, dumps_json, read_config, write_config
     from rhythmjax.params import Config
@@ -84,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         cfg = Config() if args.config is None else read_config(args.config)
-        r, new = (_camera if args.cmd == "camera" else _noise)(args, cfg)
+        r, new = {"camera": _camera, "noise": _noise, "walking": _walking}[args.cmd](args, cfg)
     except BadInput as e:
         print(f"rhythmjax-fit: {e}", file=sys.stderr)
         return 2

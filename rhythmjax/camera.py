@@ -10,6 +10,15 @@ cos(theta - pi/2) = sin(theta), equation (3) reads
 The denominator (the `depth`, m) is the distance of the point from the image plane along the
 optical axis plus f, exactly as the paper writes it. Where it is not positive the point is behind
 the camera; every function here returns an `ok` flag instead of evaluating there (no NaN leaks).
+
+Roll (an extension, `Camera.roll`, rad): the image of (3) is rotated by +roll about (Uc, Vc),
+
+    u = Uc + cos(roll) du - sin(roll) dv,    v = Vc + sin(roll) du + cos(roll) dv,
+
+where (du, dv) = (u - Uc, v - Vc) of (3). With u right and v down a positive roll turns the
+picture clockwise on the screen: the horizon falls to the right with slope tan(roll). For
+a = b this is exactly a rotation of the camera about its optical axis. roll = 0 is the paper's
+model, and every function here then gives bit-identical results (cos 0 = 1, sin 0 = 0 exactly).
 """
 
 from __future__ import annotations
@@ -40,9 +49,19 @@ def project(
     d = depth(camera, y)
     d_safe = jnp.where(d > _EPS_DEPTH, d, 1.0)  # double-where: no inf/NaN, finite gradients
     s, c = jnp.sin(camera.theta), jnp.cos(camera.theta)
-    u = camera.uc + camera.a * camera.f * x / d_safe
-    v = camera.vc - camera.b * camera.f * (y * s - camera.h * c) / d_safe
-    return u, v
+    du = camera.a * camera.f * x / d_safe
+    up = camera.b * camera.f * (y * s - camera.h * c) / d_safe  # = -(v - Vc) of (3)
+    sr, cr = jnp.sin(camera.roll), jnp.cos(camera.roll)
+    return camera.uc + (cr * du + sr * up), camera.vc - (cr * up - sr * du)
+
+
+def unroll(
+    camera: Camera, u: Float[Array, "..."], v: Float[Array, "..."]
+) -> tuple[Float[Array, "..."], Float[Array, "..."]]:
+    """Image point (px) of the rolled camera -> the same point in the roll-free image of (3)."""
+    du, dv = u - camera.uc, v - camera.vc
+    sr, cr = jnp.sin(camera.roll), jnp.cos(camera.roll)
+    return camera.uc + (cr * du + sr * dv), camera.vc + (cr * dv - sr * du)
 
 
 def in_front(camera: Camera, y: Float[Array, "..."]) -> Bool[Array, "..."]:
@@ -62,8 +81,10 @@ def measure_jacobian(camera: Camera, state: Float[Array, "4"]) -> Float[Array, "
 
 
 def horizon_v(camera: Camera) -> Float[Array, ""]:
-    """Image row (px) of the horizon, v as y -> infinity: Vc - b f tan(theta)."""
-    return camera.vc - camera.b * camera.f * jnp.tan(camera.theta)
+    """Image row (px) of the horizon, v as y -> infinity: Vc - b f tan(theta). With roll the
+    horizon is a line of slope dv/du = tan(roll); this is its row at u = Uc,
+    Vc - b f tan(theta) / cos(roll)."""
+    return camera.vc - camera.b * camera.f * jnp.tan(camera.theta) / jnp.cos(camera.roll)
 
 
 def ground_from_image(
@@ -71,12 +92,15 @@ def ground_from_image(
 ) -> tuple[Float[Array, "..."], Float[Array, "..."], Bool[Array, "..."]]:
     """Inverse perspective: the ground point (x, y) in m of the image foot point (u, v) in px.
 
-    Solves (3) for y from v, then x from u. `ok` is False for points on or above the horizon or
-    whose ground point would lie behind the camera; there x and y are 0 (finite, not NaN).
+    Solves (3) for y from v, then x from u (after undoing the roll). `ok` is False for points on or
+    above the horizon or whose ground point would lie behind the camera; there x and y are 0
+    (finite, not NaN).
     """
+    sr, cr = jnp.sin(camera.roll), jnp.cos(camera.roll)
+    du = cr * (u - camera.uc) + sr * (v - camera.vc)  # roll-free offsets (see `unroll`)
+    dv = cr * (camera.vc - v) + sr * (u - camera.uc)  # Vc - v of (3)
     s, c = jnp.sin(camera.theta), jnp.cos(camera.theta)
     bf = camera.b * camera.f
-    dv = camera.vc - v
     den = bf * s - dv * c  # > 0 below the horizon
     ok_den = den > 1e-6 * bf
     den_safe = jnp.where(ok_den, den, 1.0)
@@ -84,16 +108,17 @@ def ground_from_image(
     d = depth(camera, y)
     ok = ok_den & (d > _EPS_DEPTH) & jnp.isfinite(u) & jnp.isfinite(v)
     d_safe = jnp.where(ok, d, 1.0)
-    x = (u - camera.uc) * d_safe / (camera.a * camera.f)
+    x = du * d_safe / (camera.a * camera.f)
     zero = jnp.zeros_like(y)
     return jnp.where(ok, x, zero), jnp.where(ok, y, zero), ok
 
 
 def image_width(camera: Camera, width_m: Float[Array, "..."], y: Float[Array, "..."]):
-    """Image width (px) of a ground width (m) at distance y (m): a f w / depth, from (3)."""
+    """Image width (px) of a ground width (m) at distance y (m): a f w cos(roll) / depth, from
+    (3): the extent along the image rows of a lateral ground segment (a row-aligned box)."""
     d = depth(camera, y)
     d_safe = jnp.where(d > _EPS_DEPTH, d, 1.0)
-    return camera.a * camera.f * width_m / d_safe
+    return camera.a * camera.f * width_m / d_safe * jnp.cos(camera.roll)
 
 
 def ground_width(
@@ -103,4 +128,4 @@ def ground_width(
     `image_width` at the ground point of (u, v). `ok` as in `ground_from_image`."""
     _, y, ok = ground_from_image(camera, u, v)
     d = jnp.where(ok, depth(camera, y), 1.0)
-    return width_px * d / (camera.a * camera.f), ok
+    return width_px * d / (camera.a * camera.f) / jnp.cos(camera.roll), ok

@@ -34,8 +34,10 @@ class Camera(eqx.Module):
     """Pin-hole camera of equation (3).
 
     f (m, focal length), h (m, height above the ground), theta (rad, depression angle), a and b
-    (px per m on the sensor, horizontal and vertical), uc and vc (px, image centre). Only the
-    products a*f and b*f (px) are well determined by image data; see `fit.camera`.
+    (px per m on the sensor, horizontal and vertical), uc and vc (px, image centre), roll (rad,
+    an extension: the image of (3) rotated by +roll about (uc, vc), see `rhythmjax.camera`;
+    0 is the paper's model). Only the products a*f and b*f (px) are well determined by image
+    data; see `fit.camera`.
     """
 
     f: Float[Array, ""] = eqx.field(converter=_f32, default=0.008)
@@ -45,6 +47,7 @@ class Camera(eqx.Module):
     b: Float[Array, ""] = eqx.field(converter=_f32, default=1.0e5)
     uc: Float[Array, ""] = eqx.field(converter=_f32, default=256.0)
     vc: Float[Array, ""] = eqx.field(converter=_f32, default=256.0)
+    roll: Float[Array, ""] = eqx.field(converter=_f32, default=0.0)
     fps: float = eqx.field(static=True, default=15.0)
     image_width: int = eqx.field(static=True, default=512)
     image_height: int = eqx.field(static=True, default=512)
@@ -183,8 +186,8 @@ def _s(x) -> float:
     return float(np.asarray(x))
 
 
-_CAMERA_KEYS = ("f_m", "h_m", "theta_deg", "a_px_per_m", "b_px_per_m", "uc_px", "vc_px", "fps",
-                "image_width_px", "image_height_px")
+_CAMERA_KEYS = ("f_m", "h_m", "theta_deg", "a_px_per_m", "b_px_per_m", "uc_px", "vc_px",
+                "roll_deg", "fps", "image_width_px", "image_height_px")
 _NOISE_KEYS = ("q_std_mps_per_sqrt_s", "r_std_px", "r_corr", "init_speed_std_mps")
 _WIDTH_KEYS = ("mean_m", "std_m")
 _WALKING_KEYS = ("pace_mean_hz", "pace_std_hz", "stride_mean_m", "stride_std_m")
@@ -201,7 +204,8 @@ def config_to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
         "camera": {
             "f_m": _s(c.f), "h_m": _s(c.h), "theta_deg": math.degrees(_s(c.theta)),
             "a_px_per_m": _s(c.a), "b_px_per_m": _s(c.b), "uc_px": _s(c.uc), "vc_px": _s(c.vc),
-            "fps": float(c.fps), "image_width_px": int(c.image_width),
+            "roll_deg": math.degrees(_s(c.roll)), "fps": float(c.fps),
+            "image_width_px": int(c.image_width),
             "image_height_px": int(c.image_height),
         },
         "noise": {
@@ -273,6 +277,7 @@ def config_from_dict(d: Any) -> Config:
         a=_num("camera", "a_px_per_m", c["a_px_per_m"], lo=0.0),
         b=_num("camera", "b_px_per_m", c["b_px_per_m"], lo=0.0),
         uc=_num("camera", "uc_px", c["uc_px"]), vc=_num("camera", "vc_px", c["vc_px"]),
+        roll=math.radians(_num("camera", "roll_deg", c["roll_deg"], lo=-45.0, hi=45.0)),
         fps=_num("camera", "fps", c["fps"], lo=0.0),
         image_width=_num("camera", "image_width_px", c["image_width_px"], lo=0, integer=True),
         image_height=_num("camera", "image_height_px", c["image_height_px"], lo=0, integer=True),

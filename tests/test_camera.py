@@ -184,3 +184,87 @@ def test_horizon_is_the_limit_of_the_projection():
     other = Camera(h=2.0, theta=math.radians(30.0), b=5e4)
     lim = 256.0 - 5e4 * 0.008 * math.tan(math.radians(30.0))
     assert float(horizon_v(other)) == pytest.approx(lim, abs=TOL["horizon_px"])
+
+
+# ----------------------------------------------------------------------------------------------
+# Roll (extension): the image of (3) rotated by +roll about (Uc, Vc)
+
+ROLLED = dict(f=0.008, h=3.0, theta=math.radians(22.0), a=1.1e5, b=1.12e5, uc=240.0, vc=190.0)
+
+
+def _rolled_ref(roll, x, y, cam=ROLLED):
+    """NumPy float64: project_ref, then rotate (u - Uc, v - Vc) by +roll (v down)."""
+    u0, v0 = project_ref(*(cam[k] for k in ("f", "h", "theta", "a", "b", "uc", "vc")), x, y)
+    du, dv = u0 - cam["uc"], v0 - cam["vc"]
+    c, s = math.cos(roll), math.sin(roll)
+    return cam["uc"] + c * du - s * dv, cam["vc"] + s * du + c * dv
+
+
+@pytest.mark.parametrize("roll_deg", [-12.0, -3.0, 0.5, 7.0])
+def test_rolled_projection_against_numpy_and_its_inverse(roll_deg):
+    roll = math.radians(roll_deg)
+    with jax.enable_x64(True):
+        cam = Camera(**ROLLED, roll=roll)
+        u, v = project(cam, jnp.asarray(X_GRID), jnp.asarray(Y_GRID))
+        ur, vr = _rolled_ref(roll, X_GRID, Y_GRID)
+        assert np.abs(np.asarray(u) - ur).max() < 1e-9 and np.abs(np.asarray(v) - vr).max() < 1e-9
+        x, y, ok = ground_from_image(cam, jnp.asarray(ur), jnp.asarray(vr))
+        assert bool(ok.all())
+        assert np.abs(np.asarray(x) - X_GRID).max() < 1e-9
+        assert np.abs(np.asarray(y) - Y_GRID).max() < 1e-9
+        # the horizon: far points along any lateral offset lie on the line of slope tan(roll)
+        # through (Uc, horizon_v)
+        xf = np.array([-3e7, 0.0, 3e7])
+        uf, vf = _rolled_ref(roll, xf, np.full(3, 1e9))
+        line = float(horizon_v(cam)) + (uf - ROLLED["uc"]) * math.tan(roll)
+        assert np.abs(vf - line).max() < 1e-3
+        # a lateral ground segment of w m: its extent along the rows is image_width
+        w = 0.5
+        ua, _ = _rolled_ref(roll, X_GRID - w / 2, Y_GRID)
+        ub, _ = _rolled_ref(roll, X_GRID + w / 2, Y_GRID)
+        wpx = image_width(cam, jnp.asarray(w), jnp.asarray(Y_GRID))
+        np.testing.assert_allclose(np.asarray(wpx), ub - ua, rtol=1e-12)
+        back, ok = ground_width(cam, jnp.asarray(ub - ua), jnp.asarray(ur), jnp.asarray(vr))
+        np.testing.assert_allclose(np.asarray(back), w, rtol=1e-12)
+
+
+def test_rolled_jacobian_against_central_differences():
+    roll = math.radians(-6.0)
+    cam = Camera(**ROLLED, roll=roll)
+    states = np.stack([X_GRID, np.full_like(X_GRID, 0.7), Y_GRID, np.full_like(X_GRID, -1.1)], -1)
+    H_all = np.asarray(jax.vmap(measure_jacobian, (None, 0))(cam, f32(states)), np.float64)
+    ref = lambda s: np.array(_rolled_ref(roll, s[0], s[2]))  # noqa: E731
+    worst = max(np.abs(H - jac_fd(ref, s, 1e-4)).max() / np.abs(H).max()
+                for s, H in zip(states, H_all, strict=True))
+    assert worst <= TOL["jac_rtol"]
+    # and the Jacobian of the residual in roll itself (what the fit uses), in float64
+    with jax.enable_x64(True):
+        g = jax.jacfwd(lambda r: jnp.stack(project(Camera(**ROLLED, roll=r), jnp.asarray(1.3),
+                                                   jnp.asarray(8.0))))(jnp.float64(roll))
+    fd = (np.array(_rolled_ref(roll + 1e-6, 1.3, 8.0)) - np.array(_rolled_ref(roll - 1e-6, 1.3,
+                                                                               8.0))) / 2e-6
+    np.testing.assert_allclose(np.asarray(g), fd, rtol=1e-7, atol=1e-7)
+
+
+def test_roll_zero_is_bit_identical_to_the_paper_formulas():
+    # the pre-roll expressions of (3), evaluated op for op; roll = 0 must not change one bit
+    cam = Camera(**ROLLED)
+    x, y = f32(X_GRID), f32(Y_GRID)
+    d = cam.f + y * jnp.cos(cam.theta) + cam.h * jnp.sin(cam.theta)
+    s, c = jnp.sin(cam.theta), jnp.cos(cam.theta)
+    u0 = cam.uc + cam.a * cam.f * x / d
+    v0 = cam.vc - cam.b * cam.f * (y * s - cam.h * c) / d
+    u, v = project(cam, x, y)
+    np.testing.assert_array_equal(np.asarray(u), np.asarray(u0))
+    np.testing.assert_array_equal(np.asarray(v), np.asarray(v0))
+    np.testing.assert_array_equal(np.asarray(image_width(cam, f32(0.5), y)),
+                                  np.asarray(cam.a * cam.f * 0.5 / d))
+    bf = cam.b * cam.f
+    dv = cam.vc - v0
+    y0 = (dv * (cam.f + cam.h * s) + bf * cam.h * c) / (bf * s - dv * c)
+    d0 = cam.f + y0 * c + cam.h * s
+    gx, gy, ok = ground_from_image(cam, u0, v0)
+    assert bool(ok.all())
+    np.testing.assert_array_equal(np.asarray(gy), np.asarray(y0))
+    np.testing.assert_array_equal(np.asarray(gx), np.asarray((u0 - cam.uc) * d0 / (cam.a * cam.f)))
+    assert float(horizon_v(cam)) == float(cam.vc - bf * jnp.tan(cam.theta))

@@ -114,3 +114,17 @@ def test_noise_bad_input_exit_2(files, capsys):
     rc = main(["noise", str(files / "nan.csv"), "-o", str(files / "never2.json")])
     err = capsys.readouterr().err.strip()
     assert rc == 2 and "nan.csv" in err and "too few" in err
+
+
+def test_walking_bad_input_exit_2(files, capsys):
+    # fp.csv holds walkers only: one class; sim-like file without a 'label' column
+    out = files / "never3.json"
+    rc = main(["walking", str(files / "fp.csv"), "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and len(err.splitlines()) == 1
+    assert "fp.csv" in err and "one class only (pedestrian)" in err and not out.exists()
+    cols, _ = make_tracks(n_walkers=2, n_bicycles=1, n_dogs=0, n_cars=0, seed=3, camera=CAM)
+    write_table(files / "nolabel.csv", cols, COLS[:7])
+    rc = main(["walking", str(files / "nolabel.csv"), "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "nolabel.csv" in err and "no 'label' column" in err and not out.exists()

@@ -82,3 +82,12 @@ def test_params_are_pytrees_with_array_leaves():
 def test_bad_config_values_name_the_key(d, match):
     with pytest.raises(ConfigError, match=match):
         config_from_dict(d)
+
+
+def test_roll_key_round_trips_and_defaults_to_the_paper():
+    assert config_to_dict(Config())["camera"]["roll_deg"] == 0.0
+    cfg = config_from_dict({"camera": {"roll_deg": -3.09}})
+    assert math.degrees(float(cfg.camera.roll)) == pytest.approx(-3.09, rel=1e-6)
+    assert config_to_dict(cfg)["camera"]["roll_deg"] == pytest.approx(-3.09, rel=1e-6)
+    with pytest.raises(ConfigError, match=r"camera\.roll_deg: must be < 45"):
+        config_from_dict({"camera": {"roll_deg": 60.0}})
