@@ -2,7 +2,12 @@
 objects, against the plain OpenCV floor (absdiff + Sobel + threshold + projections) on the same
 frames, in one process. Prints a markdown table.
 
-    python benchmarks/bench_pipeline.py [--frames 150] [--repeat 3]
+    python benchmarks/bench_pipeline.py [--frames 150] [--repeat 5] [--xla-inline]
+
+The floor and the pipeline are timed alternately (best of `repeat` each), so a load change on
+shared cores hits both. `--xla-inline` runs XLA's per-frame step on the calling thread
+(XLA_FLAGS `--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1`, set before jax
+is imported); on 2 shared cores it made no consistent difference (README, Benchmarks).
 """
 
 from __future__ import annotations
@@ -51,36 +56,44 @@ def pipeline(cfg, frames: np.ndarray, fps: float) -> int:
     return len(verdicts["track_id"])
 
 
-def best_fps(fn, n: int, repeat: int) -> float:
-    times = []
+def best_seconds(fns, repeat: int) -> list[float]:
+    """Best wall time of each function, the functions timed in turn `repeat` times."""
+    best = [float("inf")] * len(fns)
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return n / min(times)
+        for i, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            fn()
+            best[i] = min(best[i], time.perf_counter() - t0)
+    return best
+
+
+SINGLE_THREAD_XLA = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
 
 
 def main(argv=None) -> int:
-    from rhythmjax.params import Config
-
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--frames", type=int, default=150)
-    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--xla-inline", action="store_true", help="no XLA CPU thread pool")
     a = p.parse_args(argv)
+    if a.xla_inline:
+        os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " " + SINGLE_THREAD_XLA)
+    from rhythmjax.params import Config
+
     cfg = Config()
     rows = []
     for n_obj, scene in scenes(a.frames).items():
         frames = scene.frames
         pipeline(cfg, frames, scene.fps)  # compile (and warm the classify window)
-        f_fps = best_fps(lambda fr=frames: floor(fr), len(frames) - 1, a.repeat)
-        p_fps = best_fps(lambda fr=frames, sc=scene: pipeline(cfg, fr, sc.fps), len(frames),
-                         a.repeat)
-        rows.append((n_obj, p_fps, f_fps))
+        f_s, p_s = best_seconds([lambda fr=frames: floor(fr),
+                                 lambda fr=frames, sc=scene: pipeline(cfg, fr, sc.fps)], a.repeat)
+        rows.append((n_obj, len(frames) / p_s, (len(frames) - 1) / f_s))
     import jax
 
     print(f"512x512, {a.frames} frames, best of {a.repeat}; {os.cpu_count()} CPUs, "
           f"jax {jax.__version__} on {jax.default_backend()}, OpenCV {cv2.__version__} "
-          f"({cv2.getNumThreads()} threads)\n")
+          f"({cv2.getNumThreads()} threads), XLA thread pool {'off' if a.xla_inline else 'on'}"
+          "\n")
     print("| objects | detect + track + rhythm (fps) | OpenCV floor (fps) | ratio floor/pipeline |")
     print("|---|---|---|---|")
     for n_obj, p_fps, f_fps in rows:

@@ -183,7 +183,8 @@ def _object_regions(crop: np.ndarray, core: Box, dilate_px: int) -> np.ndarray |
     return np.where(keep[labels], crop, 0).astype(crop.dtype)
 
 
-def _overlap(a: Box, b: Box) -> int:
+def box_overlap(a: Box, b: Box) -> int:
+    """Intersection area (px^2) of two (x0, y0, w, h) boxes."""
     ox = min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0])
     oy = min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1])
     return max(ox, 0) * max(oy, 0)
@@ -227,8 +228,8 @@ def _keep(dets, exclude_boxes, max_objects) -> list[Detection]:
     """The first `max_objects` detections not inside (or half covered by) an excluded box."""
     out: list[Detection] = []
     for det in dets:
-        if det is None or any(_inside(det, b) or 2 * _overlap(det.box, b) >= det.box[2] * det.box[3]
-                              for b in exclude_boxes):
+        if det is None or any(_inside(det, b) or 2 * box_overlap(det.box, b)
+                              >= det.box[2] * det.box[3] for b in exclude_boxes):
             continue
         out.append(det)
         if len(out) >= max_objects:
@@ -262,6 +263,18 @@ def _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction, m
             yield _bottom_point(crop, x0, y0, fraction, min_area, halo)
 
     return _keep(regions(), exclude_boxes, max_objects)
+
+
+def shared_detections(dets: dict[int, Detection], overlap: Number = 0.5) -> set[int]:
+    """Keys of `dets` whose boxes overlap another's by at least `overlap` of the smaller box's
+    area: one blob claimed by two tracks (two objects passing each other, or a duplicate)."""
+    out, items = set(), list(dets.items())
+    for i, (a, da) in enumerate(items):
+        for b, db in items[i + 1:]:
+            small = min(da.box[2] * da.box[3], db.box[2] * db.box[3])
+            if box_overlap(da.box, db.box) >= overlap * small:
+                out |= {a, b}
+    return out
 
 
 def _inside(det: Detection, b: Box) -> bool:

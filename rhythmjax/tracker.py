@@ -29,7 +29,7 @@ from .camera import image_width, measure
 from .ekf import Carry, empty_carry, predict, step
 from .gates import PaperGates
 from .params import Config
-from .rhythm import classify_window
+from .rhythm import MAX_MISSING_FRACTION, classify_window
 from .status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
 
 
@@ -52,6 +52,16 @@ class TrackerOptions:
     # tracked object's predicted foot point is that object, not a new one
     merge_widths: float = 0.5  # two tracks whose estimated foot points stay within this many W
     merge_frames: int = 2  # for this many frames in a row follow one object: the younger ends
+    merge_speed_mps: float = 0.6  # ... and their ground velocities differ by less than this
+    # (objects crossing in the image move differently; a duplicate moves alike), unless the
+    # younger is still settling (fewer than merge_young frames)
+    merge_young: int = 10
+    shared_overlap: float = 0.5  # two tracks' detections overlapping by this fraction of the
+    # smaller box are one (merged) blob: neither is updated from it (both predict)
+    shared_nearest: bool = True  # a shared blob still updates the track whose predicted foot
+    # point is nearest its foot point (in W), when the others' are more than twice as far
+    shared_missing: bool = True  # a shared blob's frame gives no rhythm sample (NaN)
+    exclude_windows: bool = False  # True: no new object inside a track's whole detection window
     downscale: int = 4  # new objects are labelled on a 4x smaller mask (detect.find_objects)
     global_change_fraction: float = 0.5  # more than this of the frame changed: a glitch frame
 
@@ -68,6 +78,7 @@ class _Object:
     last_uv: tuple[float, float] = (math.nan, math.nan)  # foot point used for window B, px
     last_W: float = math.nan  # window-B width W, px
     close_frames: int = 0  # frames in a row its estimate coincided with an older track's
+    win_start: int = 0  # first row of the next rhythm window
 
 
 def _advance(cfg: Config, carry: Carry, reset, z, width, dt, present):
@@ -107,12 +118,18 @@ class _Structure:
                                                   or self.value == other.value)
 
 
+_INTERNED: dict[_Structure, _Structure] = {}
+
+
 def _split(tree):
     """Array leaves (a flat tuple) and the hashable rest, so jax's C++ dispatch skips the Python
-    flattening of Config and Carry pytrees that dominates a per-frame call (~3 ms to ~0.1 ms)."""
+    flattening of Config and Carry pytrees that dominates a per-frame call (~3 ms to ~0.1 ms).
+    The rest is interned: a later tracker with an equal config gets the very object jit cached,
+    so the cache lookup is an identity test, not an equinox tree comparison (~0.6 ms a frame)."""
     dyn, static = eqx.partition(tree, eqx.is_array)
     leaves, treedef = jax.tree.flatten(dyn)
-    return tuple(leaves), _Structure((treedef, static))
+    structure = _Structure((treedef, static))
+    return tuple(leaves), _INTERNED.setdefault(structure, structure)
 
 
 def _join(leaves, structure):
@@ -180,7 +197,7 @@ class OnlineTracker:
             elif detect.is_global_change(D, opt.diff_threshold, opt.global_change_fraction):
                 self.glitch_frames.append(index)
                 glitch = True
-        boxes, near = [], []
+        boxes, near, cores, dets = [], [], {}, {}
         for s, obj in enumerate(self._slots):
             if obj is None:
                 continue
@@ -188,17 +205,30 @@ class OnlineTracker:
             uv = self._next_uv[s]
             box_w, box_h, Wp = self._window_size(uv, self._next_W[s])
             centre = (uv[0], uv[1] - opt.window_raise * box_h / opt.window_heights)
-            boxes.append(_box(centre, box_w, box_h))
+            if opt.exclude_windows:
+                boxes.append(_box(centre, box_w, box_h))
             if math.isfinite(Wp):
                 near.append((uv[0], uv[1], opt.near_widths * Wp))
-            if glitch or not np.all(np.isfinite(uv)):
+            if not np.all(np.isfinite(uv)) or not math.isfinite(Wp):
                 continue
             core_h = opt.core_heights * box_h / opt.window_heights
-            core = _box((uv[0], uv[1] - 0.45 * core_h), opt.core_widths * Wp, core_h)
+            cores[s] = _box((uv[0], uv[1] - 0.45 * core_h), opt.core_widths * Wp, core_h)
+            if not opt.exclude_windows:
+                boxes.append(cores[s])
+            if glitch:
+                continue
             det = detect.detect_in_window(M, centre, (box_w, box_h), fraction=opt.fraction,
-                                          core=core)
+                                          core=cores[s])
             if det is not None:
+                dets[s] = det
+        shared = detect.shared_detections(dets, opt.shared_overlap)
+        if opt.shared_nearest:
+            shared -= self._nearest_claims(dets, shared)
+        for s, det in dets.items():
+            if s not in shared:
                 z[s], width[s] = (det.u, det.v), det.width
+            if not opt.exclude_windows:
+                boxes.append(det.box)
         if not glitch:
             free = [s for s, o in enumerate(self._slots) if o is None]
             found = detect.find_objects(M, min_area=opt.min_area, exclude_boxes=boxes,
@@ -222,13 +252,29 @@ class OnlineTracker:
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._after_step(s, obj, index, t, dt, z[s], width[s], bool(valid[s]),
-                                 bool(started[s]), mean[s], est_uv[s], float(W[s]), D, glitch)
-        self._merge(est_uv, W)
+                                 bool(started[s]), mean[s], est_uv[s], float(W[s]), D,
+                                 glitch or (opt.shared_missing and s in shared))
+        self._merge(est_uv, W, mean)
 
-    def _merge(self, est_uv, W) -> None:
+    def _nearest_claims(self, dets: dict, shared: set) -> set:
+        """Of the slots sharing a blob, those whose predicted foot point is at most half as far
+        from their detection's foot point (in units of their W) as any other sharer's."""
+        dist = {s: math.hypot(dets[s].u - self._next_uv[s][0], dets[s].v - self._next_uv[s][1])
+                / float(self._next_W[s]) for s in shared}
+        keep = set()
+        for s in shared:
+            others = [math.hypot(dets[s].u - self._next_uv[o][0], dets[s].v - self._next_uv[o][1])
+                      / float(self._next_W[o]) for o in shared if o != s
+                      and detect.box_overlap(dets[s].box, dets[o].box) > 0]
+            if all(2 * dist[s] < d for d in others):
+                keep.add(s)
+        return keep
+
+    def _merge(self, est_uv, W, mean) -> None:
         """Two slots following one object (their estimated foot points within merge_widths W
-        for merge_frames frames in a row): the younger one ends; if it has fewer than N samples
-        it is dropped unrecorded (a duplicate, not a track of its own)."""
+        and their ground velocities within merge_speed_mps, for merge_frames frames in a row):
+        the younger one ends; if it has fewer than N samples it is dropped unrecorded (a
+        duplicate, not a track of its own)."""
         live = [s for s, o in enumerate(self._slots)
                 if o is not None and o.state != TrackState.DETECT]
         close = set()
@@ -237,7 +283,11 @@ class OnlineTracker:
                 r = self.opt.merge_widths * float(W[a])
                 if math.isfinite(r) and math.hypot(*(est_uv[a] - est_uv[b])) < r:
                     oa, ob = self._slots[a], self._slots[b]
-                    close.add(b if len(ob.rows) < len(oa.rows) else a)
+                    young = b if len(ob.rows) < len(oa.rows) else a
+                    dv = math.hypot(mean[a][1] - mean[b][1], mean[a][3] - mean[b][3])
+                    if (dv < self.opt.merge_speed_mps
+                            or len(self._slots[young].rows) < self.opt.merge_young):
+                        close.add(young)
         for s in live:
             obj = self._slots[s]
             if obj is None:
@@ -259,7 +309,7 @@ class OnlineTracker:
         return self.opt.window_widths * Wp, self.opt.window_heights * height_px, Wp
 
     def _after_step(self, s, obj, index, t, dt, z, width, valid, started, mean, est_uv, W, D,
-                    glitch):
+                    no_sample):
         if obj.state == TrackState.DETECT:
             if not started:  # outside the detection range: back to NONE, nothing recorded
                 self._slots[s] = None
@@ -274,7 +324,7 @@ class OnlineTracker:
         measured = bool(np.all(np.isfinite(z)))
         fu, fv = (z if measured else est_uv)
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
-        intensity = math.nan if glitch or D is None else detect.window_b_intensity(D, fu, fv, W)
+        intensity = math.nan if no_sample or D is None else detect.window_b_intensity(D, fu, fv, W)
         obj.rows.append((index, t, float(z[0]), float(z[1]), float(width), intensity,
                          float(mean[0]), float(mean[2]), int(obj.state)))
         self._match(obj)
@@ -282,14 +332,26 @@ class OnlineTracker:
         if out_of_range or obj.predict_time > self._timeout:
             self._end(s)
 
-    def _match(self, obj: _Object) -> None:
-        """(13)-(15) on each completed run of N frames until Pedestrian (Sec. 4.2)."""
+    def _match(self, obj: _Object, *, final: bool = False) -> None:
+        """(13)-(15) on each completed run of N frames until Pedestrian (Sec. 4.2). `final`
+        (the track ends with N rows or more but no window judged, every one having been
+        restarted past missing samples): the N rows with the fewest missing are judged."""
         n = self.cfg.thresholds.n
-        if obj.decided or len(obj.rows) < n * (obj.windows_done + 1):
+        k = obj.win_start
+        if final:
+            if obj.result is not None or len(obj.rows) < n:
+                return
+            bad = np.concatenate([[0], np.cumsum([not math.isfinite(r[5]) for r in obj.rows])])
+            k = int(np.argmin(bad[n:] - bad[:-n]))
+        elif obj.decided or len(obj.rows) < k + n:
             return
-        k = n * obj.windows_done
         rows = np.asarray([r[1:8] for r in obj.rows[k:k + n]], np.float64)
         t, intensity, xy = rows[:, 0], rows[:, 4], rows[:, 5:7]
+        missing = np.flatnonzero(~np.isfinite(intensity))
+        if not final and len(missing) > MAX_MISSING_FRACTION * n:  # mixed with a neighbour:
+            obj.win_start = k + int(missing[-1]) + 1  # restart after it
+            return
+        obj.win_start = k + n
         res = _classify(self.cfg, jnp.asarray(intensity, jnp.float32),
                         jnp.asarray(t - t[0], jnp.float32), jnp.asarray(xy, jnp.float32),
                         jnp.asarray(True))
@@ -314,6 +376,7 @@ class OnlineTracker:
         return out
 
     def _end(self, s: int) -> None:
+        self._match(self._slots[s], final=True)
         self.finished.append(self._slots[s])
         self._slots[s] = None
 

@@ -13,6 +13,8 @@ import pytest
 
 from rhythmjax.camera import project
 from rhythmjax.detect import (
+    Detection,
+    box_overlap,
     detect_in_window,
     find_objects,
     frame_difference,
@@ -20,6 +22,7 @@ from rhythmjax.detect import (
     is_global_change,
     motion_from_diff,
     motion_image,
+    shared_detections,
     walker_width_px,
     window_b_intensity,
     window_b_rect,
@@ -212,3 +215,18 @@ def test_casia_smoke():
     first = found.index(True)
     assert 10 < first < n // 2
     assert np.mean(found[first:]) >= 0.9, (first, found)
+
+
+def test_box_overlap_and_shared_detections_hand_worked():
+    """(x0, y0, w, h) boxes: [0, 10) x [0, 10) and [6, 16) x [5, 25) share a 4 x 5 px patch;
+    two detections are one blob when that covers half of the smaller box."""
+    assert box_overlap((0, 0, 10, 10), (6, 5, 10, 20)) == 20
+    assert box_overlap((0, 0, 10, 10), (10, 0, 5, 5)) == 0  # touching, half-open
+    assert box_overlap((0, 0, 10, 10), (2, 3, 4, 4)) == 16  # contained
+    det = lambda box: Detection(u=0.0, v=0.0, width=1.0, box=box, area=1)  # noqa: E731
+    dets = {0: det((0, 0, 10, 10)), 1: det((2, 3, 4, 4)), 2: det((6, 5, 10, 20)),
+            3: det((40, 40, 5, 5))}
+    # 0-1: 16 >= 0.5 * 16; 0-2: 20 < 0.5 * 100; 1-2: 0; 3 alone
+    assert shared_detections(dets, 0.5) == {0, 1}
+    assert shared_detections(dets, 0.2) == {0, 1, 2}  # 20 >= 0.2 * 100
+    assert shared_detections({0: dets[0]}) == set()

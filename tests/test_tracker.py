@@ -117,3 +117,30 @@ def test_classify_reproduces_tracker_verdicts(tmp_path):
                                 abs_tol=1e-3)
             assert math.isclose(float(again["stride_m"][j]), float(verdicts["stride_m"][i]),
                                 abs_tol=1e-3)
+
+
+def test_rhythm_window_restarts_after_missing_run():
+    """A window of N rows more than a quarter of whose intensities are missing (a blob shared
+    with another track) is not classified: the next window starts after its last missing row,
+    and is classified once N rows follow it."""
+    from rhythmjax.status import TrackState
+    from rhythmjax.tracker import _Object
+
+    cfg = config_from_dict({"thresholds": {"n_samples": 32}})
+    tr = OnlineTracker(cfg)
+    obj = _Object(track_id=1, state=TrackState.OBSERVE)
+    t = np.arange(80) / 15.0
+    rng = np.random.default_rng(0)
+    inten = 100 + 30 * np.sin(2 * np.pi * 2.0 * t) + rng.normal(0, 1, 80)
+    inten[5:15] = np.nan  # 10 of the first 32 missing (> 8)
+    for k in range(80):
+        obj.rows.append((k, t[k], 1.0, 1.0, 10.0, inten[k], 1.3 * t[k], 10.0, 1))
+        tr._match(obj)
+        if k < 46:  # rows 15..46 make the first complete window after the missing run
+            assert obj.result is None, k
+        if k == 31:
+            assert obj.win_start == 15  # restarted after row 14, the last missing one
+        if k == 46:
+            assert obj.win_start == 47 and obj.result["window"] == (15, 47)
+    # decided on the first window: matching stops there; else the next window (47, 79) ran
+    assert obj.win_start == (47 if obj.decided and obj.result["window"] == (15, 47) else 79)
