@@ -10,7 +10,8 @@ from fit.camera import (
     reprojection_rms as reprojection_rms,
 )
 from fit.noise import NoiseFit as NoiseFit, fit_noise as fit_noise, simulate as simulate
+from fit.walking import WalkingFit as WalkingFit, fit_walking as fit_walking
 
 
-__all__ = ["CameraFit", "CameraParams", "NoiseFit", "fit_camera", "fit_noise",
-           "reprojection_rms", "simulate"]
+__all__ = ["CameraFit", "CameraParams", "NoiseFit", "WalkingFit", "fit_camera", "fit_noise",
+           "fit_walking", "reprojection_rms", "simulate"]
