@@ -90,3 +90,32 @@ def _label(o) -> str:
     pace = float(r["pace_hz"])
     extra = f", F={pace:.2f} Hz, T={float(r['stride_m']):.2f} m" if math.isfinite(pace) else ""
     return f"{VERDICT_LABELS[int(r['verdict'])]} ({REASON_LABELS[int(r['reason'])]}{extra})"
+
+
+def draw_count_frame(gray: np.ndarray, pedestrians: list[dict], index: int) -> np.ndarray:
+    """BGR copy of a grey frame with each pedestrian's patch (`rhythmjax count`): box (left, top,
+    w, h) px, id ("new" while tentative), solid when measured and thin grey-edged when
+    predicted, coloured by its online verdict; plus the frame index and the count in view.
+
+    `pedestrians`: dicts with track_id (0 = tentative), box, measured, verdict (label or None)."""
+    img = cv2.cvtColor(gray, cv2.COLOR_GRAY2BGR)
+    shown = 0
+    for p in pedestrians:
+        left, top, w, h = p["box"]
+        if not all(math.isfinite(q) for q in (left, top, w, h)):
+            continue
+        c = _COLOURS.get(p.get("verdict") or "unclassified", (200, 200, 200))
+        if p["track_id"] == 0:
+            c = (150, 150, 150)
+        x0, y0 = int(round(left)), int(round(top))
+        x1, y1 = int(round(left + w)), int(round(top + h))
+        cv2.rectangle(img, (x0, y0), (x1, y1), c, 2 if p["measured"] else 1)
+        label = str(p["track_id"]) if p["track_id"] else "new"
+        if p.get("verdict"):
+            label += " " + p["verdict"][:3]
+        cv2.putText(img, label, (x0, max(10, y0 - 3)), cv2.FONT_HERSHEY_SIMPLEX, 0.4, c, 1,
+                    cv2.LINE_AA)
+        shown += p["track_id"] != 0
+    cv2.putText(img, f"frame {index}  in view {shown}", (5, 15), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
+                (255, 255, 0), 1, cv2.LINE_AA)
+    return img

@@ -1,0 +1,313 @@
+"""Pedestrians level of Masoud & Papanikolopoulos: the patch model, its dynamics and placement.
+
+Pedestrian model (PAPERS.md, "Multi-pedestrian paper", part 3): a rectangular patch standing on
+its foot point (u, v) px (bottom centre). Its size is the image of an average pedestrian
+`width_m` wide (default: the config's `width.mean`, 0.5 m) and `height_m` tall (1.7 m):
+
+    3-D shape ("3d-shape", "3d"): at the foot point's ground point (x, y) of (3),
+        w = a f width_m / depth(y)                       (the width at the feet, px)
+        h = v - v_top, v_top = the row of (x, y, height_m) through `synth.project_3d`'s model
+            (equation (3) with h replaced by h - height_m; the head is nearer the image plane);
+    2-D shape ("2d"): one fixed size, that of the average pedestrian at x = 0 and the middle
+        of the detection range (range_min + range_max) / 2 ("near the middle of the scene").
+
+Dynamics, equation (1) with zero-mean Gaussian acceleration noise, one of three variants:
+    "2d", "3d-shape": constant velocity in the image, state (u, du/dt, v, dv/dt) (px, px/s),
+        a linear Kalman filter: the core's `ekf.predict` (F, Q of (1)) with a px/s noise and a
+        linear update (H picks u and v; Joseph form);
+    "3d" (default): constant velocity on the ground plane, state (x, vx, y, vy) (m, m/s), the
+        core's EKF (`ekf.step`, measurement (3)) with `ekf.FromAnnotations` validity: the
+        pedestrians level does its own association, so every measurement it gives is used.
+All slots advance in ONE jitted, vmapped call per frame (`SlotFilter`), compiled once per
+(variant, slot count), as `tracker._advance_flat` does.
+
+Placement ("Calculating pedestrian positions"): `place_patch` moves the patch horizontally around
+its predicted foot point to cover as many pixels of its related blobs as it can (an integral
+image gives each candidate's covered count), with the foot row at the lowest related pixel under
+the patch; ties go to the candidate nearest the prediction.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import cv2
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .camera import measure
+from .ekf import Carry, FromAnnotations, Gaussian, empty_carry, inverse_2x2, predict, select, step
+from .params import Camera, Config, Noise
+from .tracker import _join, _split
+
+
+DYNAMICS = ("2d", "3d-shape", "3d")
+PEDESTRIAN_HEIGHT_M = 1.7  # average pedestrian height (m); width: cfg.width.mean (0.5 m)
+
+
+# ----------------------------------------------------------------------------------------------
+# shape (NumPy float64)
+
+
+def _cam(camera) -> tuple[float, ...]:
+    """(f, h, theta, a, b, uc, vc) as Python floats (a tuple passes through unchanged)."""
+    if isinstance(camera, tuple):
+        return camera
+    return tuple(float(np.asarray(getattr(camera, k))) for k in ("f", "h", "theta", "a", "b",
+                                                                     "uc", "vc"))
+
+
+def ground_point(camera: Camera | tuple, u, v):
+    """Inverse of (3) in NumPy float64: ground (x, y) m of the foot point (u, v) px, and `ok`
+    (below the horizon, in front of the camera); x = y = 0 where not ok."""
+    f, h, th, a, b, uc, vc = _cam(camera)
+    u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
+    s, c = math.sin(th), math.cos(th)
+    dv = vc - v
+    den = b * f * s - dv * c
+    ok = den > 1e-6 * b * f
+    y = (dv * (f + h * s) + b * f * h * c) / np.where(ok, den, 1.0)
+    d = f + y * c + h * s
+    ok = ok & (d > 1e-3) & np.isfinite(u) & np.isfinite(v)
+    x = (u - uc) * np.where(ok, d, 1.0) / (a * f)
+    return np.where(ok, x, 0.0), np.where(ok, y, 0.0), ok
+
+
+def patch_size_3d(camera: Camera | tuple, u, v, width_m: float,
+                  height_m: float = PEDESTRIAN_HEIGHT_M):
+    """3-D shape: (w, h) px of an average pedestrian standing at the foot point (u, v) px, and
+    `ok`; NaN where the foot point has no ground point or the head is behind the camera."""
+    f, hc, th, a, b, uc, vc = _cam(camera)
+    _, y, ok = ground_point(camera, u, v)
+    s, c = math.sin(th), math.cos(th)
+    d_foot = f + y * c + hc * s
+    d_head = f + y * c + (hc - height_m) * s
+    ok = ok & (d_head > 1e-3)
+    v_top = vc - b * f * (y * s - (hc - height_m) * c) / np.where(ok, d_head, 1.0)
+    w = a * f * width_m / np.where(ok, d_foot, 1.0)
+    h = np.asarray(v, np.float64) - v_top
+    nan = np.where(ok, 1.0, np.nan)
+    return w * nan, h * nan, ok
+
+
+def middle_foot_point(cfg: Config) -> tuple[float, float]:
+    """Foot point (u, v) px of x = 0, y = middle of the detection range: the 2-D shape's place."""
+    f, h, th, a, b, uc, vc = _cam(cfg.camera)
+    y = 0.5 * (float(cfg.thresholds.range_min) + float(cfg.thresholds.range_max))
+    s, c = math.sin(th), math.cos(th)
+    return uc, vc - b * f * (y * s - h * c) / (f + y * c + h * s)
+
+
+@dataclass(frozen=True)
+class ShapeModel:
+    """Patch size as a function of the foot point: 3-D (per place) or 2-D (fixed)."""
+
+    camera: tuple[float, ...]  # (f, h, theta, a, b, uc, vc), host floats (see `_cam`)
+    width_m: float
+    height_m: float
+    fixed: tuple[float, float] | None = None  # (w, h) px for the 2-D shape
+
+    @classmethod
+    def from_config(cls, cfg: Config, dynamics: str, height_m: float = PEDESTRIAN_HEIGHT_M):
+        if dynamics not in DYNAMICS:
+            raise ValueError(f"dynamics must be one of {DYNAMICS}, got {dynamics!r}")
+        width_m = float(cfg.width.mean)
+        fixed = None
+        if dynamics == "2d":
+            w, h, _ = patch_size_3d(cfg.camera, *middle_foot_point(cfg), width_m, height_m)
+            fixed = (float(w), float(h))
+        return cls(_cam(cfg.camera), width_m, height_m, fixed)
+
+    def size(self, u, v):
+        """(w, h) px arrays (NaN where the 3-D shape has no ground point)."""
+        if self.fixed is not None:
+            ones = np.ones(np.broadcast(np.asarray(u), np.asarray(v)).shape)
+            return self.fixed[0] * ones, self.fixed[1] * ones
+        w, h, _ = patch_size_3d(self.camera, u, v, self.width_m, self.height_m)
+        return w, h
+
+
+def patch_box(u: float, v: float, w: float, h: float) -> tuple[float, float, float, float]:
+    """(x0, y0, x1, y1) px of the patch standing on (u, v), w wide and h tall."""
+    return u - 0.5 * w, v - h, u + 0.5 * w, v
+
+
+# ----------------------------------------------------------------------------------------------
+# dynamics (JAX): one jitted call advances every slot
+
+
+def image_noise(cfg: Config) -> Noise:
+    """Image-plane noise for the 2-D dynamics: the ground q and initial speed spread times the
+    px per m at the middle of the detection range; R as the config's (px)."""
+    _, y, _ = ground_point(cfg.camera, *middle_foot_point(cfg))
+    f, hc, th, a, *_ = _cam(cfg.camera)
+    px_per_m = a * f / (f + float(y) * math.cos(th) + hc * math.sin(th))
+    R = np.asarray(cfg.noise.R(), np.float64)
+    r = np.sqrt(np.diag(R))
+    return Noise(q_std=tuple(np.asarray(cfg.noise.q_std(), np.float64) * px_per_m), r_std=r,
+                 r_corr=float(R[0, 1] / (r[0] * r[1])),
+                 init_speed_std=float(cfg.noise.init_speed_std()) * px_per_m)
+
+
+def _linear_step(noise: Noise, carry: Carry, z, dt, present) -> Carry:
+    """Constant-velocity Kalman step in the image: (1)-(2) prediction by `ekf.predict`, linear
+    update with H = [[1,0,0,0],[0,0,1,0]] (Joseph form), start on the first measurement."""
+    available = present & jnp.all(jnp.isfinite(z))
+    zs = jnp.where(available, z, 0.0)
+    prior = predict(noise, carry.state, dt)
+    R = noise.R()
+    P, m = prior.cov, prior.mean
+    Hm = jnp.zeros((2, 4), m.dtype).at[0, 0].set(1.0).at[1, 2].set(1.0)
+    S = Hm @ P @ Hm.T + R
+    Sinv, _ = inverse_2x2(S)
+    K = P @ Hm.T @ Sinv
+    A = jnp.eye(4, dtype=m.dtype) - K @ Hm
+    post = Gaussian(m + K @ (zs - Hm @ m), A @ P @ A.T + K @ R @ K.T)
+    s2 = noise.init_speed_std() ** 2
+    init_cov = jnp.zeros((4, 4), m.dtype).at[0, 0].set(R[0, 0]).at[2, 2].set(R[1, 1])
+    init_cov = init_cov.at[0, 2].set(R[0, 1]).at[2, 0].set(R[1, 0])
+    init_cov = init_cov.at[1, 1].set(s2).at[3, 3].set(s2)
+    init = Gaussian(jnp.stack([zs[0], 0.0 * zs[0], zs[1], 0.0 * zs[1]]), init_cov)
+    tracked = select(available, post, prior)
+    start = ~carry.started & available
+    state = select(start, init, select(carry.started, tracked, carry.state))
+    return Carry(state, carry.started | start)
+
+
+def _advance(dynamics: str, params, carry, reset, z, dt, dt_next, present):
+    """Every slot one frame; returns the carry and a host array (S, 9): started, estimated foot
+    (u, v), predicted next foot (u, v), ground (x, y) m, velocity (vx, vy) (m/s or px/s)."""
+    cfg, noise_img = params
+    empty = empty_carry(z.dtype)
+    carry = jax.vmap(lambda r, c: select(r, empty, c))(reset, carry)
+    if dynamics == "3d":
+        width = jnp.full(z.shape[:1], jnp.nan, z.dtype)
+        run = jax.vmap(step, in_axes=(None, None, None, 0, 0, 0, None, 0))
+        carry, _ = run(cfg.camera, cfg.noise, FromAnnotations(), carry, z, width, dt, present)
+        nxt = jax.vmap(lambda s: predict(cfg.noise, s, dt_next))(carry.state)
+        est_uv = jax.vmap(lambda m: measure(cfg.camera, m))(carry.state.mean)
+        next_uv = jax.vmap(lambda m: measure(cfg.camera, m))(nxt.mean)
+    else:
+        run = jax.vmap(_linear_step, in_axes=(None, 0, 0, None, 0))
+        carry = run(noise_img, carry, z, dt, present)
+        nxt = jax.vmap(lambda s: predict(noise_img, s, dt_next))(carry.state)
+        est_uv = carry.state.mean[:, jnp.array([0, 2])]
+        next_uv = nxt.mean[:, jnp.array([0, 2])]
+    mean = carry.state.mean
+    host = jnp.concatenate([carry.started[:, None].astype(z.dtype), est_uv, next_uv,
+                            mean[:, jnp.array([0, 2])], mean[:, jnp.array([1, 3])]], axis=1)
+    return carry, host
+
+
+@functools.partial(jax.jit, static_argnums=(0, 1, 2))
+def _advance_flat(dynamics, params_structure, carry_structure, params_leaves, carry_leaves,
+                       *args):
+    carry, host = _advance(dynamics, _join(params_leaves, params_structure),
+                           _join(carry_leaves, carry_structure), *args)
+    return _split(carry)[0], host
+
+
+class SlotFilter:
+    """`slots` pedestrian filters advanced together by one jitted call per frame."""
+
+    def __init__(self, cfg: Config, dynamics: str = "3d", slots: int = 32):
+        if dynamics not in DYNAMICS:
+            raise ValueError(f"dynamics must be one of {DYNAMICS}, got {dynamics!r}")
+        self.dynamics, self.slots = dynamics, int(slots)
+        self._params, self._params_structure = _split((cfg, image_noise(cfg)))
+        carry = jax.tree.map(lambda a: jnp.broadcast_to(a, (self.slots,) + a.shape).copy(),
+                             empty_carry())
+        self._carry, self._carry_structure = _split(carry)
+        self.dt_nominal = float(cfg.camera.dt)
+
+    def step(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
+             dt_next: float | None = None) -> np.ndarray:
+        """Advance every slot by dt s (reset slots start afresh from their measurement z, NaN =
+        none); returns the host array of `_advance` as float64 (S, 9)."""
+        dt_next = self.dt_nominal if dt_next is None else dt_next
+        self._carry, host = _advance_flat(
+            self.dynamics, self._params_structure, self._carry_structure, self._params,
+            self._carry, np.asarray(reset, bool), np.asarray(z, np.float32), np.float32(dt),
+            np.float32(dt_next), np.asarray(present, bool))
+        return np.asarray(host, np.float64)
+
+
+# ----------------------------------------------------------------------------------------------
+# placement (NumPy / OpenCV)
+
+
+@dataclass(frozen=True)
+class Placement:
+    u: float  # foot point, px
+    v: float
+    w: float  # patch size at the foot point, px
+    h: float
+    covered: int  # related pixels inside the patch
+
+
+def place_patch(labels: np.ndarray, related: np.ndarray, claimed: np.ndarray | None,
+                shape: ShapeModel, pred_u: float, pred_v: float, *, radius_px: float,
+                band: float = 0.35, v_max: float | None = None, min_cover: float = 0.08
+                ) -> Placement | None:
+    """Move the patch around the predicted foot point (pred_u, pred_v) to cover as many pixels of
+    its related blobs as it can: pixels of `labels` (H, W int labels image) whose label is in
+    `related`, and not `claimed` (H, W bool, pixels already taken by other patches; None: none).
+
+    Candidates: every integer column offset within `radius_px`. For each, the foot row is the
+    lowest related pixel in the patch's columns from `band` patch heights above pred_v down to
+    `v_max` (px; None: `band` patch heights below pred_v); the
+    covered count is an integral-image sum over the patch at that foot row (sized there). The
+    best count wins (ties: nearest to the prediction); None if no candidate covers at least
+    `min_cover` of its patch area."""
+    H, W = labels.shape
+    w0, h0 = (float(q) for q in shape.size(pred_u, pred_v))
+    if not (math.isfinite(w0) and math.isfinite(h0)) or w0 < 1 or h0 < 1:
+        return None
+    r = max(1, int(math.ceil(radius_px)))
+    half = 0.5 * w0
+    x0 = max(0, int(math.floor(pred_u - r - half - 1)))
+    x1 = min(W, int(math.ceil(pred_u + r + half + 2)))
+    ylo = max(0, int(math.floor(pred_v - band * h0)))
+    yhi = min(H, int(math.ceil(pred_v + band * h0 if v_max is None else v_max)) + 1)
+    if x1 <= x0 or yhi <= ylo:
+        return None
+    ytop = max(0, int(math.floor(pred_v - (1 + 2 * band) * h0)))
+    crop = np.isin(labels[ytop:yhi, x0:x1], related)
+    if claimed is not None:
+        crop &= ~claimed[ytop:yhi, x0:x1]
+    crop = crop.view(np.uint8)
+    if not crop.any():
+        return None
+    ii = cv2.integral(crop)  # (rows + 1, cols + 1), int32
+    sub = crop[ylo - ytop:]
+    has = sub.any(axis=0)
+    bottom = np.where(has, sub.shape[0] - 1 - np.argmax(sub[::-1], axis=0), -1) + (ylo - ytop)
+    us = pred_u + np.arange(-r, r + 1, dtype=np.float64)
+    c0 = np.clip(np.floor(us - half + 0.5).astype(int) - x0, 0, x1 - x0)
+    c1 = np.clip(np.floor(us + half + 0.5).astype(int) - x0, 0, x1 - x0)
+    # lowest related row under each candidate's columns: a running max over the column bottoms
+    vb = np.array([bottom[a:b].max() if b > a else -1 for a, b in zip(c0, c1)])
+    ok = vb >= ylo - ytop
+    if not ok.any():
+        return None
+    us, vb = us[ok], vb[ok]
+    v = vb + float(ytop)
+    w, h = shape.size(us, v)
+    fin = np.isfinite(w) & np.isfinite(h)
+    w, h = np.where(fin, w, 0.0), np.where(fin, h, 0.0)
+    a0 = np.clip(np.floor(us - 0.5 * w + 0.5).astype(int) - x0, 0, x1 - x0)
+    a1 = np.clip(np.floor(us + 0.5 * w + 0.5).astype(int) - x0, 0, x1 - x0)
+    b0 = np.clip(np.floor(v - h + 1.5).astype(int) - ytop, 0, crop.shape[0])
+    b1 = vb + 1
+    cov = ii[b1, a1] - ii[b0, a1] - ii[b1, a0] + ii[b0, a0]
+    cov = np.where(fin & (a1 > a0) & (b1 > b0), cov, -1)
+    good = cov >= min_cover * w * h
+    if not good.any():
+        return None
+    # best covered count; ties to the candidate nearest the prediction
+    key = np.where(good, cov, -1) - 1e-6 * np.abs(us - pred_u) / (r + 1)
+    i = int(np.argmax(key))
+    return Placement(float(us[i]), float(v[i]), float(w[i]), float(h[i]), int(cov[i]))

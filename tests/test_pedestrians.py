@@ -1,0 +1,223 @@
+"""The pedestrians level (rhythmjax.pedestrians, count.PedestrianLevel): patch size, dynamics
+against independent filters, placement, and two constructed scenes (crossing, group split)."""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from rhythmjax import ekf
+from rhythmjax.count import CountOptions, count_frames
+from rhythmjax.params import config_from_dict
+from rhythmjax.pedestrians import (
+    ShapeModel,
+    SlotFilter,
+    image_noise,
+    middle_foot_point,
+    patch_size_3d,
+    place_patch,
+)
+from rhythmjax.synth import SceneSpec, project_3d, render_scene, walker
+
+
+# a small camera: 256x192, 3 m high, 25 deg down, a f = b f = 200 px/m; people 3-15 m away
+SMALL = {"camera": {"f_m": 0.008, "h_m": 3.0, "theta_deg": 25.0, "a_px_per_m": 25000.0,
+                    "b_px_per_m": 25000.0, "uc_px": 128.0, "vc_px": 96.0, "fps": 15.0,
+                    "image_width_px": 256, "image_height_px": 192},
+         "thresholds": {"range_min_m": 3.0, "range_max_m": 15.0},
+         "noise": {"r_std_px": [3.0, 3.0]}, "width": {"std_m": 0.2}}
+CFG = config_from_dict(SMALL)
+FAST = CountOptions(classify=False, online_verdicts=False)
+
+
+def _ground_ref(camera, u: float, v: float) -> tuple[float, float]:
+    """Inverse of (3) by bisection on y (float64, the camera's stored float32 values), then x:
+    independent of the closed form."""
+    f, h, th, a, b, uc, vc = (float(np.asarray(getattr(camera, k)))
+                              for k in ("f", "h", "theta", "a", "b", "uc", "vc"))
+    bf, af = b * f, a * f
+    vrow = lambda y: vc - bf * (y * math.sin(th) - h * math.cos(th)) / (
+        f + y * math.cos(th) + h * math.sin(th))
+    lo, hi = 0.0, 1e4  # v decreases with y
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if vrow(mid) > v else (lo, mid)
+    y = 0.5 * (lo + hi)
+    return (u - uc) * (f + y * math.cos(th) + h * math.sin(th)) / af, y
+
+
+@pytest.mark.parametrize("uv", [(40.0, 150.0), (128.0, 96.0), (200.0, 60.0), (10.0, 185.0)])
+def test_patch_size_is_the_projection_of_the_average_pedestrian(uv):
+    x, y = _ground_ref(CFG.camera, *uv)
+    W, Hm = 0.5, 1.7
+    ul, _ = project_3d(CFG.camera, x - W / 2, y, 0.0)
+    ur, vf = project_3d(CFG.camera, x + W / 2, y, 0.0)
+    _, vt = project_3d(CFG.camera, x, y, Hm)
+    assert abs(vf - uv[1]) < 1e-8  # the reference found the foot point's ground point
+    w, h, ok = patch_size_3d(CFG.camera, *uv, W, Hm)
+    assert ok
+    np.testing.assert_allclose([w, h], [ur - ul, vf - vt], rtol=1e-9)
+    shape = ShapeModel.from_config(CFG, "3d")
+    np.testing.assert_allclose(shape.size(*uv), [ur - ul, vf - vt], rtol=1e-9)
+
+
+def test_2d_shape_is_the_size_at_the_middle_of_the_scene():
+    shape2 = ShapeModel.from_config(CFG, "2d")
+    u, v = middle_foot_point(CFG)
+    _, y = _ground_ref(CFG.camera, u, v)
+    assert abs(y - 9.0) < 1e-5  # (range_min + range_max) / 2
+    want = patch_size_3d(CFG.camera, u, v, 0.5)[:2]
+    np.testing.assert_allclose(shape2.size(10.0, 180.0), want, rtol=1e-12)
+    np.testing.assert_allclose(shape2.size(200.0, 50.0), want, rtol=1e-12)
+
+
+def test_above_the_horizon_has_no_patch():
+    w, h, ok = patch_size_3d(CFG.camera, 100.0, -300.0, 0.5)
+    assert not ok and math.isnan(w) and math.isnan(h)
+
+
+def _measurements(T=40, seed=0):
+    rng = np.random.default_rng(seed)
+    k = np.arange(T)
+    z = np.stack([60.0 + 2.5 * k, 120.0 - 0.8 * k], 1) + rng.normal(0, 2.0, (T, 2))
+    present = np.ones(T, bool)
+    present[[7, 8, 20]] = False  # frames without a measurement: predict only
+    return z.astype(np.float32), present
+
+
+@pytest.fixture(scope="module")
+def slot_runs():
+    """Slot 1 of a 4-slot SlotFilter fed the measurements, for both dynamics families."""
+    z, present = _measurements()
+    out = {}
+    for dyn in ("3d", "2d"):
+        sf = SlotFilter(CFG, dyn, slots=4)
+        rows = []
+        for k in range(len(z)):
+            zz = np.full((4, 2), np.nan, np.float32)
+            if present[k]:
+                zz[1] = z[k]
+            pres = np.array([False, True, False, False])
+            rows.append(sf.step(np.array([False, k == 0, False, False]), zz, pres, 1 / 15)[1])
+        out[dyn] = np.asarray(rows)
+    return z, present, out
+
+
+def test_3d_dynamics_is_the_core_ekf(slot_runs):
+    z, present, out = slot_runs
+    T = len(z)
+    zz = np.where(present[:, None], z, np.nan).astype(np.float32)
+    run = eqx.filter_jit(ekf.filter_track)
+    ref = run(CFG.camera, CFG.noise, ekf.FromAnnotations(), jnp.asarray(zz), jnp.full(T, jnp.nan),
+              jnp.full(T, 1 / 15), jnp.asarray(present))
+    mean = np.asarray(ref.steps.mean)
+    np.testing.assert_allclose(out["3d"][:, 5], mean[:, 0], rtol=1e-4, atol=2e-4)
+    np.testing.assert_allclose(out["3d"][:, 6], mean[:, 2], rtol=1e-4, atol=2e-4)
+
+
+def test_2d_dynamics_is_a_linear_kalman_filter(slot_runs):
+    z, present, out = slot_runs
+    nz = image_noise(CFG)
+    q2 = np.asarray(jnp.exp(2 * nz.log_q), np.float64)
+    R = np.asarray(nz.R(), np.float64)
+    s2 = float(nz.init_speed_std()) ** 2
+    dt = 1 / 15
+    F = np.array([[1, dt, 0, 0], [0, 1, 0, 0], [0, 0, 1, dt], [0, 0, 0, 1]], float)
+    Q = np.diag([0, q2[0] * dt, 0, q2[1] * dt])
+    H = np.array([[1, 0, 0, 0], [0, 0, 1, 0]], float)
+    x = np.array([z[0, 0], 0, z[0, 1], 0], float)
+    P = np.diag([R[0, 0], s2, R[1, 1], s2])
+    P[0, 2] = P[2, 0] = R[0, 1]
+    est = [x.copy()]
+    for k in range(1, len(z)):
+        x, P = F @ x, F @ P @ F.T + Q
+        if present[k]:
+            K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+            x, P = x + K @ (z[k].astype(float) - H @ x), (np.eye(4) - K @ H) @ P
+        est.append(x.copy())
+    est = np.asarray(est)
+    np.testing.assert_allclose(out["2d"][:, 1], est[:, 0], rtol=0, atol=2e-3)
+    np.testing.assert_allclose(out["2d"][:, 2], est[:, 2], rtol=0, atol=2e-3)
+
+
+def test_placement_covers_the_blob_and_stands_on_its_bottom():
+    shape = ShapeModel.from_config(CFG, "3d")
+    labels = np.zeros((192, 256), np.int32)
+    w, h = (float(q) for q in shape.size(100.0, 140.0))
+    labels[int(140 - h * 0.9):141, 94:107] = 3  # a body, columns 94..106, bottom row 140
+    labels[60:80, 150:170] = 5  # another blob, not related
+    pl = place_patch(labels, np.array([3]), None, shape, 92.0, 132.0, radius_px=12.0)
+    assert pl is not None
+    assert pl.v == 140.0
+    # the whole body is covered, and the placement is the covering one nearest the prediction
+    assert pl.covered == int((labels == 3).sum())
+    right = lambda u: math.floor(u + pl.w / 2 + 0.5)  # exclusive right column of the patch
+    assert math.floor(pl.u - pl.w / 2 + 0.5) <= 94 and right(pl.u - 1) < 107 <= right(pl.u)
+    np.testing.assert_allclose((pl.w, pl.h), shape.size(pl.u, pl.v))
+    claimed = np.zeros_like(labels, bool)
+    claimed[:, :] = True
+    assert place_patch(labels, np.array([3]), claimed, shape, 92.0, 132.0, radius_px=12.0) is None
+    assert place_patch(labels, np.array([5]), None, shape, 92.0, 132.0, radius_px=12.0) is None
+
+
+def _truth_switches(res, scene):
+    """Per frame, truth foot points and track boxes paired one-to-one (Hungarian on the foot
+    distance, gated: |du| < box width, |dv| < 0.3 box height); per truth walker returns (id
+    changes, fraction of visible frames paired, the set of paired ids)."""
+    from scipy.optimize import linear_sum_assignment
+
+    m = res.mot
+    seqs = {i: [] for i in range(len(scene.truth))}
+    for k in range(len(scene.frames)):
+        sel = m["frame"] == k + 1
+        fu = m["bb_left"][sel] + m["bb_width"][sel] / 2
+        fv = m["bb_top"][sel] + m["bb_height"][sel]
+        vis = [i for i, tr in enumerate(scene.truth) if tr.visible[k]]
+        if not vis or not sel.any():
+            continue
+        du = np.abs(fu[None, :] - np.array([scene.truth[i].u[k] for i in vis])[:, None])
+        dv = np.abs(fv[None, :] - np.array([scene.truth[i].v[k] for i in vis])[:, None])
+        ok = (du < m["bb_width"][sel][None, :]) & (dv < 0.3 * m["bb_height"][sel][None, :])
+        cost = np.where(ok, np.hypot(du, dv), 1e6)
+        for r, c in zip(*linear_sum_assignment(cost)):
+            if ok[r, c]:
+                seqs[vis[r]].append(int(m["id"][sel][c]))
+    return [(sum(a != b for a, b in zip(q, q[1:])), len(q) / tr.visible.sum(), set(q))
+            for q, tr in zip(seqs.values(), scene.truth)]
+
+
+def _run(actors, dynamics="3d"):
+    spec = SceneSpec(n_frames=72, actors=actors, camera=CFG.camera)
+    scene = render_scene(1, spec)
+    opt = CountOptions(dynamics=dynamics, classify=False, online_verdicts=False)
+    res = count_frames(CFG, ((i, i / 15.0, f) for i, f in enumerate(scene.frames)), options=opt)
+    return res, scene
+
+
+@pytest.mark.parametrize("dynamics", ["3d", "3d-shape"])
+def test_two_walkers_crossing_keep_their_ids(dynamics):
+    a = walker(-4.0, 7.0, 0.0, start_frame=3, phase=0.1)
+    b = walker(4.0, 7.6, math.pi, start_frame=3, phase=0.6, grey_torso=150, grey_legs=70)
+    res, scene = _run((a, b), dynamics)
+    # they overlap in the image around frame 37 (merged blob), then part
+    assert res.counts["tracks"] == 2
+    (s0, f0, ids0), (s1, f1, ids1) = _truth_switches(res, scene)
+    assert s0 == 0 and s1 == 0
+    assert f0 > 0.9 and f1 > 0.9
+    assert ids0.isdisjoint(ids1)
+
+
+def test_a_group_splitting_gives_two_pedestrians():
+    a = walker(-0.35, 7.0, math.pi + 0.25, start_frame=3)
+    b = walker(0.35, 7.0, -0.25, start_frame=3, phase=0.5, grey_torso=150)
+    res, scene = _run((a, b))
+    # one blob two walkers wide at the start: two pedestrians side by side, then one each
+    assert res.counts["tracks"] == 2
+    first = res.mot["frame"] == res.mot["frame"].min()
+    assert first.sum() == 2
+    (s0, f0, ids0), (s1, f1, ids1) = _truth_switches(res, scene)
+    assert s0 == s1 == 0 and f0 > 0.9 and f1 > 0.9 and ids0.isdisjoint(ids1)
