@@ -29,6 +29,13 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--fit-center", action="store_true",
                    help="also fit Uc, Vc; b/a is then held at the config's (ground footprints "
                    "determine only five combinations)")
+    c.add_argument("--fit-roll", action="store_true",
+                   help="also fit the roll angle (an extension of (3): a tilted horizon); "
+                   "written as camera.roll_deg")
+    c.add_argument("--world", action="store_true",
+                   help="x, y are in the data's own world frame: fit a planar rigid transform "
+                   "(tx, ty, yaw; reported, not written) to the ground frame of (3) with the "
+                   "camera; b/a is then held at the config's")
     c.add_argument("--loss", choices=("l2", "huber", "cauchy"), default="l2")
     c.add_argument("--max-steps", type=int, default=256)
     n = sub.add_parser("noise", help="fit Q and R by the EKF's innovation likelihood")
@@ -62,10 +69,17 @@ def _camera(args, cfg):
     ok = np.isfinite(tr.u) & np.isfinite(tr.v) & np.isfinite(tr.x) & np.isfinite(tr.y)
     if not np.any(ok):
         raise BadInput(args.footprints, "no footprint with finite u, v, x and y")
-    fit = ("af", "h", "theta", "uc", "vc") if args.fit_center else ("af", "bf", "h", "theta")
+    if args.world and args.fit_center:
+        raise BadInput(args.footprints, "--world and --fit-center together are not identifiable "
+                       "from ground footprints; give the principal point in the config")
+    # In a world frame of its own the ground's translation trades with b f (singular Jacobian,
+    # measured): b/a is held at the config's, as with --fit-center.
+    fit = (("af", "h", "theta", "uc", "vc") if args.fit_center
+           else ("af", "h", "theta") if args.world else ("af", "bf", "h", "theta"))
+    fit += ("roll",) if args.fit_roll else ()
     try:
         r = fit_camera(tr.u[ok], tr.v[ok], tr.x[ok], tr.y[ok], cfg.camera, fit=fit,
-                       loss=args.loss, max_steps=args.max_steps)
+                       loss=args.loss, max_steps=args.max_steps, world=args.world)
     except ValueError as e:
         raise BadInput(args.footprints, str(e)) from None
     return r, cfg.__class__(r.camera, cfg.noise, cfg.width, cfg.walking, cfg.thresholds)

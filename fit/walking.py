@@ -34,6 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from rhythmjax import mem
+from rhythmjax.batch import padded_chunks
 from rhythmjax.camera import ground_width
 from rhythmjax.ekf import filter_track
 from rhythmjax.gates import PaperGates
@@ -96,19 +97,10 @@ def _features_chunk(cfg: Config, z, width, intensity, dt, present) -> Features:
 def features(cfg: Config, batch, *, chunk: int = 256) -> Features:
     """`Features` of every track of a `rhythmjax.io.TrackBatch` (padded to >= N frames), in
     fixed-shape chunks so one compilation serves them all."""
-    B = len(batch.ids)
     if batch.z.shape[1] < cfg.thresholds.n:
         raise ValueError(f"tracks must be padded to at least N = {cfg.thresholds.n} frames")
-    rows = min(chunk, max(8, 1 << max(0, B - 1).bit_length()))
     parts = []
-    for s in range(0, B, rows):
-        e = min(s + rows, B)
-        arrays = []
-        for a in (batch.z, batch.width, batch.intensity, batch.dt, batch.present):
-            pad = np.zeros((rows - (e - s),) + a.shape[1:], a.dtype)
-            if a.dtype.kind == "f":
-                pad[...] = np.nan if a is not batch.dt else 1.0 / cfg.camera.fps
-            arrays.append(jnp.asarray(np.concatenate([a[s:e], pad])))
+    for s, e, arrays in padded_chunks(cfg, batch, chunk):
         parts.append(jax.tree.map(lambda x, e=e, s=s: np.asarray(x)[: e - s],
                                   _features_chunk(cfg, *arrays)))
     return jax.tree.map(lambda *xs: jnp.asarray(np.concatenate(xs)), *parts)

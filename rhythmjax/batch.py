@@ -26,6 +26,23 @@ def _chunk_size(n_tracks: int, chunk: int) -> int:
     return min(chunk, max(8, 1 << max(0, int(n_tracks - 1).bit_length())))
 
 
+def padded_chunks(cfg: Config, batch, chunk: int):
+    """Yield (start, end, (z, width, intensity, dt, present)) over the tracks of a `TrackBatch`
+    in chunks of one fixed row count (`_chunk_size`); the last chunk is padded with empty tracks
+    (no measurement, NaN intensity, dt = 1 / fps), so one compilation serves every chunk."""
+    B = len(batch.ids)
+    rows = _chunk_size(B, chunk)
+    for s in range(0, B, rows):
+        e = min(s + rows, B)
+        arrays = []
+        for a in (batch.z, batch.width, batch.intensity, batch.dt, batch.present):
+            pad = np.zeros((rows - (e - s),) + a.shape[1:], a.dtype)
+            if a.dtype.kind == "f":
+                pad[...] = np.nan if a is not batch.dt else 1.0 / cfg.camera.fps
+            arrays.append(jnp.asarray(np.concatenate([a[s:e], pad])))
+        yield s, e, tuple(arrays)
+
+
 def _progress(total: int, enabled: bool):
     if enabled and sys.stderr.isatty():
         from tqdm import tqdm
@@ -38,19 +55,11 @@ def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = Tr
     """Classify every track of a `TrackBatch`; returns NumPy columns of the verdicts table
     (`VERDICT_COLUMNS`, verdict and reason as labels) plus `peak_*` arrays for plots."""
     B = len(batch.ids)
-    rows = _chunk_size(B, chunk)
     fields = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
               "peak_freq", "peak_power", "peak_mask")
     parts: dict[str, list[np.ndarray]] = {k: [] for k in fields}
     bar = _progress(B, progress)
-    for s in range(0, B, rows):
-        e = min(s + rows, B)
-        arrays = []
-        for a in (batch.z, batch.width, batch.intensity, batch.dt, batch.present):
-            pad = np.zeros((rows - (e - s),) + a.shape[1:], a.dtype)
-            if a.dtype.kind == "f":
-                pad[...] = np.nan if a is not batch.dt else 1.0 / cfg.camera.fps
-            arrays.append(jnp.asarray(np.concatenate([a[s:e], pad])))
+    for s, e, arrays in padded_chunks(cfg, batch, chunk):
         res = classify_batch(cfg, *arrays)
         for k in fields:
             parts[k].append(np.asarray(getattr(res, k))[: e - s])

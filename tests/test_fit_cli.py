@@ -128,3 +128,26 @@ def test_walking_bad_input_exit_2(files, capsys):
     rc = main(["walking", str(files / "nolabel.csv"), "-o", str(out)])
     err = capsys.readouterr().err.strip()
     assert rc == 2 and "nolabel.csv" in err and "no 'label' column" in err and not out.exists()
+
+
+def test_camera_fit_roll_and_world_frame(tmp_path, capsys):
+    """Footprints from a rolled camera (3 deg), given in a world frame rotated by 30 deg and
+    shifted by (5, -2) m: --fit-roll --world recovers h, theta and roll (1 px noise, ~1000
+    points: h within 5 cm, theta and roll within 0.3 deg) and writes roll_deg."""
+    cam = Camera(h=3.0, theta=math.radians(20.0), roll=math.radians(3.0))
+    cols, _ = make_tracks(n_walkers=12, n_bicycles=0, n_dogs=0, n_cars=0, seed=4, camera=cam,
+                          r_std_px=1.0)
+    c, s = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+    x, y = np.asarray(cols["x"]), np.asarray(cols["y"])
+    cols = dict(cols, x=c * x - s * y + 5.0, y=s * x + c * y - 2.0)
+    write_table(tmp_path / "fp.csv", cols, COLS)
+    out = tmp_path / "roll.json"
+    rc = main(["camera", str(tmp_path / "fp.csv"), "-o", str(out), "--fit-roll", "--world",
+               "--json"])
+    rep = json.loads(capsys.readouterr().out)
+    assert rc == 0 and {"roll", "tx", "ty", "yaw"} <= set(rep["se"])
+    got = read_config(out).camera
+    assert abs(float(got.h) - 3.0) < 0.05
+    assert abs(math.degrees(float(got.theta)) - 20.0) < 0.3
+    assert abs(math.degrees(float(got.roll)) - 3.0) < 0.3
+    assert json.loads(out.read_text())["camera"]["roll_deg"] == pytest.approx(3.0, abs=0.3)
