@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .io_tables import BadInput
+from .errors import BadInput
 from .params import Camera
 
 

@@ -9,149 +9,24 @@ here so that the first bad cell is reported with its line and column. Every outp
 
 from __future__ import annotations
 
-import contextlib
 import csv
-import errno
 import math
 import os
-import secrets
-from collections.abc import Iterator, Mapping, Sequence
-from typing import IO, Any
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
+from .atomic import atomic_path as atomic_path, atomic_write, check_writable as check_writable
+from .errors import BadInput as BadInput, PathLike
 
-PathLike = str | os.PathLike
+
 TABLE_SUFFIXES = (".csv", ".parquet")
 NULL_TOKENS = ("", "nan", "NaN", "NAN", "NA", "N/A", "null", "NULL", "None")
 KINDS = ("float", "int", "id", "str")
-
-
-class BadInput(ValueError):
-    """A user's file is unusable. `str()` is one line naming the file and where: the CSV `line`
-    (1-based, header = line 1) or Parquet `row` (1-based), the `column`, the `track_id` or the
-    config `key`. The command line prints it and exits 2."""
-
-    def __init__(self, path: PathLike, message: str, *, line: int | None = None,
-                 row: int | None = None, column: str | int | None = None,
-                 track_id: str | None = None, key: str | None = None):
-        self.path, self.message = os.fspath(path), message
-        self.line, self.row, self.column, self.track_id, self.key = line, row, column, track_id, key
-        super().__init__(self._text())
-
-    def _text(self) -> str:
-        head, msg = self.path, self.message
-        if self.track_id is not None:
-            msg = f"track {self.track_id}: {msg}"
-        elif self.line is not None or self.row is not None:
-            head += f" line {self.line}" if self.line is not None else f" row {self.row}"
-            if isinstance(self.column, int):
-                head += f" col {self.column}"
-            elif self.column is not None:
-                head += f", column '{self.column}'"
-        return f"{head}: {msg}".replace("\n", " ")
-
-
-# ----------------------------------------------------------------------------------------------
-# Atomic writes
-
-def _temp_name(path: str) -> str:
-    d, base = os.path.split(path)
-    stem, suffix = os.path.splitext(base)
-    return os.path.join(d, f".{stem}.{secrets.token_hex(4)}.tmp{suffix}")
-
-
-def _fsync(path: str) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def _target(path: PathLike) -> str:
-    p = os.fspath(path)
-    return os.path.realpath(p) if os.path.islink(p) else p
-
-
-def _commit(tmp: str, final: str) -> None:
-    with contextlib.suppress(OSError):  # keep the permissions of the file being replaced
-        os.chmod(tmp, os.stat(final).st_mode & 0o7777)
-    os.replace(tmp, final)
-    with contextlib.suppress(OSError):  # best effort: not every filesystem allows it
-        _fsync(os.path.dirname(final) or ".")
-
-
-@contextlib.contextmanager
-def atomic_write(path: PathLike, mode: str = "wb") -> Iterator[IO[Any]]:
-    """Open a temp file beside `path` (``.<stem>.<random>.tmp<suffix>``) for writing; on success
-    flush, fsync and rename it over `path`; on any exception (Ctrl-C included) remove it and
-    re-raise, leaving the previous `path` untouched. Text modes are UTF-8 with ``newline=""``."""
-    if not mode.startswith(("w", "x")) or "+" in mode:
-        raise ValueError(f"atomic_write needs a write mode, got {mode!r}")
-    final = _target(path)
-    f, tmp = _open_temp(final, mode)
-    try:
-        with f:
-            yield f
-            f.flush()
-            os.fsync(f.fileno())
-        _commit(tmp, final)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-
-
-@contextlib.contextmanager
-def atomic_path(path: PathLike) -> Iterator[str]:
-    """Yield a temp PATH beside `path` that keeps its suffix, for writers that take a file name
-    (cv2.VideoWriter, pyarrow.parquet.write_table, savefig); rename it over `path` on success,
-    remove it on failure. A writer that created no file is an error (OSError ENOENT)."""
-    final = _target(path)
-    check_writable(final)
-    tmp = _temp_name(final)
-    try:
-        yield tmp
-        if not os.path.isfile(tmp):
-            raise FileNotFoundError(errno.ENOENT, "the writer created no file", tmp)
-        _fsync(tmp)
-        _commit(tmp, final)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-
-
-def check_writable(path: PathLike) -> None:
-    """Fail fast (before any work) if `path` cannot be written: its directory is missing or not
-    writable, or `path` is a directory. Probes with a real temp file, so it holds for root too."""
-    f, probe = _open_temp(os.fspath(path), "wb")
-    f.close()
-    os.unlink(probe)
-
-
-def _open_temp(final: str, mode: str) -> tuple[IO[Any], str]:
-    """Create the temp file for `final` exclusively (permissions from the umask, as for a plain
-    open); a missing or unwritable directory is a `BadInput` naming `final`."""
-    d = os.path.dirname(os.path.abspath(final))
-    if os.path.isdir(final):
-        raise BadInput(final, "is a directory, not an output file")
-    if not os.path.isdir(d):
-        raise BadInput(final, f"output directory '{d}' does not exist")
-    text = "b" not in mode
-    while True:
-        tmp = _temp_name(final)
-        try:
-            return open(tmp, mode.replace("w", "x"), encoding="utf-8" if text else None,
-                        newline="" if text else None), tmp
-        except FileExistsError:
-            continue
-        except OSError as e:
-            raise BadInput(final, f"cannot write in '{d}': {e.strerror or e}") from None
 
 
 # ----------------------------------------------------------------------------------------------

@@ -16,7 +16,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .io_tables import BadInput, PathLike, atomic_write
+from .atomic import atomic_write
+from .errors import BadInput, PathLike
 
 
 MOT_COLUMNS = ("frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf", "x", "y", "z")

@@ -21,7 +21,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from .io_tables import BadInput, PathLike, atomic_path
+from .atomic import atomic_path
+from .errors import BadInput, PathLike
 
 
 FRAME_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")

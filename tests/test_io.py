@@ -15,7 +15,7 @@ import numpy as np
 import pyarrow.csv as pacsv
 import pytest
 
-from rhythmjax import io_tables
+from rhythmjax import atomic, io_tables
 from rhythmjax.io import (
     BadInput,
     atomic_path,
@@ -288,7 +288,7 @@ def test_check_writable(tmp_path, monkeypatch):
     def denied(*a, **k):
         raise PermissionError(errno.EACCES, "Permission denied")
 
-    monkeypatch.setattr(io_tables, "open", denied, raising=False)  # the module's open()
+    monkeypatch.setattr(atomic, "open", denied, raising=False)  # the module's open()
     with bad(f"out.csv: cannot write in '{tmp_path}': Permission denied"):
         check_writable(tmp_path / "out.csv")
     with bad(f"out.csv: cannot write in '{tmp_path}': Permission denied"):
