@@ -213,6 +213,7 @@ class WalkingFit:
     iterations: int
     success: bool
     reasons: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)  # warnings that do not fail the fit
 
     @property
     def ill_determined(self) -> bool:
@@ -242,6 +243,7 @@ class WalkingFit:
                      f"other label ({c['negatives']}); unscored: {c['unclassified']} unclassified, "
                      f"{c['unlabelled']} unlabelled")
         lines.append(f"solver: {self.result} after {self.iterations} iterations")
+        lines += [f"note: {n}" for n in self.notes]
         if self.reasons:
             lines.append("ILL-DETERMINED: " + "; ".join(self.reasons))
         return "\n".join(lines)
@@ -251,7 +253,8 @@ class WalkingFit:
                 "thresholds": self.thresholds, "start_thresholds": self.start_thresholds,
                 "balanced_accuracy": self.ba, "counts": self.counts, "result": self.result,
                 "success": self.success, "num_steps": self.iterations,
-                "ill_determined": self.ill_determined, "reasons": self.reasons}
+                "ill_determined": self.ill_determined, "reasons": self.reasons,
+                "notes": self.notes}
 
 
 def _thr_dict(thr: Thresholds) -> dict[str, float]:
@@ -328,6 +331,7 @@ def fit_walking(cfg: Config, batch, *, test_fraction: float = 0.3, seed: int = 0
     speed = np.asarray(f.speed)[:, 0]
     new_cfg = dataclasses.replace(cfg, walking=walking, thresholds=thr,
                                   width=WidthModel(gw["mean"], gw["std"]))
+    notes = _edge_notes(axes, ba_tr, (i, j, k))
     reasons = [] if settled else [f"walking model still moving after {max_iter} iterations"]
     for name, g in (("pace", gp), ("stride", gs), ("width", gw)):
         if not (math.isfinite(g["std"]) and g["std"] > 0):
@@ -348,7 +352,24 @@ def fit_walking(cfg: Config, batch, *, test_fraction: float = 0.3, seed: int = 0
         tracks={"track_id": np.asarray(batch.ids, dtype=object), "label": labels, "test": test,
                 "verdict": vt, "reason": rt, "pace_hz": pt, "stride_m": st, "ratio": qt,
                 "speed_mps": speed, "used_for_walking": use},
-        iterations=iterations, success=settled, reasons=reasons)
+        iterations=iterations, success=settled, reasons=reasons, notes=notes)
+
+
+def _edge_notes(axes: dict, ba: np.ndarray, idx: tuple) -> list[str]:
+    """A note for each chosen threshold on the first or last point of its grid axis where the
+    balanced accuracy there beats the next point inwards: the optimum may lie beyond the grid."""
+    notes = []
+    for ax, (name, values) in enumerate(axes.items()):
+        pos = int(idx[ax])
+        if values.size < 2 or pos not in (0, values.size - 1):
+            continue
+        inner = list(idx)
+        inner[ax] = 1 if pos == 0 else values.size - 2
+        if ba[tuple(idx)] > ba[tuple(inner)]:
+            side = "lower" if pos == 0 else "upper"
+            notes.append(f"{name} {values[pos]:.4g} is at the {side} edge of its grid: the "
+                         "optimum may lie beyond it")
+    return notes
 
 
 def make_labelled(**kw):

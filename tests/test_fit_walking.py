@@ -214,3 +214,18 @@ def test_cli_unsettled_keeps_config(pop, capsys):
     cap = capsys.readouterr()
     assert rc == 1 and "not written" in cap.err and "iterations" in cap.out
     assert keep.read_text() == "previous\n"
+
+
+def test_edge_notes_flag_an_optimum_on_the_grid_edge():
+    from fit.walking import _edge_notes
+
+    axes = {"p_thr": np.array([1.0, 3.0, 10.0]), "r_thr": np.array([0.0, 0.1]),
+            "k_sigma3": np.array([2.0, 3.0, 4.0])}
+    ba = np.full((3, 2, 3), 0.5)
+    ba[0, 1, 1] = 0.9  # best at p_thr's lower edge, better than its inner neighbour
+    ba[1, 1, 1] = 0.8
+    ba[0, 0, 1] = 0.9  # r_thr's upper edge ties its inner neighbour here: no note for it
+    notes = _edge_notes(axes, ba, (0, 1, 1))
+    assert len(notes) == 1 and notes[0].startswith("p_thr 1 is at the lower edge")
+    assert _edge_notes(axes, ba, (1, 1, 1)) == ["r_thr 0.1 is at the upper edge of its grid: "
+                                                "the optimum may lie beyond it"]
