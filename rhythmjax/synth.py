@@ -28,6 +28,12 @@ import cv2
 import numpy as np
 
 from . import synth_actors as sa
+from .camera_np import (
+    camera_tuple,
+    depth_3d as depth_3d,
+    ground_of_pixels as _ground_of_pixels,
+    project_3d as project_3d,
+)
 from .params import Camera
 
 
@@ -146,49 +152,6 @@ class Scene:
     @property
     def fps(self) -> float:
         return float(self.spec.camera.fps)
-
-
-# ----------------------------------------------------------------------------------------------
-# camera, NumPy float64
-
-
-def _cam(camera: Camera) -> tuple[float, ...]:
-    return tuple(float(np.asarray(getattr(camera, k))) for k in ("f", "h", "theta", "a", "b",
-                                                                     "uc", "vc"))
-
-
-def depth_3d(camera: Camera, y, z):
-    """Denominator of (3) for a point at height z (m): f + y cos(theta) + (h - z) sin(theta)."""
-    f, h, th = _cam(camera)[:3]
-    return f + np.asarray(y, np.float64) * math.cos(th) + (h - np.asarray(z, np.float64)) * \
-        math.sin(th)
-
-
-def project_3d(camera: Camera, x, y, z):
-    """(u, v) px of the point (x, y) m on the ground plane and z m above it: equation (3) with the
-    camera height h replaced by h - z (the camera at height h looks down by theta; a point z
-    above the ground is seen as a ground point by a camera h - z high). z = 0 is (3) exactly.
-    NumPy float64; no check for points behind the camera (see `depth_3d`)."""
-    f, h, th, a, b, uc, vc = _cam(camera)
-    x, y, z = (np.asarray(q, np.float64) for q in (x, y, z))
-    s, c = math.sin(th), math.cos(th)
-    d = f + y * c + (h - z) * s
-    return uc + a * f * x / d, vc - b * f * (y * s - (h - z) * c) / d
-
-
-def _ground_of_pixels(camera: Camera, u, v):
-    """Inverse perspective (NumPy): ground (x, y) of pixels (u, v) and a below-horizon mask."""
-    f, h, th, a, b, uc, vc = _cam(camera)
-    s, c = math.sin(th), math.cos(th)
-    dv = vc - v
-    den = b * f * s - dv * c
-    ok = den > 1e-6 * b * f
-    den = np.where(ok, den, 1.0)
-    y = (dv * (f + h * s) + b * f * h * c) / den
-    d = f + y * c + h * s
-    ok &= d > 1e-3
-    x = (u - uc) * np.where(ok, d, 1.0) / (a * f)
-    return np.where(ok, x, 0.0), np.where(ok, y, 0.0), ok
 
 
 # ----------------------------------------------------------------------------------------------
@@ -315,7 +278,7 @@ def render_scene(key_or_seed, spec: SceneSpec) -> Scene:
     bg = render_background(cam, r_tex, ground_mean=spec.ground_mean,
                            ground_contrast=spec.ground_contrast, sky=spec.sky)
     T, H, W = spec.n_frames, cam.image_height, cam.image_width
-    f, h, th, a_, b_, uc, vc = _cam(cam)
+    f, h, th, a_, b_, uc, vc = camera_tuple(cam)
     afs = a_ * f
     jitter = (r_jit.standard_normal((T, 2)) * spec.jitter_px if spec.jitter_px > 0
               else np.zeros((T, 2)))
@@ -406,7 +369,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     camera = camera or Camera()
     rng = _rng(seed)
     fps, W, H = float(camera.fps), camera.image_width, camera.image_height
-    afs = _cam(camera)[3] * _cam(camera)[0]
+    afs = camera_tuple(camera)[3] * camera_tuple(camera)[0]
     kinds = ["pedestrian"] * n_walkers + ["bicycle"] * n_bicycles + ["dog"] * n_dogs
     placed: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []  # alive, u, hw, v
     actors = []
@@ -423,7 +386,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
         for _ in range(300):
             head = float(rng.uniform(-math.pi, math.pi))
             ym = float(rng.uniform(*range_m))
-            half = 0.8 * (W / 2) * ym * math.cos(_cam(camera)[2]) / afs
+            half = 0.8 * (W / 2) * ym * math.cos(camera_tuple(camera)[2]) / afs
             xm = float(rng.uniform(-half, half))
             tau = (k - start - life / 2) / fps
             x = xm + speed * tau * math.cos(head)
