@@ -46,6 +46,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from fit.homography import dlt_homography as dlt_homography, pose_from_homography
 from rhythmjax.camera import project
 from rhythmjax.params import Camera
 
@@ -342,52 +343,6 @@ def _camera(values: dict[str, float], f: float, like: Camera) -> Camera:
                   b=values["bf"] / f, uc=values["uc"], vc=values["vc"],
                   roll=math.radians(values["roll"]), fps=like.fps,
                   image_width=like.image_width, image_height=like.image_height)
-
-
-def dlt_homography(X, Y, u, v) -> np.ndarray:
-    """Least-squares plane-to-image homography (normalised DLT): [u, v, 1] ~ M [X, Y, 1]."""
-    def norm(a, b):
-        m, s = np.array([a.mean(), b.mean()]), np.sqrt(2) / np.mean(np.hypot(a - a.mean(),
-                                                                             b - b.mean()))
-        return np.array([[s, 0, -s * m[0]], [0, s, -s * m[1]], [0, 0, 1.0]])
-    Tw, Ti = norm(X, Y), norm(u, v)
-    P = np.stack([X, Y, np.ones_like(X)]).T @ Tw.T
-    q = np.stack([u, v, np.ones_like(u)]).T @ Ti.T
-    z = np.zeros_like(P)
-    A = np.concatenate([np.hstack([P, z, -q[:, :1] * P]), np.hstack([z, P, -q[:, 1:2] * P])])
-    M = np.linalg.svd(A)[2][-1].reshape(3, 3)
-    return np.linalg.inv(Ti) @ M @ Tw
-
-
-def pose_from_homography(M: np.ndarray, c0: dict[str, float], X, Y
-                         ) -> tuple[dict[str, float], float]:
-    """Start values (a f, h, theta, roll, tx, ty, yaw; `NAMES` units) and the mirror sign from a
-    plane-to-image homography, with the principal point (and b/a) of `c0`: K^-1 M = [r1 r2 t]
-    up to scale; a f from the orthogonality of r1, r2 (else `c0`'s)."""
-    ba = c0["bf"] / c0["af"]
-    B = np.array([[1, 0, -c0["uc"]], [0, 1 / ba, -c0["vc"] / ba], [0, 0, 1.0]]) @ M
-    (h11, h12, _), (h21, h22, _), (h31, h32, _) = B
-    a = np.array([h11 * h12 + h21 * h22, h11**2 + h21**2 - h12**2 - h22**2])
-    b = np.array([h31 * h32, h31**2 - h32**2])
-    w = -(a @ b) / max(a @ a, 1e-300)  # 1 / af^2
-    af = 1 / math.sqrt(w) if w > 0 else c0["af"]
-    B = np.diag([1 / af, 1 / af, 1.0]) @ B
-    lam = 2.0 / (np.linalg.norm(B[:, 0]) + np.linalg.norm(B[:, 1]))
-    if np.median(M[2, 0] * X + M[2, 1] * Y + M[2, 2]) < 0:  # the points in front of the camera
-        lam = -lam
-    r1, r2, t = lam * B[:, 0], lam * B[:, 1], lam * B[:, 2]
-    U, _, Vt = np.linalg.svd(np.stack([r1, r2, np.cross(r1, r2)], 1))
-    R = U @ Vt  # rows: camera x (right), y (down), z (axis) in world coordinates
-    C = -R.T @ t
-    mirror = 1.0
-    if C[2] < 0:  # world Z = X x Y points down: mirror Y
-        mirror, R, C = -1.0, R @ np.diag([1, -1, -1.0]), C * np.array([1, -1, -1.0])
-    th = math.asin(np.clip(-R[2, 2], -1, 1))
-    roll = math.asin(np.clip(R[0, 2] / math.cos(th), -1, 1))
-    fx, fy = R[2, :2] / np.hypot(*R[2, :2])
-    tx, ty = -(C[0] * fy - C[1] * fx), -(C[0] * fx + C[1] * fy)
-    return {"af": af, "h": float(C[2]), "theta": math.degrees(th), "roll": math.degrees(roll),
-            "tx": float(tx), "ty": float(ty), "yaw": math.degrees(math.atan2(fx, fy))}, mirror
 
 
 def _report(best, fit, loss, n) -> CameraFit:
