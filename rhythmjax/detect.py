@@ -125,7 +125,8 @@ def _window(shape: tuple[int, ...], cu: float, cv: float, w: int, h: int) -> tup
 def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarray,
                      window_size: Number | Sequence[Number] | np.ndarray, *,
                      fraction: Number = 0.3, min_area: int = 10, halo: int = SOBEL_HALO_PX,
-                     core: Box | None = None, dilate_px: int = 3) -> Detection | None:
+                     core: Box | None = None, dilate_px: int = 3,
+                     body_px: Number | None = None) -> Detection | None:
     """Detect the object in a window centred on the predicted foot point `center_uv` = (u, v) px.
 
     `window_size` is (width, height) px or one number for a square; the window is clipped at the
@@ -141,7 +142,16 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
     `find_objects`) that belong to the object are kept: the region with the most motion pixels
     inside `core`, and every other region at least half inside it. Another object that enters
     the window (a walker passing nearer or farther) then no longer widens the extent or moves
-    the bottom point."""
+    the bottom point.
+
+    `body_px` (with `core`): the object's regions may also be joined across gaps. The motion of
+    a walker far away splits into separate regions (the outlines of its torso, its legs, a bag;
+    its uniform inside does not change), and when the prediction is off by a fraction of the
+    body width the regions on the far side lie mostly outside `core` and were dropped, so the
+    detection was half a body with the foot point of the wrong part, pulling the estimate
+    further off. Here the remaining regions are added nearest first while the kept regions stay
+    within `body_px` columns and their bottom not below `core`'s by more than a tenth of its
+    height and the dilation (a nearer object's feet)."""
     u, v = (float(c) for c in center_uv)
     if not (math.isfinite(u) and math.isfinite(v)):
         return None
@@ -152,20 +162,23 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
         return None
     crop = motion[y0:y1, x0:x1]
     if core is not None:
-        crop = _object_regions(crop, (core[0] - x0, core[1] - y0, core[2], core[3]), dilate_px)
+        crop = _object_regions(crop, (core[0] - x0, core[1] - y0, core[2], core[3]), dilate_px,
+                               body_px)
         if crop is None:
             return None
     return _bottom_point(crop, x0, y0, fraction, min_area, halo)
 
 
-def _object_regions(crop: np.ndarray, core: Box, dilate_px: int) -> np.ndarray | None:
+def _object_regions(crop: np.ndarray, core: Box, dilate_px: int,
+                    body_px: Number | None = None) -> np.ndarray | None:
     """The motion of `crop` restricted to the regions that belong to the object in `core` (crop
     coordinates): the region with the most motion pixels inside `core`, and every other region
-    at least half inside it; None if no region touches it."""
+    at least half inside it (and, with `body_px`, those joined by `_join_body`); None if no
+    region touches it."""
     mask = (crop > 0).astype(np.uint8)
     if dilate_px > 0:
         mask = cv2.dilate(mask, np.ones((2 * dilate_px + 1,) * 2, np.uint8))
-    n, labels = cv2.connectedComponents(mask, connectivity=8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if n <= 2:  # one region (or none): nothing to choose
         return crop if n == 2 else None
     moving = np.where(crop > 0, labels, 0)
@@ -180,7 +193,32 @@ def _object_regions(crop: np.ndarray, core: Box, dilate_px: int) -> np.ndarray |
         return None
     keep = (2 * inside >= total) & (total > 0)
     keep[int(np.argmax(inside))] = True
+    if body_px is not None:
+        _join_body(keep, total, stats, dilate_px, float(body_px),
+                   cy1 + 0.1 * (cy1 - cy0) + dilate_px)
     return np.where(keep[labels], crop, 0).astype(crop.dtype)
+
+
+def _join_body(keep: np.ndarray, total: np.ndarray, stats: np.ndarray, dilate_px: int,
+               body_px: float, max_bottom: float) -> None:
+    """Add to `keep` (in place) the other moving regions, the one that widens the kept columns
+    least first, while the kept columns span at most `body_px` and the region's bottom row
+    (stats of the dilated regions, less `dilate_px`) is above `max_bottom`."""
+    x0 = stats[:, cv2.CC_STAT_LEFT] + dilate_px
+    x1 = stats[:, cv2.CC_STAT_LEFT] + stats[:, cv2.CC_STAT_WIDTH] - 1 - dilate_px
+    bottom = stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT] - 1 - dilate_px
+    lo, hi = int(x0[keep].min()), int(x1[keep].max())
+    if hi - lo + 1 > body_px:
+        return
+    rest = [k for k in np.flatnonzero(~keep & (total > 0)) if bottom[k] <= max_bottom]
+    while rest:
+        span = [max(hi, x1[k]) - min(lo, x0[k]) + 1 for k in rest]
+        j = int(np.argmin(span))
+        if span[j] > body_px:
+            return
+        k = rest.pop(j)
+        keep[k] = True
+        lo, hi = min(lo, int(x0[k])), max(hi, int(x1[k]))
 
 
 def box_overlap(a: Box, b: Box) -> int:

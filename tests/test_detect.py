@@ -230,3 +230,24 @@ def test_box_overlap_and_shared_detections_hand_worked():
     assert shared_detections(dets, 0.5) == {0, 1}
     assert shared_detections(dets, 0.2) == {0, 1, 2}  # 20 >= 0.2 * 100
     assert shared_detections({0: dets[0]}) == set()
+
+
+def test_body_parts_apart_are_joined_within_body_px():
+    """A far walker's motion: two torso outlines apart (its uniform inside does not change) and
+    a leg; the prediction (core) is off to the right by half a body. Without `body_px` only the
+    right outline is measured (narrow, foot point on the wrong part); with it the parts within
+    body_px columns are joined (the whole body, foot at the leg), and a neighbour that would
+    widen them beyond body_px is not."""
+    m = np.zeros((200, 200), np.uint8)
+    m[40:100, 60:63] = 1  # left torso outline, columns 60..62
+    m[40:100, 88:91] = 1  # right torso outline, columns 88..90 (apart by 25 px > dilation)
+    m[100:130, 66:69] = 2  # a leg under the left half, foot row 129
+    m[60:128, 140:150] = 1  # a neighbour further right
+    core = (80, 30, 36, 102)  # predicted body box: from column 80, misses the left parts
+    kw = dict(halo=0, core=core)
+    alone = detect_in_window(m, (100, 90), (120, 140), **kw)
+    assert alone.box[0] == 88 and alone.width == 3 and alone.v == 99  # the right outline only
+    joined = detect_in_window(m, (100, 90), (120, 140), body_px=40, **kw)
+    assert joined.box[0] == 60 and joined.width == 31 and joined.v == 129
+    assert joined.u == 60 + 30 / 2
+    assert detect_in_window(m, (100, 90), (120, 140), body_px=20, **kw) == alone  # too wide

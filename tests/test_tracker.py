@@ -144,3 +144,59 @@ def test_rhythm_window_restarts_after_missing_run():
             assert obj.win_start == 47 and obj.result["window"] == (15, 47)
     # decided on the first window: matching stops there; else the next window (47, 79) ran
     assert obj.win_start == (47 if obj.decided and obj.result["window"] == (15, 47) else 79)
+
+
+def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
+    """The rhythm signal is sampled in window B at the filter's foot point (its ground estimate
+    projected), not at the measured one, which scatters by more than window B's W/5 rows;
+    `sample_estimate=False` keeps the measured one."""
+    import jax.numpy as jnp
+
+    from rhythmjax import detect
+    from rhythmjax.camera import project
+    from rhythmjax.tracker import TrackerOptions
+
+    at, real = [], detect.window_b_intensity
+    monkeypatch.setattr(detect, "window_b_intensity",
+                        lambda D, u, v, W, **kw: at.append((u, v)) or real(D, u, v, W, **kw))
+    for estimate in (True, False):
+        at.clear()
+        tr = OnlineTracker(CFG, TrackerOptions(sample_estimate=estimate))
+        for i, f in enumerate(walker_scene.frames[:40]):
+            tr.update(i, i / 15.0, f)
+        tracks, _, _ = tr.finish()
+        assert len(at) == len(tracks["u"]) > 30
+        uv = np.asarray(at)
+        est = np.stack([np.asarray(a) for a in project(
+            CFG.camera, jnp.asarray(tracks["x_est"], jnp.float32),
+            jnp.asarray(tracks["y_est"], jnp.float32))], axis=1)
+        meas = np.stack([tracks["u"], tracks["v"]], axis=1)
+        ok = np.all(np.isfinite(meas), axis=1)
+        assert ok.sum() > 20 and np.max(np.abs(meas[ok] - est[ok])) > 1.0
+        if estimate:
+            np.testing.assert_allclose(uv, est, atol=0.05)
+        else:
+            np.testing.assert_allclose(uv[ok], meas[ok])
+
+
+def test_body_parts_measured_together():
+    """A walker crossing at 8 m: its motion splits into parts (torso outlines, legs), and with
+    the body's parts within body_widths W joined the measured width is the body's (median ratio
+    to the true width ~0.9), not a part's (0.78 with body_widths=0, which also broke the walker
+    into more tracks)."""
+    from rhythmjax.tracker import TrackerOptions
+
+    scene = _walker_scene(y=8.0)
+    truth = scene.truth[0]
+    ratio, n_tracks = {}, {}
+    for bw in (0.0, TrackerOptions().body_widths):
+        tr = OnlineTracker(CFG, TrackerOptions(body_widths=bw))
+        for i, f in enumerate(scene.frames):
+            tr.update(i, i / 15.0, f)
+        tracks, _, _ = tr.finish()
+        ok = np.isfinite(tracks["u"])
+        fr = tracks["frame"][ok]
+        ratio[bw] = float(np.median(tracks["width_px"][ok] / truth.width_px[fr]))
+        n_tracks[bw] = len(np.unique(tracks["track_id"]))
+    assert ratio[1.8] > 0.85 > 0.8 > ratio[0.0]
+    assert n_tracks[1.8] < n_tracks[0.0]
