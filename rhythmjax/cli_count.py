@@ -17,16 +17,20 @@ def cmd_count(args) -> int:
     blob graph, pedestrians as rectangular patches the size of an average pedestrian (0.5 m x
     1.7 m seen through the config's camera) with Kalman dynamics (--dynamics: 3d = the core
     EKF on the ground plane; 3d-shape or 2d = constant velocity in the image). Every track's
-    window-B rhythm signal is then judged by the rhythm classifier (as `rhythmjax classify`),
-    and only the tracks judged pedestrian count as walkers (bicycles do not).
+    window-B rhythm signal is then judged by the rhythm classifier (as `rhythmjax classify`).
+    Fragments of one walker (lost behind another, at a crossing) are first stitched into one
+    track when the later one starts where and as fast as the earlier one was going (ground
+    plane). The walkers counted are all tracks minus those judged non-pedestrian (bicycles,
+    which the paper counted twice): a track too short to judge (unclassified) still counts.
 
     Writes DIR/mot.txt (MOTChallenge: frame (1-based), id, bb_left, bb_top, bb_width,
     bb_height, conf (1 measured, 0.5 predicted), x, y (ground, m), z (0; -1 -1 -1 where the
     foot point has no ground point); no header), DIR/tracks.parquet (the tracks format, which
-    `rhythmjax classify` re-judges), DIR/verdicts.csv and DIR/counts.json (counts and the run
-    summary). Tracks shorter than 10 frames are dropped. A frame where one blob covers half the
-    image (dense crowd, camera jump) is not used for detection (pedestrians predict) and the
-    summary says how many there were."""
+    `rhythmjax classify` re-judges), DIR/verdicts.csv and DIR/counts.json (counts: tracks,
+    pedestrians, non_pedestrians, unclassified, walkers; the rule in words; the run summary).
+    Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
+    (dense crowd, camera jump) is not used for detection (pedestrians predict) and the summary
+    says how many there were."""
     from .cli import _load_config, _say
     from .count import CountOptions, count_frames
     from .io import atomic_write, check_writable, dumps_json, write_table
@@ -56,9 +60,9 @@ def cmd_count(args) -> int:
         print(json.dumps(json.loads(dumps_json(summary))))
         return 0
     c = res.counts
-    print(f"{summary['n_frames']} frames: {c['tracks']} tracks, {c['walkers']} walking "
-          f"(pedestrian), {c['non_pedestrians']} non-pedestrian, {c['unclassified']} "
-          f"unclassified; wrote {args.output}/", file=sys.stderr)
+    print(f"{summary['n_frames']} frames: {c['walkers']} walkers = {c['tracks']} tracks - "
+          f"{c['non_pedestrians']} non-pedestrian ({c['pedestrians']} judged pedestrian, "
+          f"{c['unclassified']} unclassified); wrote {args.output}/", file=sys.stderr)
     for note in notes:
         _say(args, f"note: {note}")
     return 0

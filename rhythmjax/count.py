@@ -1,35 +1,33 @@
-"""Counting pedestrians: the three levels of Masoud & Papanikolopoulos over a video, then the rhythm
-classifier on every track, so only what walks is counted (issue 4).
+"""Counting pedestrians: the three levels of Masoud & Papanikolopoulos over a video
+(`pedestrian_level.PedestrianLevel`), fragments of one walker stitched into one track, then the
+rhythm classifier on every track, which removes what does not walk from the count (issue 4).
 
-Per frame (`PedestrianLevel.update`):
-1. Images: `blobs.BackgroundModel` (running average, selective update) gives the 0/1 mask.
-2. Blobs: `blobs.find_blobs`, then `blobgraph.blob_graph` between frames i-1 and i. A frame whose
-   blob box covers `crowd_fraction` of the image (`blobs.is_crowd`: a dense crowd, a camera jump)
-   is not used for detection: every pedestrian predicts, the frame is listed in `crowd_frames`.
-3. Pedestrians (`pedestrians`): relations are propagated through the blob graph (a pedestrian
-   related to blob i of frame i-1 becomes related to i's children; when a blob shared by several
-   pedestrians splits, they are assigned to its children by the Hungarian method on the distance
-   of their predicted foot points to the children's bottom centres); a pedestrian with no
-   related blob takes the blobs its predicted patch overlaps (re-acquisition after occlusion).
-   Each pedestrian's patch is placed (`pedestrians.place_patch`), older pedestrians first, each
-   claiming the pixels it covers from those after it (groups). Pedestrians sharing a blob too
-   narrow to hold them side by side (< `merge_widths` x their summed patch widths: walking past
-   each other) are not measured: they keep their predicted positions, so identities survive the
-   merge. One jitted call advances every filter (`pedestrians.SlotFilter`).
-4. Refinement: blob columns no pedestrian explains (a pedestrian explains `walker_widths` W
-   around its foot point: a walker's blob spans its stance foot to its leading arm), at least
-   `new_min_widths` W wide, holding enough pixels and reaching the blob's bottom (feet, not
-   arms), start new pedestrians, one per `walker_widths` W of the run, side by side (groups);
-   a new pedestrian gets an id after `confirm_hits` measured frames (dropped if it misses
-   `tentative_misses` before); a pedestrian without measurement predicts for
-   `coast_s` s (default: the config's predict_timeout_s), then ends; two whose foot points are
-   within `duplicate_widths` W with the same image velocity for `duplicate_frames` frames are
-   one: the younger ends. Relations for the next frame: the blobs the placed patch overlaps.
-Every frame each pedestrian samples the rhythm signal I(k) in window B at its foot point
-(`detect.window_b_intensity` on the frame difference, W = its patch width); at the end the
-tracks go through `batch.classify_tracks` (`rhythm.classify_track`: the same judgement
-`rhythmjax classify` makes on the written tracks file). Tracks shorter than `min_track_frames`
-are dropped from every output and count; trailing predicted frames of a track are trimmed.
+Stitching (`stitch_pieces`): a walker hidden behind another or behind a bicycle for longer than
+its coasting time, or lost by its patch at a crossing (a track whose ground velocity jumps ends
+there: `PedestrianLevel._velocity_jump`), comes back as a new track. At the end of the video
+every track's end (its last measured frame: the EKF ground state (x, y, vx, vy) for the "3d"
+dynamics, a line fit over its last `stitch_fit_s` s of measured foot points otherwise) is
+compared with every later track's start (a line fit over its first `stitch_fit_s` s of
+measured foot points): B continues A when B starts after A's last measured frame, within
+`stitch_max_gap_s` s, and the two meet halfway: A predicted on for half the gap (on the ground
+plane with its EKF state for "3d", projected through the camera; in the image otherwise) and B
+taken back for half the gap at its own velocity lie within `stitch_gate_w` W across and
+`stitch_gate_h` H up or down (growing by `stitch_gate_per_s` per second of gap; W, H: B's
+patch), with image velocities within `stitch_max_dv_w` W/s. The gate is in the image, in units
+of the patch, because the foot row's pixel noise is what limits both: a ground gate in metres
+is far too tight near the camera or far too loose 20 m away. Pairs are taken cheapest first,
+each track with at most one predecessor and one successor; a chain of pieces becomes one track
+(the gap frames stay without rows) and is judged as one, which also lets the rhythm classifier
+see N samples of a walker it saw only in pieces before.
+
+The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestrian it tracked,
+and its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged
+non-pedestrian. A track the classifier cannot judge (unclassified: shorter than N samples, or
+an unusable rhythm window) is a pedestrian of the paper's method and is counted; a track judged
+pedestrian is counted; only a non-pedestrian verdict removes one. Tracks shorter than
+`min_track_frames` frames (after stitching) are dropped from every output and count first.
+`CountResult.counts` holds all five numbers (tracks, pedestrians, non_pedestrians,
+unclassified, walkers) and `COUNT_RULE` says the rule in words (written to counts.json).
 """
 
 from __future__ import annotations
@@ -42,7 +40,16 @@ from typing import Any
 import numpy as np
 
 from .params import Config
+from .pedestrian_level import PedestrianLevel, _Ped
 from .pedestrians import DYNAMICS, PEDESTRIAN_HEIGHT_M
+
+
+__all__ = ["COUNT_RULE", "CountOptions", "CountResult", "PedestrianLevel", "count_frames",
+           "count_walkers", "stitch_pieces"]
+
+COUNT_RULE = ("walkers = tracks - non_pedestrians: every confirmed track is a pedestrian of the "
+              "paper's method; the rhythm classifier removes the tracks it judges non-pedestrian "
+              "(bicycles); unclassified tracks (too short to judge) are counted")
 
 
 @dataclass
@@ -65,6 +72,7 @@ class CountOptions:
     new_min_fill: float = 0.15  # ... holding at least this fraction of a patch area in pixels
     new_min_height: float = 0.5  # ... spanning at least this many H
     new_max_lift: float = 0.25  # ... reaching down to within this many H of the blob's bottom
+    new_in_range: bool = True  # ... standing in the config's detection range (ground y, m)
     confirm_hits: int = 3
     tentative_misses: int = 2
     coast_s: float | None = None  # default: cfg.thresholds.predict_timeout (s)
@@ -77,10 +85,23 @@ class CountOptions:
     online_verdicts: bool = True  # with an overlay: judge each N-frame window as it completes
     # (the labels drawn); without one it is skipped (saves a compilation)
     classify: bool = True  # judge the tracks at the end (False: all unclassified, no compile)
+    max_dv_mps: float = 2.5  # "3d": a track whose ground velocity changes by more than this
+    dv_window_s: float = 0.5  # ... within this long lost its object: it ends before the change
+    stitch: bool = True  # join fragments of one walker (count.stitch_pieces)
+    stitch_max_gap_s: float = 2.0  # from a track's last measured frame to the next one's first
+    stitch_gate_w: float = 0.6  # foot point misfit allowed at zero gap: this many W across ...
+    stitch_gate_h: float = 0.3  # ... and this many H up or down ...
+    stitch_gate_per_s: float = 0.5  # ... growing by this fraction per second of gap
+    stitch_max_dv_w: float = 1.5  # image velocity misfit allowed, W/s
+    stitch_fit_s: float = 1.0  # measured foot points fitted at a track's start (and end)
 
     def __post_init__(self):
         if self.dynamics not in DYNAMICS:
             raise ValueError(f"dynamics must be one of {DYNAMICS}, got {self.dynamics!r}")
+
+
+# ----------------------------------------------------------------------------------------------
+# the pedestrians level over frames
 
 
 @dataclass
@@ -110,8 +131,9 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     patch at the filter's estimated foot point; conf 1 measured, 0.5 predicted; x, y the ground
     estimate (m; the EKF state for "3d", the inverse perspective of the estimated foot point
     otherwise) and z = 0 (on the ground plane); x = y = z = -1 (the MOT convention for "no world
-    position") where the foot point has no ground point. counts: tracks, walkers (verdict
-    pedestrian), non_pedestrians, unclassified (shorter than N or unusable)."""
+    position") where the foot point has no ground point. counts (`count_walkers`): tracks,
+    pedestrians, non_pedestrians, unclassified (shorter than N or unusable) and walkers =
+    tracks - non_pedestrians (`COUNT_RULE`: unclassified tracks count)."""
     from .cli_video import _progress
 
     opt = options or CountOptions()
@@ -132,355 +154,163 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     return level.finish()
 
 
+
 # ----------------------------------------------------------------------------------------------
-# the pedestrians level over frames
+# stitching fragments of one walker
 
 
-@dataclass
-class _Ped:
-    slot: int
-    born: int  # frame index
-    track_id: int = 0  # 0 while tentative
-    blobs: set = field(default_factory=set)  # related blobs (indices into the last frame's)
-    rows: list = field(default_factory=list)  # tracks-format rows (see tracker.tracks_columns)
-    boxes: list = field(default_factory=list)  # (index, left, top, w, h, conf, x, y, ok)
-    hits: int = 0
-    misses: int = 0
-    coast: float = 0.0  # s without a measurement
-    next_uv: tuple = (math.nan, math.nan)  # predicted foot point for the next frame, px
-    est_uv: tuple = (math.nan, math.nan)
-    size: tuple = (math.nan, math.nan)  # patch (w, h) px at est_uv
-    step_uv: tuple = (0.0, 0.0)  # predicted image motion per frame, px
-    close: int = 0
-    windows_done: int = 0
-    result: dict | None = None
-    decided: bool = False
-    z: tuple = (math.nan, math.nan)  # this frame's measurement
+@dataclass(frozen=True)
+class Piece:
+    """A track for stitching: first and last measured frame (index) and time (s); its foot point
+    (u, v px, du, dv px/s) at its first frame and at its last, and the patch (w, h) px at its
+    first; for the "3d" dynamics also its ground state (x, y m, vx, vy m/s) at its last frame
+    (the EKF's: the prediction runs on the ground plane). NaN: unknown."""
+
+    first: int
+    last: int
+    t_first: float
+    t_last: float
+    start: tuple[float, float, float, float]
+    end: tuple[float, float, float, float]
+    size: tuple[float, float]
+    end_ground: tuple[float, float, float, float] | None = None
 
 
-def _inter(a, b) -> float:
-    w = min(a[2], b[2]) - max(a[0], b[0])
-    h = min(a[3], b[3]) - max(a[1], b[1])
-    return float(max(0.0, w) * max(0.0, h))
+def _line_fit(t: np.ndarray, uv: np.ndarray, at: float) -> tuple[float, float, float, float]:
+    """(u, v, du, dv) at time `at` of a least-squares line through (t, uv); NaN with < 2
+    points (velocity 0 when every t is the same)."""
+    if len(t) < 2:
+        return (math.nan,) * 4
+    tc = t - at
+    if np.ptp(tc) <= 0:
+        m = uv.mean(axis=0)
+        return float(m[0]), float(m[1]), 0.0, 0.0
+    A = np.stack([np.ones_like(tc), tc], 1)
+    coef, *_ = np.linalg.lstsq(A, uv, rcond=None)
+    return float(coef[0, 0]), float(coef[0, 1]), float(coef[1, 0]), float(coef[1, 1])
 
 
-def _area(a) -> float:
-    return float(max(0.0, a[2] - a[0]) * max(0.0, a[3] - a[1]))
+def _project(camera: tuple, x, y) -> tuple[float, float]:
+    """Equation (3) in float64 (`pedestrians.ground_point`'s inverse): foot point of (x, y)."""
+    f, h, th, a, b, uc, vc = camera
+    s, c = math.sin(th), math.cos(th)
+    d = f + y * c + h * s
+    return uc + a * f * x / d, vc - b * f * (y * s - h * c) / d
 
 
-def _finite(uv) -> bool:
-    return math.isfinite(uv[0]) and math.isfinite(uv[1])
+def piece_of(p: _Ped, shape, dynamics: str, fit_s: float) -> Piece:
+    """The `Piece` of a pedestrian's rows: a line fit over its measured foot points in its first
+    `fit_s` s gives its start; its end is the EKF ground state at its last (measured) row for
+    "3d" (projected, with the image velocity of its ground velocity), else the same fit over
+    its last `fit_s` s."""
+    from .status import TrackState
+
+    rows = np.asarray([r[1:4] + (r[8],) for r in p.rows], np.float64).reshape(-1, 4)
+    t, uv = rows[:, 0], rows[:, 1:3]
+    use = (rows[:, 3] == int(TrackState.OBSERVE)) & np.all(np.isfinite(uv), axis=1)
+    t0, t1 = float(t[0]), float(t[-1])
+    head = use & (t <= t0 + fit_s)
+    start = _line_fit(t[head], uv[head], t0)
+    size = tuple(float(q) for q in shape.size(*start[:2])) if np.isfinite(start[0]) else \
+        (math.nan, math.nan)
+    ground = None
+    if dynamics == "3d":
+        ground = tuple(float(q) for q in p.ground[-1])
+        x, y, vx, vy = ground
+        u, v = _project(shape.camera, x, y)
+        u2, v2 = _project(shape.camera, x + 0.1 * vx, y + 0.1 * vy)
+        end = (u, v, (u2 - u) / 0.1, (v2 - v) / 0.1)
+    else:
+        tail = use & (t >= t1 - fit_s)
+        end = _line_fit(t[tail], uv[tail], t1)
+    return Piece(int(p.rows[0][0]), int(p.rows[-1][0]), t0, t1, start, end, size, ground)
 
 
-class PedestrianLevel:
-    """Feed frames with `update(index, t, gray)`; `finish()` returns the `CountResult`."""
+def _predict(A: Piece, dt: float, camera: tuple | None) -> np.ndarray:
+    """A's foot point (u, v) dt s after its end: on the ground plane (EKF state) when it has
+    one, else in the image."""
+    if A.end_ground is not None and camera is not None:
+        x, y, vx, vy = A.end_ground
+        return np.asarray(_project(camera, x + vx * dt, y + vy * dt))
+    e = np.asarray(A.end)
+    return e[:2] + e[2:] * dt
 
-    def __init__(self, cfg: Config, opt: CountOptions):
-        from .pedestrians import ShapeModel, SlotFilter
 
-        self.cfg, self.opt = cfg, opt
-        self.shape = ShapeModel.from_config(cfg, opt.dynamics, opt.height_m)
-        self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
-        self.coast_s = float(cfg.thresholds.predict_timeout) if opt.coast_s is None else \
-            float(opt.coast_s)
-        self.peds: list[_Ped] = []
-        self.finished: list[_Ped] = []
-        self.bg = None
-        self.prev = None
-        self.prev_blobs: list = []
-        self.last_t: float | None = None
-        self.next_id = 1
-        self.n_frames = 0
-        self.crowd_frames: list[int] = []
-        self.missing_frames: list[int] = []
-        self.full_frames: list[int] = []  # frames where a new pedestrian found no free slot
-        self.detections: list[tuple] = []
-        self.image_shape: tuple[int, int] | None = None
+def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_h: float,
+                  gate_per_s: float, max_dv_w: float, camera: tuple | None = None) -> list[int]:
+    """Successor of each piece (index into `pieces`, -1: none); see the module docstring.
 
-    # ------------------------------------------------------------------------------------------
-    def update(self, index: int, t: float, gray: np.ndarray | None) -> None:
-        from .blobgraph import blob_graph
-        from .blobs import BackgroundModel, find_blobs, is_crowd
-        from .detect import frame_difference
-
-        self.n_frames += 1
-        opt = self.opt
-        if gray is not None and self.bg is None:
-            self.bg = BackgroundModel(gray, alpha=opt.bg_alpha, threshold=opt.bg_threshold,
-                                      open_px=opt.open_px, close_px=opt.close_px)
-            self.prev, self.last_t, self.image_shape = gray, t, gray.shape
-            return
-        if self.last_t is None:
-            return
-        dt, self.last_t = t - self.last_t, t
-        blobs, labels, D, graph = [], None, None, None
-        if gray is None:
-            self.missing_frames.append(index)
-        else:
-            mask = self.bg.apply(gray)
-            D, self.prev = frame_difference(self.prev, gray), gray
-            blobs, labels = find_blobs(mask, min_area=opt.min_blob_area)
-            if is_crowd(blobs, mask.shape, fraction=opt.crowd_fraction):
-                self.crowd_frames.append(index)
-                blobs, labels = [], None
-            else:
-                graph = blob_graph(self.prev_blobs, blobs)
-                self.detections += [(index, *b.box, b.area) for b in blobs]
-        for p in self.peds:
-            p.z = (math.nan, math.nan)  # no measurement unless placed below
-        rel = self._relate(graph, blobs)
-        S = self.filter.slots
-        z = np.full((S, 2), np.nan)
-        present, reset = np.zeros(S, bool), np.zeros(S, bool)
-        if labels is not None:
-            self._place(rel, blobs, labels)
-        for p in self.peds:
-            present[p.slot] = True
-            z[p.slot] = p.z
-        if labels is not None:
-            for p in self._new_pedestrians(blobs, labels):
-                present[p.slot] = reset[p.slot] = True
-                z[p.slot] = p.z
-        host = self.filter.step(reset, z, present, dt)
-        for p in list(self.peds):
-            self._after(p, host[p.slot], index, t, dt, blobs, D)
-        self._duplicates()
-        self.prev_blobs = blobs
-
-    def _relate(self, graph, blobs) -> dict[int, set]:
-        """Relations of frame i: through the blob graph, Hungarian on shared splits, then
-        re-acquisition by overlap for pedestrians left without a blob."""
-        from scipy.optimize import linear_sum_assignment
-
-        rel: dict[int, set] = {id(p): set() for p in self.peds}
-        if graph is not None:
-            by_parent: dict[int, list[_Ped]] = {}
-            for p in self.peds:
-                for i in p.blobs:
-                    by_parent.setdefault(i, []).append(p)
-            for i, peds in by_parent.items():
-                kids = list(graph.children(i))
-                if len(peds) > 1 and len(kids) > 1:
-                    cost = np.array([[self._dist(p, blobs[k]) for k in kids] for p in peds])
-                    r, c = linear_sum_assignment(cost)
-                    for a, b in zip(r, c):
-                        rel[id(peds[a])].add(kids[b])
-                    for a in set(range(len(peds))) - set(r.tolist()):
-                        rel[id(peds[a])].add(kids[int(np.argmin(cost[a]))])
-                else:
-                    for p in peds:
-                        rel[id(p)].update(kids)
-        for p in self.peds:
-            if rel[id(p)] or not _finite(p.next_uv):
+    B may follow A when B.first > A.last and B.t_first - A.t_last = gap <= max_gap_s, and they
+    meet halfway: A predicted gap/2 s on (`_predict`) and B's start taken gap/2 s back at its
+    own velocity differ by at most (gate_w W, gate_h H) x (1 + gate_per_s x gap) (W, H: B's
+    patch at its start; an ellipse), and their image velocities by at most max_dv_w W/s.
+    Cheapest pairs first (position misfit / its gate + velocity misfit / max_dv_w); each piece
+    has at most one predecessor and one successor."""
+    cand = []
+    for a, A in enumerate(pieces):
+        ea = np.asarray(A.end, np.float64)
+        if not np.all(np.isfinite(ea)):
+            continue
+        for b, B in enumerate(pieces):
+            sb, (w, h) = np.asarray(B.start, np.float64), B.size
+            gap = B.t_first - A.t_last
+            if (B.first <= A.last or gap > max_gap_s or not np.all(np.isfinite(sb))
+                    or not (w > 0 and h > 0)):
                 continue
-            box = self._box(p.next_uv)
-            for j, b in enumerate(blobs):
-                ov = _inter(box, b.box)
-                if ov > 0.2 * _area(box) or ov > 0.5 * _area(b.box):
-                    rel[id(p)].add(j)
-        return rel
+            mid_a = _predict(A, 0.5 * gap, camera)
+            mid_b = sb[:2] - sb[2:] * 0.5 * gap
+            grow = 1.0 + gate_per_s * gap
+            d = float(np.hypot((mid_a[0] - mid_b[0]) / (gate_w * w),
+                               (mid_a[1] - mid_b[1]) / (gate_h * h))) / grow
+            dv = float(np.hypot(*(ea[2:] - sb[2:]))) / (max_dv_w * w)
+            if d <= 1.0 and dv <= 1.0:
+                cand.append((d + dv, a, b))
+    succ, pred = [-1] * len(pieces), [-1] * len(pieces)
+    for _, a, b in sorted(cand):
+        if succ[a] < 0 and pred[b] < 0:
+            succ[a], pred[b] = b, a
+    return succ
 
-    def _dist(self, p: _Ped, b) -> float:
-        if not _finite(p.next_uv):
-            return 1e6
-        bu, bv = b.bottom_center
-        return math.hypot(p.next_uv[0] - bu, p.next_uv[1] - bv)
 
-    def _box(self, uv):
-        from .pedestrians import patch_box
+def stitch_level(level: PedestrianLevel, peds: list[_Ped]) -> list[_Ped]:
+    """Join the chains `stitch_pieces` finds among the ended tracks (`peds`, in id order) into
+    one track each (the first piece's id); the rest unchanged."""
+    opt = level.opt
+    if not opt.stitch or len(peds) < 2:
+        return peds
+    pieces = [piece_of(p, level.shape, opt.dynamics, opt.stitch_fit_s) for p in peds]
+    succ = stitch_pieces(pieces, max_gap_s=opt.stitch_max_gap_s, gate_w=opt.stitch_gate_w,
+                         gate_h=opt.stitch_gate_h, gate_per_s=opt.stitch_gate_per_s,
+                         max_dv_w=opt.stitch_max_dv_w, camera=level.shape.camera)
+    has_pred = {b for b in succ if b >= 0}
+    out = []
+    for a, p in enumerate(peds):
+        if a in has_pred:
+            continue
+        b = succ[a]
+        while b >= 0:
+            q = peds[b]
+            p.rows, p.boxes, p.ground = p.rows + q.rows, p.boxes + q.boxes, p.ground + q.ground
+            p.hits += q.hits
+            level.stitched += 1
+            b = succ[b]
+        out.append(p)
+    return out
 
-        w, h = (float(q) for q in self.shape.size(*uv))
-        return patch_box(uv[0], uv[1], w, h) if math.isfinite(w) else (0, 0, 0, 0)
 
-    def _place(self, rel, blobs, labels) -> None:
-        """Measurements: each related pedestrian's patch placement (older first, claiming)."""
-        from .pedestrians import place_patch
+def count_walkers(verdicts) -> dict[str, int]:
+    """The counts of a verdict list (labels as `status.Verdict`): tracks, pedestrians,
+    non_pedestrians, unclassified, and walkers = tracks - non_pedestrians (`COUNT_RULE`)."""
+    v = [str(x) for x in verdicts]
+    n, non = len(v), v.count("non-pedestrian")
+    return {"tracks": n, "pedestrians": v.count("pedestrian"), "non_pedestrians": non,
+            "unclassified": v.count("unclassified"), "walkers": n - non}
 
-        opt = self.opt
-        users: dict[int, int] = {}
-        for p in self.peds:
-            for j in rel[id(p)]:
-                users[j] = users.get(j, 0) + 1
-        claimed = np.zeros(labels.shape, bool)
-        for p in sorted(self.peds, key=lambda q: (-q.hits, q.born)):
-            mine = rel[id(p)]
-            if not mine or not _finite(p.next_uv):
-                continue
-            w0 = float(self.shape.size(*p.next_uv)[0])
-            k = max(users[j] for j in mine)
-            if k > 1:
-                boxes = [blobs[j].box for j in mine if users[j] > 1]
-                width = max(b[2] for b in boxes) - min(b[0] for b in boxes)
-                if width < opt.merge_widths * k * w0:
-                    continue  # walking past each other: keep the prediction
-            radius = (opt.shared_search_widths if k > 1 else opt.search_widths) * w0
-            lab = np.asarray([blobs[j].label for j in mine])
-            # a new pedestrian alone on its blobs stands on their bottom, however far its first
-            # prediction is; a confirmed one looks within `band` H of its prediction (so it does
-            # not jump to a nearer person its blob has merged with)
-            v_max = None if k > 1 or p.track_id else float(max(blobs[j].box[3] - 1
-                                                                for j in mine))
-            pl = place_patch(labels, lab, claimed, self.shape, *p.next_uv, radius_px=radius,
-                             v_max=v_max, min_cover=opt.min_cover)
-            if pl is None:
-                continue
-            p.z = (pl.u, pl.v)
-            if k > 1:
-                x0, y0, x1, y1 = (int(round(q)) for q in (pl.u - pl.w / 2, pl.v - pl.h,
-                                                          pl.u + pl.w / 2, pl.v + 1))
-                claimed[max(0, y0):max(0, y1), max(0, x0):max(0, x1)] = True
 
-    def _new_pedestrians(self, blobs, labels) -> list[_Ped]:
-        """Runs of blob columns no patch covers, wide and full enough for a pedestrian: one new
-        pedestrian per patch width of the run, side by side (groups)."""
-        opt = self.opt
-        cover = []
-        for p in self.peds:
-            b = self._box(p.z if _finite(p.z) else p.next_uv)
-            half = 0.5 * opt.walker_widths * (b[2] - b[0])
-            cover.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3]))
-        free_slots = sorted(set(range(self.filter.slots)) - {p.slot for p in self.peds})
-        new: list[_Ped] = []
-        for b in blobs:
-            x0, y0, x1, y1 = b.box
-            hb = float(self.shape.size(0.5 * (x0 + x1 - 1), y1 - 1)[1])
-            crop = labels[y0:y1, x0:x1] == b.label
-            cols = crop.any(axis=0)
-            for c in cover:
-                if c[1] < y1 and c[3] > y0:
-                    cols[max(0, int(math.floor(c[0])) - x0):max(0, int(math.ceil(c[2])) - x0)] \
-                        = False
-            edges = np.flatnonzero(np.diff(np.r_[0, cols.astype(np.int8), 0]))
-            for c0, c1 in zip(edges[::2], edges[1::2]):
-                sub = crop[:, c0:c1]
-                rows = np.flatnonzero(sub.any(axis=1))
-                vb = y0 + int(rows[-1])
-                w, h = (float(q) for q in self.shape.size(x0 + 0.5 * (c0 + c1 - 1), vb))
-                if not (math.isfinite(w) and w > 0):
-                    continue
-                n = max(1, int(round((c1 - c0) / (opt.walker_widths * w))))
-                if ((c1 - c0) < opt.new_min_widths * w or sub.sum() < opt.new_min_fill * w * h * n
-                        or rows[-1] - rows[0] + 1 < opt.new_min_height * h
-                        or not vb >= y1 - 1 - opt.new_max_lift * hb):  # feet, not arms
-                    continue
-                for k in range(n):
-                    a0, a1 = c0 + (c1 - c0) * k // n, c0 + (c1 - c0) * (k + 1) // n
-                    r = np.flatnonzero(crop[:, a0:a1].any(axis=1))
-                    if not free_slots:
-                        self.full_frames.append(self.n_frames)
-                        return new
-                    if r.size:
-                        p = _Ped(slot=free_slots.pop(0), born=self.n_frames)
-                        p.z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1]))
-                        new.append(p)
-        self.peds += new
-        return new
-
-    def _after(self, p: _Ped, host, index, t, dt, blobs, D) -> None:
-        from .detect import window_b_intensity
-        from .pedestrians import ground_point
-        from .status import TrackState
-
-        if host[0] < 0.5:  # the first measurement had no ground point (above the horizon)
-            self.peds.remove(p)
-            return
-        measured = _finite(p.z)
-        p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
-        p.coast = 0.0 if measured else p.coast + dt
-        p.est_uv, p.next_uv = (host[1], host[2]), (host[3], host[4])
-        p.step_uv = (host[3] - host[1], host[4] - host[2])
-        w, h = (float(q) for q in self.shape.size(*p.est_uv))
-        p.size = (w, h)
-        if self.opt.dynamics == "3d":
-            gx, gy, ok = host[5], host[6], True
-        else:
-            gx, gy, ok = (float(q) for q in ground_point(self.shape.camera, *p.est_uv))
-        fu, fv = p.z if measured else p.est_uv
-        W = float(self.shape.size(fu, fv)[0])
-        inten = math.nan if D is None else window_b_intensity(D, fu, fv, W)
-        state = TrackState.OBSERVE if measured else TrackState.PREDICT
-        p.rows.append((index, t, p.z[0], p.z[1], W if measured else math.nan, inten, gx, gy,
-                       int(state)))
-        p.boxes.append((index, p.est_uv[0] - w / 2, p.est_uv[1] - h, w, h,
-                        1.0 if measured else 0.5, gx, gy, bool(ok)))
-        box = self._box(p.est_uv)
-        p.blobs = {j for j, b in enumerate(blobs) if (ov := _inter(box, b.box)) > 0.1 * _area(box)
-                   or ov > 0.5 * _area(b.box)}
-        if p.track_id == 0:
-            if p.hits >= self.opt.confirm_hits:
-                p.track_id, self.next_id = self.next_id, self.next_id + 1
-            elif p.misses >= self.opt.tentative_misses:
-                self.peds.remove(p)
-                return
-        elif self.opt.online_verdicts:
-            self._match(p)
-        H, Wi = self.image_shape
-        u, v = p.est_uv
-        outside = not (math.isfinite(w) and -0.5 * w <= u <= Wi + 0.5 * w and 0 <= v <= H + h)
-        if p.coast > self.coast_s or outside:
-            self._end(p)
-
-    def _duplicates(self) -> None:
-        for i, a in enumerate(self.peds):
-            for b in self.peds[i + 1:]:
-                near = math.hypot(a.est_uv[0] - b.est_uv[0], a.est_uv[1] - b.est_uv[1]) \
-                    < self.opt.duplicate_widths * max(1.0, a.size[0])
-                same = math.hypot(a.step_uv[0] - b.step_uv[0], a.step_uv[1] - b.step_uv[1]) \
-                    < 0.15 * max(1.0, a.size[0])
-                young = b if (b.hits, -b.born) < (a.hits, -a.born) else a
-                young.close = young.close + 1 if near and same else 0
-        for p in list(self.peds):
-            if p.close >= self.opt.duplicate_frames:
-                self._end(p)
-
-    def _match(self, p: _Ped) -> None:
-        """Online: (13)-(15) on each completed run of N frames until Pedestrian (as tracker)."""
-        import jax.numpy as jnp
-
-        from .status import Verdict
-        from .tracker import _classify
-
-        n = self.cfg.thresholds.n
-        if p.decided or len(p.rows) < n * (p.windows_done + 1):
-            return
-        k = n * p.windows_done
-        rows = np.asarray([r[1:8] for r in p.rows[k:k + n]], np.float64)
-        res = _classify(self.cfg, jnp.asarray(rows[:, 4], jnp.float32),
-                        jnp.asarray(rows[:, 0] - rows[0, 0], jnp.float32),
-                        jnp.asarray(rows[:, 5:7], jnp.float32), jnp.asarray(True))
-        p.windows_done += 1
-        p.decided = int(res.verdict) == Verdict.PEDESTRIAN
-        if p.result is None or p.decided:
-            p.result = {"verdict": int(res.verdict)}
-
-    def _end(self, p: _Ped) -> None:
-        if p in self.peds:
-            self.peds.remove(p)
-        if p.track_id == 0:
-            return
-        last = max((i for i, r in enumerate(p.rows) if r[8] == 2), default=-1)
-        p.rows, p.boxes = p.rows[:last + 1], p.boxes[:last + 1]
-        self.finished.append(p)
-
-    def snapshot(self) -> list[dict]:
-        """Pedestrians now, for drawing: id (0 tentative), box, measured, verdict label."""
-        from .status import VERDICT_LABELS
-
-        out = []
-        for p in self.peds:
-            if not p.boxes:
-                continue
-            _, left, top, w, h, conf, *_ = p.boxes[-1]
-            verdict = None if p.result is None else VERDICT_LABELS[p.result["verdict"]]
-            out.append({"track_id": p.track_id, "box": (left, top, w, h), "measured": conf == 1.0,
-                        "verdict": verdict})
-        return out
-
-    def finish(self) -> CountResult:
-        for p in list(self.peds):
-            self._end(p)
-        return _result(self, [p for p in sorted(self.finished, key=lambda q: q.track_id)
-                              if len(p.rows) >= self.opt.min_track_frames])
+def walker_ids(verdicts: dict) -> list[int]:
+    """Track ids counted as walkers: every track not judged non-pedestrian (`COUNT_RULE`)."""
+    return [int(i) for i, w in zip(verdicts["track_id"], verdicts["verdict"])
+            if str(w) != "non-pedestrian"]
 
 
 def _result(level: PedestrianLevel, peds: list[_Ped]) -> CountResult:
@@ -525,11 +355,9 @@ def _result(level: PedestrianLevel, peds: list[_Ped]) -> CountResult:
     detections = {"frame": det["frame"] + 1, "bb_left": det["x0"], "bb_top": det["y0"],
                   "bb_width": det["x1"] - det["x0"], "bb_height": det["y1"] - det["y0"],
                   "area": det["area"]}
-    v = list(verdicts["verdict"])
-    counts = {"tracks": len(peds), "walkers": v.count("pedestrian"),
-              "non_pedestrians": v.count("non-pedestrian"),
-              "unclassified": v.count("unclassified")}
+    counts = count_walkers(verdicts["verdict"])
     summary = {"n_frames": level.n_frames, "dynamics": level.opt.dynamics,
+               "count_rule": COUNT_RULE, "stitched": level.stitched,
                "crowd_frames": len(level.crowd_frames),
                "missing_frames": len(level.missing_frames), "notes": []}
     if level.crowd_frames:

@@ -113,8 +113,10 @@ def test_count_cli_writes_consistent_files(crossing_run):
     assert sorted(np.asarray(verdicts["track_id"]).astype(int).tolist()) == ids
     c = counts["counts"]
     assert c["tracks"] == 2
-    assert c["walkers"] + c["non_pedestrians"] + c["unclassified"] == 2
-    assert c["walkers"] == int(np.sum(np.asarray(verdicts["verdict"]) == "pedestrian"))
+    assert c["pedestrians"] + c["non_pedestrians"] + c["unclassified"] == 2
+    assert c["pedestrians"] == int(np.sum(np.asarray(verdicts["verdict"]) == "pedestrian"))
+    assert c["walkers"] == 2 - int(np.sum(np.asarray(verdicts["verdict"]) == "non-pedestrian"))
+    assert "unclassified" in counts["count_rule"]
     # MOT frames are 1-based video frames; the tracks file keeps the 0-based index
     assert mot["frame"].min() == np.asarray(tracks["frame"]).min() + 1
     assert np.all(mot["z"] == 0.0) and np.all((mot["y"] > 3.0) & (mot["y"] < 15.0))
@@ -137,8 +139,9 @@ def test_no_motion_gives_zero_tracks(videos, tmp_path, capsys):
                str(tmp_path), "--fps", "15", "--json"])
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["counts"] == {"tracks": 0, "walkers": 0, "non_pedestrians": 0,
-                                 "unclassified": 0}
+    assert summary["counts"] == {"tracks": 0, "pedestrians": 0, "non_pedestrians": 0,
+                                 "unclassified": 0, "walkers": 0}
+    assert "non_pedestrians" in summary["count_rule"]
     assert summary["n_frames"] == 30 and summary["crowd_frames"] == 0
     assert (tmp_path / "mot.txt").read_text() == ""
     assert read_mot(tmp_path / "mot.txt")["frame"].shape == (0,)
@@ -186,3 +189,115 @@ def test_missing_frames_predict_only():
     assert res.counts["tracks"] == 2
     at = np.isin(res.mot["frame"], [21, 22])
     assert at.sum() == 4 and np.all(res.mot["conf"][at] == 0.5)  # 2 tracks x 2 frames
+
+
+# ----------------------------------------------------------------------------------------------
+# the counting rule and stitching
+
+
+def test_count_rule_removes_only_non_pedestrians():
+    from rhythmjax.count import COUNT_RULE, count_walkers, walker_ids
+
+    v = ["pedestrian", "unclassified", "non-pedestrian", "unclassified", "pedestrian",
+         "non-pedestrian"]
+    c = count_walkers(v)
+    # the paper counts every confirmed track (6); the classifier removes the 2 non-pedestrians;
+    # the 2 too short to judge still count
+    assert c == {"tracks": 6, "pedestrians": 2, "non_pedestrians": 2, "unclassified": 2,
+                 "walkers": 4}
+    ids = walker_ids({"track_id": np.arange(1, 7), "verdict": np.asarray(v, dtype=object)})
+    assert ids == [1, 2, 4, 5]
+    assert count_walkers([]) == {"tracks": 0, "pedestrians": 0, "non_pedestrians": 0,
+                                 "unclassified": 0, "walkers": 0}
+    assert "non_pedestrians" in COUNT_RULE and "unclassified" in COUNT_RULE
+
+
+def _piece(first, last, start, end, size=(20.0, 60.0), ground=None, fps=15.0):
+    from rhythmjax.count import Piece
+
+    fl = lambda q: None if q is None else tuple(float(x) for x in q)
+    return Piece(first, last, first / fps, last / fps, fl(start), fl(end), fl(size), fl(ground))
+
+
+# gates: 0.6 W across, 0.3 H up/down (growing 50 %/s of gap), 1.5 W/s velocity, 2 s gap
+STITCH = {"max_gap_s": 2.0, "gate_w": 0.6, "gate_h": 0.3, "gate_per_s": 0.5, "max_dv_w": 1.5}
+
+
+def test_stitch_links_a_track_that_continues_another():
+    from rhythmjax.count import stitch_pieces
+
+    # W = 20 px, H = 60 px; a walker going right at 30 px/s, lost at frame 30 (u = 100), back
+    # at frame 45 (1 s later, u = 130)
+    a = _piece(0, 30, (40, 150, 30, 0), (100, 150, 30, 0))
+    b = _piece(45, 90, (131, 151, 28, 1), (220, 150, 30, 0))
+    bike = _piece(44, 80, (128, 150, 80, 0), (300, 150, 80, 0))  # right place, too fast
+    far = _piece(46, 80, (130, 190, 30, 0), (200, 190, 30, 0))  # 40 px = 0.67 H lower
+    back = _piece(45, 80, (130, 150, -30, 0), (60, 150, -30, 0))  # walking back
+    early = _piece(25, 80, (100, 150, 30, 0), (210, 150, 30, 0))  # overlaps a in time
+    late = _piece(70, 120, (180, 150, 30, 0), (280, 150, 30, 0))  # 2.7 s later
+    assert stitch_pieces([a, b], **STITCH) == [1, -1]
+    for other in (bike, far, back, early, late):
+        assert stitch_pieces([a, other], **STITCH) == [-1, -1]
+    # the best fitting one wins, each piece has one successor and one predecessor
+    b2 = _piece(45, 90, (138, 150, 30, 0), (220, 150, 30, 0))  # 8 px off: a worse fit
+    assert stitch_pieces([a, b2, b, far], **STITCH) == [2, -1, -1, -1]
+    # chains: a -> b -> c
+    c = _piece(100, 130, (220 + 30 * 10 / 15, 150, 30, 0), (280, 150, 30, 0))
+    assert stitch_pieces([a, b, c], **STITCH) == [1, 2, -1]
+    # unknown end state (no ground point): never linked
+    nan = _piece(0, 30, (40, 150, 30, 0), (math.nan,) * 4)
+    assert stitch_pieces([nan, b], **STITCH) == [-1, -1]
+
+
+def test_stitch_predicts_on_the_ground_plane_with_the_ekf_state():
+    from rhythmjax.count import _project, stitch_pieces
+    from rhythmjax.pedestrians import ShapeModel
+
+    shape = ShapeModel.from_config(CFG, "3d")
+    cam = shape.camera
+    # walking away from the camera at 1.4 m/s: lost at y = 6 m, back 1 s later at y = 7.4 m
+    uv = lambda x, y: _project(cam, x, y)
+    vel = lambda x, y, vx, vy: tuple((np.asarray(uv(x + 0.1 * vx, y + 0.1 * vy))
+                                      - np.asarray(uv(x, y))) / 0.1)
+    a = _piece(0, 30, (*uv(0.5, 3.2), *vel(0.5, 3.2, 0, 1.4)), (*uv(0.5, 6.0),
+               *vel(0.5, 6.0, 0, 1.4)), ground=(0.5, 6.0, 0.0, 1.4))
+    size = tuple(float(q) for q in shape.size(*uv(0.5, 7.4)))
+    b = _piece(45, 80, (*uv(0.5, 7.4), *vel(0.5, 7.4, 0, 1.4)), (*uv(0.5, 12.0),
+               *vel(0.5, 12.0, 0, 1.4)), size=size)
+    assert stitch_pieces([a, b], camera=cam, **STITCH) == [1, -1]
+    # the prediction runs on the ground plane: exact for a constant ground velocity, where a
+    # straight line in the image (no EKF state) misses as the walker recedes
+    from rhythmjax.count import _predict
+
+    np.testing.assert_allclose(_predict(a, 1.0, cam), uv(0.5, 7.4), atol=1e-6)
+    flat = dataclasses_replace(a, end_ground=None)
+    assert abs(_predict(flat, 1.0, cam)[1] - uv(0.5, 7.4)[1]) > 0.05 * size[1]
+
+
+def _hidden_walker_items():
+    """One walker crossing; frames 25-44 show the empty background (1.33 s: longer than the
+    1 s a pedestrian coasts before it ends)."""
+    a = walker(-4.0, 7.0, 0.0, start_frame=3, phase=0.1)
+    frames = render_scene(1, SceneSpec(n_frames=72, actors=(a,), camera=CFG.camera)).frames
+    return [(k, k / 15.0, frames[0] if 25 <= k < 45 else f) for k, f in enumerate(frames)]
+
+
+@pytest.mark.parametrize("dynamics", ["3d", "2d"])
+def test_a_walker_hidden_longer_than_it_coasts_keeps_its_id(dynamics):
+    items = _hidden_walker_items()
+    opt = CountOptions(dynamics=dynamics, classify=False, online_verdicts=False)
+    res = count_frames(CFG, iter(items), options=opt)
+    assert res.counts["tracks"] == 1 and res.counts["walkers"] == 1
+    assert res.summary["stitched"] == 1
+    assert set(res.mot["id"].tolist()) == {1}
+    f = res.mot["frame"]
+    assert f.min() <= 6 and f.max() == 72 and not np.isin(f, np.arange(27, 46)).any()
+    # without stitching: two tracks, two walkers
+    off = count_frames(CFG, iter(items), options=dataclasses_replace(opt, stitch=False))
+    assert off.counts["tracks"] == 2 and off.summary["stitched"] == 0
+
+
+def dataclasses_replace(opt, **kw):
+    import dataclasses
+
+    return dataclasses.replace(opt, **kw)

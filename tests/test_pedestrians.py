@@ -221,3 +221,41 @@ def test_a_group_splitting_gives_two_pedestrians():
     assert first.sum() == 2
     (s0, f0, ids0), (s1, f1, ids1) = _truth_switches(res, scene)
     assert s0 == s1 == 0 and f0 > 0.9 and f1 > 0.9 and ids0.isdisjoint(ids1)
+
+
+def test_new_pedestrians_start_only_in_the_detection_range():
+    a = walker(-4.0, 7.0, 0.0, start_frame=3, phase=0.1)  # 7 m ahead
+    spec = SceneSpec(n_frames=40, actors=(a,), camera=CFG.camera)
+    frames = render_scene(1, spec).frames
+    near = config_from_dict({**SMALL, "thresholds": {"range_min_m": 3.0, "range_max_m": 6.0}})
+    items = lambda: ((i, i / 15.0, f) for i, f in enumerate(frames))
+    assert count_frames(near, items(), options=FAST).counts["tracks"] == 0
+    off = CountOptions(classify=False, online_verdicts=False, new_in_range=False)
+    assert count_frames(near, items(), options=off).counts["tracks"] == 1
+    assert count_frames(CFG, items(), options=FAST).counts["tracks"] == 1
+
+
+def test_a_track_whose_ground_velocity_jumps_ends_before_the_jump():
+    from rhythmjax.pedestrian_level import PedestrianLevel, _Ped
+
+    level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False))
+    k = round(0.5 * 15)  # dv_window_s = 0.5 s at 15 fps
+    p = _Ped(slot=0, born=0)
+    # 2 s walking at 1.4 m/s, then the velocity swings by 3 m/s within 0.3 s (the patch slid
+    # down a merged blob onto a nearer person)
+    p.ground = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)]
+    assert level._velocity_jump(p) == 0
+    p.ground += [(3.0, 8.0 - 0.2 * i, 1.4, -1.0 * i) for i in range(1, 5)]
+    assert level._velocity_jump(p) == k
+    # a cyclist at a steady 6 m/s is not lost; nor is a track younger than 2 windows (its
+    # filter starts at rest)
+    p.ground = [(0.4 * i, 8.0, 6.0, 0.0) for i in range(40)]
+    assert level._velocity_jump(p) == 0
+    p.ground = [(0.0, 8.0, 0.0, 0.0)] * 3 + [(0.1, 8.0, 4.0, 0.0)] * 5
+    assert level._velocity_jump(p) == 0
+    # the 2-D dynamics have no ground velocity: never
+    level2 = PedestrianLevel(CFG, CountOptions(dynamics="2d", classify=False,
+                                               online_verdicts=False))
+    p.ground = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)] + [(3.0, 8.0, 1.4, -4.0)] * 4
+    assert level2._velocity_jump(p) == 0
+    assert level._velocity_jump(p) == k

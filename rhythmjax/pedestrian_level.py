@@ -1,0 +1,434 @@
+"""The pedestrians level of Masoud & Papanikolopoulos over frames (`PedestrianLevel`): per frame
+the three levels, then refinement; `count.count_frames` drives it and judges the tracks.
+
+Per frame (`PedestrianLevel.update`):
+1. Images: `blobs.BackgroundModel` (running average, selective update) gives the 0/1 mask.
+2. Blobs: `blobs.find_blobs`, then `blobgraph.blob_graph` between frames i-1 and i. A frame whose
+   blob box covers `crowd_fraction` of the image (`blobs.is_crowd`: a dense crowd, a camera jump)
+   is not used for detection: every pedestrian predicts, the frame is listed in `crowd_frames`.
+3. Pedestrians (`pedestrians`): relations are propagated through the blob graph (a pedestrian
+   related to blob i of frame i-1 becomes related to i's children; when a blob shared by several
+   pedestrians splits, they are assigned to its children by the Hungarian method on the distance
+   of their predicted foot points to the children's bottom centres); a pedestrian with no
+   related blob takes the blobs its predicted patch overlaps (re-acquisition after occlusion).
+   Each pedestrian's patch is placed (`pedestrians.place_patch`), older pedestrians first, each
+   claiming the pixels it covers from those after it (groups). Pedestrians sharing a blob too
+   narrow to hold them side by side (< `merge_widths` x their summed patch widths: walking past
+   each other) are not measured: they keep their predicted positions, so identities survive the
+   merge. One jitted call advances every filter (`pedestrians.SlotFilter`).
+4. Refinement: blob columns no pedestrian explains (a pedestrian explains `walker_widths` W
+   around its foot point: a walker's blob spans its stance foot to its leading arm), at least
+   `new_min_widths` W wide, holding enough pixels and reaching the blob's bottom (feet, not
+   arms), with the foot point's ground point in the config's detection range (range_min to
+   range_max m: where `rhythmjax track` detects; `new_in_range`), start new pedestrians, one
+   per `walker_widths` W of the run, side by side (groups);
+   a new pedestrian gets an id after `confirm_hits` measured frames (dropped if it misses
+   `tentative_misses` before); a pedestrian without measurement predicts for
+   `coast_s` s (default: the config's predict_timeout_s), then ends; with the "3d" dynamics
+   one whose ground velocity changes by more than `max_dv_mps` within `dv_window_s` s has lost
+   its walker (its patch slid onto another object or down a merged blob: no walker or cyclist
+   turns or brakes that fast) and ends without those frames (`_velocity_jump`), so neither the
+   wrong stretch nor its wrong stride reaches the track, and stitching sees a clean end;
+   two whose foot points are
+   within `duplicate_widths` W with the same image velocity for `duplicate_frames` frames are
+   one: the younger ends. Relations for the next frame: the blobs the placed patch overlaps.
+Every frame each pedestrian samples the rhythm signal I(k) in window B at its foot point
+(`detect.window_b_intensity` on the frame difference, W = its patch width) and keeps its ground
+state (`_Ped.ground`: x, y, vx, vy; the EKF's for "3d") for stitching. A pedestrian that ends
+loses its trailing predicted frames; `finish` hands the ended tracks to `count`, which stitches
+fragments of one walker, judges and counts them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .params import Config
+
+
+if TYPE_CHECKING:
+    from .count import CountOptions
+
+
+@dataclass
+class _Ped:
+    slot: int
+    born: int  # frame index
+    track_id: int = 0  # 0 while tentative
+    blobs: set = field(default_factory=set)  # related blobs (indices into the last frame's)
+    rows: list = field(default_factory=list)  # tracks-format rows (see tracker.tracks_columns)
+    ground: list = field(default_factory=list)  # per row: filter (x, y) m, velocity (m/s for
+    # "3d", px/s otherwise)
+    boxes: list = field(default_factory=list)  # (index, left, top, w, h, conf, x, y, ok)
+    hits: int = 0
+    misses: int = 0
+    coast: float = 0.0  # s without a measurement
+    next_uv: tuple = (math.nan, math.nan)  # predicted foot point for the next frame, px
+    est_uv: tuple = (math.nan, math.nan)
+    size: tuple = (math.nan, math.nan)  # patch (w, h) px at est_uv
+    step_uv: tuple = (0.0, 0.0)  # predicted image motion per frame, px
+    close: int = 0
+    windows_done: int = 0
+    result: dict | None = None
+    decided: bool = False
+    z: tuple = (math.nan, math.nan)  # this frame's measurement
+
+
+def _inter(a, b) -> float:
+    w = min(a[2], b[2]) - max(a[0], b[0])
+    h = min(a[3], b[3]) - max(a[1], b[1])
+    return float(max(0.0, w) * max(0.0, h))
+
+
+def _area(a) -> float:
+    return float(max(0.0, a[2] - a[0]) * max(0.0, a[3] - a[1]))
+
+
+def _finite(uv) -> bool:
+    return math.isfinite(uv[0]) and math.isfinite(uv[1])
+
+
+class PedestrianLevel:
+    """Feed frames with `update(index, t, gray)`; `finish()` returns the `CountResult`."""
+
+    def __init__(self, cfg: Config, opt: CountOptions):
+        from .pedestrians import ShapeModel, SlotFilter
+
+        self.cfg, self.opt = cfg, opt
+        self.shape = ShapeModel.from_config(cfg, opt.dynamics, opt.height_m)
+        self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
+        self.coast_s = float(cfg.thresholds.predict_timeout) if opt.coast_s is None else \
+            float(opt.coast_s)
+        self.peds: list[_Ped] = []
+        self.finished: list[_Ped] = []
+        self.bg = None
+        self.prev = None
+        self.prev_blobs: list = []
+        self.last_t: float | None = None
+        self.next_id = 1
+        self.n_frames = 0
+        self.crowd_frames: list[int] = []
+        self.missing_frames: list[int] = []
+        self.full_frames: list[int] = []  # frames where a new pedestrian found no free slot
+        self.stitched = 0  # tracks joined onto an earlier one at the end (count.stitch_level)
+        self.detections: list[tuple] = []
+        self.image_shape: tuple[int, int] | None = None
+
+    # ------------------------------------------------------------------------------------------
+    def update(self, index: int, t: float, gray: np.ndarray | None) -> None:
+        from .blobgraph import blob_graph
+        from .blobs import BackgroundModel, find_blobs, is_crowd
+        from .detect import frame_difference
+
+        self.n_frames += 1
+        opt = self.opt
+        if gray is not None and self.bg is None:
+            self.bg = BackgroundModel(gray, alpha=opt.bg_alpha, threshold=opt.bg_threshold,
+                                      open_px=opt.open_px, close_px=opt.close_px)
+            self.prev, self.last_t, self.image_shape = gray, t, gray.shape
+            return
+        if self.last_t is None:
+            return
+        dt, self.last_t = t - self.last_t, t
+        blobs, labels, D, graph = [], None, None, None
+        if gray is None:
+            self.missing_frames.append(index)
+        else:
+            mask = self.bg.apply(gray)
+            D, self.prev = frame_difference(self.prev, gray), gray
+            blobs, labels = find_blobs(mask, min_area=opt.min_blob_area)
+            if is_crowd(blobs, mask.shape, fraction=opt.crowd_fraction):
+                self.crowd_frames.append(index)
+                blobs, labels = [], None
+            else:
+                graph = blob_graph(self.prev_blobs, blobs)
+                self.detections += [(index, *b.box, b.area) for b in blobs]
+        for p in self.peds:
+            p.z = (math.nan, math.nan)  # no measurement unless placed below
+        rel = self._relate(graph, blobs)
+        S = self.filter.slots
+        z = np.full((S, 2), np.nan)
+        present, reset = np.zeros(S, bool), np.zeros(S, bool)
+        if labels is not None:
+            self._place(rel, blobs, labels)
+        for p in self.peds:
+            present[p.slot] = True
+            z[p.slot] = p.z
+        if labels is not None:
+            for p in self._new_pedestrians(blobs, labels):
+                present[p.slot] = reset[p.slot] = True
+                z[p.slot] = p.z
+        host = self.filter.step(reset, z, present, dt)
+        for p in list(self.peds):
+            self._after(p, host[p.slot], index, t, dt, blobs, D)
+        self._duplicates()
+        self.prev_blobs = blobs
+
+    def _relate(self, graph, blobs) -> dict[int, set]:
+        """Relations of frame i: through the blob graph, Hungarian on shared splits, then
+        re-acquisition by overlap for pedestrians left without a blob."""
+        from scipy.optimize import linear_sum_assignment
+
+        rel: dict[int, set] = {id(p): set() for p in self.peds}
+        if graph is not None:
+            by_parent: dict[int, list[_Ped]] = {}
+            for p in self.peds:
+                for i in p.blobs:
+                    by_parent.setdefault(i, []).append(p)
+            for i, peds in by_parent.items():
+                kids = list(graph.children(i))
+                if len(peds) > 1 and len(kids) > 1:
+                    cost = np.array([[self._dist(p, blobs[k]) for k in kids] for p in peds])
+                    r, c = linear_sum_assignment(cost)
+                    for a, b in zip(r, c):
+                        rel[id(peds[a])].add(kids[b])
+                    for a in set(range(len(peds))) - set(r.tolist()):
+                        rel[id(peds[a])].add(kids[int(np.argmin(cost[a]))])
+                else:
+                    for p in peds:
+                        rel[id(p)].update(kids)
+        for p in self.peds:
+            if rel[id(p)] or not _finite(p.next_uv):
+                continue
+            box = self._box(p.next_uv)
+            for j, b in enumerate(blobs):
+                ov = _inter(box, b.box)
+                if ov > 0.2 * _area(box) or ov > 0.5 * _area(b.box):
+                    rel[id(p)].add(j)
+        return rel
+
+    def _dist(self, p: _Ped, b) -> float:
+        if not _finite(p.next_uv):
+            return 1e6
+        bu, bv = b.bottom_center
+        return math.hypot(p.next_uv[0] - bu, p.next_uv[1] - bv)
+
+    def _box(self, uv):
+        from .pedestrians import patch_box
+
+        w, h = (float(q) for q in self.shape.size(*uv))
+        return patch_box(uv[0], uv[1], w, h) if math.isfinite(w) else (0, 0, 0, 0)
+
+    def _place(self, rel, blobs, labels) -> None:
+        """Measurements: each related pedestrian's patch placement (older first, claiming)."""
+        from .pedestrians import place_patch
+
+        opt = self.opt
+        users: dict[int, int] = {}
+        for p in self.peds:
+            for j in rel[id(p)]:
+                users[j] = users.get(j, 0) + 1
+        claimed = np.zeros(labels.shape, bool)
+        for p in sorted(self.peds, key=lambda q: (-q.hits, q.born)):
+            mine = rel[id(p)]
+            if not mine or not _finite(p.next_uv):
+                continue
+            w0 = float(self.shape.size(*p.next_uv)[0])
+            k = max(users[j] for j in mine)
+            if k > 1:
+                boxes = [blobs[j].box for j in mine if users[j] > 1]
+                width = max(b[2] for b in boxes) - min(b[0] for b in boxes)
+                if width < opt.merge_widths * k * w0:
+                    continue  # walking past each other: keep the prediction
+            radius = (opt.shared_search_widths if k > 1 else opt.search_widths) * w0
+            lab = np.asarray([blobs[j].label for j in mine])
+            # a new pedestrian alone on its blobs stands on their bottom, however far its first
+            # prediction is; a confirmed one looks within `band` H of its prediction (so it does
+            # not jump to a nearer person its blob has merged with)
+            v_max = None if k > 1 or p.track_id else float(max(blobs[j].box[3] - 1
+                                                                for j in mine))
+            pl = place_patch(labels, lab, claimed, self.shape, *p.next_uv, radius_px=radius,
+                             v_max=v_max, min_cover=opt.min_cover)
+            if pl is None:
+                continue
+            p.z = (pl.u, pl.v)
+            if k > 1:
+                x0, y0, x1, y1 = (int(round(q)) for q in (pl.u - pl.w / 2, pl.v - pl.h,
+                                                          pl.u + pl.w / 2, pl.v + 1))
+                claimed[max(0, y0):max(0, y1), max(0, x0):max(0, x1)] = True
+
+    def _new_pedestrians(self, blobs, labels) -> list[_Ped]:
+        """Runs of blob columns no patch covers, wide and full enough for a pedestrian: one new
+        pedestrian per patch width of the run, side by side (groups)."""
+        opt = self.opt
+        cover = []
+        for p in self.peds:
+            b = self._box(p.z if _finite(p.z) else p.next_uv)
+            half = 0.5 * opt.walker_widths * (b[2] - b[0])
+            cover.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3]))
+        free_slots = sorted(set(range(self.filter.slots)) - {p.slot for p in self.peds})
+        new: list[_Ped] = []
+        for b in blobs:
+            x0, y0, x1, y1 = b.box
+            hb = float(self.shape.size(0.5 * (x0 + x1 - 1), y1 - 1)[1])
+            crop = labels[y0:y1, x0:x1] == b.label
+            cols = crop.any(axis=0)
+            for c in cover:
+                if c[1] < y1 and c[3] > y0:
+                    cols[max(0, int(math.floor(c[0])) - x0):max(0, int(math.ceil(c[2])) - x0)] \
+                        = False
+            edges = np.flatnonzero(np.diff(np.r_[0, cols.astype(np.int8), 0]))
+            for c0, c1 in zip(edges[::2], edges[1::2]):
+                sub = crop[:, c0:c1]
+                rows = np.flatnonzero(sub.any(axis=1))
+                vb = y0 + int(rows[-1])
+                w, h = (float(q) for q in self.shape.size(x0 + 0.5 * (c0 + c1 - 1), vb))
+                if not (math.isfinite(w) and w > 0):
+                    continue
+                n = max(1, int(round((c1 - c0) / (opt.walker_widths * w))))
+                if ((c1 - c0) < opt.new_min_widths * w or sub.sum() < opt.new_min_fill * w * h * n
+                        or rows[-1] - rows[0] + 1 < opt.new_min_height * h
+                        or not vb >= y1 - 1 - opt.new_max_lift * hb):  # feet, not arms
+                    continue
+                for k in range(n):
+                    a0, a1 = c0 + (c1 - c0) * k // n, c0 + (c1 - c0) * (k + 1) // n
+                    r = np.flatnonzero(crop[:, a0:a1].any(axis=1))
+                    if not free_slots:
+                        self.full_frames.append(self.n_frames)
+                        return new
+                    z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1])) if r.size else None
+                    if z is not None and self._in_range(z):
+                        p = _Ped(slot=free_slots.pop(0), born=self.n_frames)
+                        p.z = z
+                        new.append(p)
+        self.peds += new
+        return new
+
+    def _in_range(self, uv) -> bool:
+        """The foot point's ground point lies in the config's detection range (range_min to
+        range_max m ahead): where `rhythmjax track` detects, and where a new pedestrian starts."""
+        from .pedestrians import ground_point
+
+        if not self.opt.new_in_range:
+            return True
+        _, y, ok = ground_point(self.shape.camera, *uv)
+        thr = self.cfg.thresholds
+        return bool(ok) and float(thr.range_min) <= float(y) <= float(thr.range_max)
+
+    def _after(self, p: _Ped, host, index, t, dt, blobs, D) -> None:
+        from .detect import window_b_intensity
+        from .pedestrians import ground_point
+        from .status import TrackState
+
+        if host[0] < 0.5:  # the first measurement had no ground point (above the horizon)
+            self.peds.remove(p)
+            return
+        measured = _finite(p.z)
+        p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
+        p.coast = 0.0 if measured else p.coast + dt
+        p.est_uv, p.next_uv = (host[1], host[2]), (host[3], host[4])
+        p.step_uv = (host[3] - host[1], host[4] - host[2])
+        w, h = (float(q) for q in self.shape.size(*p.est_uv))
+        p.size = (w, h)
+        if self.opt.dynamics == "3d":
+            gx, gy, ok = host[5], host[6], True
+        else:
+            gx, gy, ok = (float(q) for q in ground_point(self.shape.camera, *p.est_uv))
+        fu, fv = p.z if measured else p.est_uv
+        W = float(self.shape.size(fu, fv)[0])
+        inten = math.nan if D is None else window_b_intensity(D, fu, fv, W)
+        state = TrackState.OBSERVE if measured else TrackState.PREDICT
+        p.rows.append((index, t, p.z[0], p.z[1], W if measured else math.nan, inten, gx, gy,
+                       int(state)))
+        p.boxes.append((index, p.est_uv[0] - w / 2, p.est_uv[1] - h, w, h,
+                        1.0 if measured else 0.5, gx, gy, bool(ok)))
+        p.ground.append((gx, gy, host[7], host[8]))
+        box = self._box(p.est_uv)
+        p.blobs = {j for j, b in enumerate(blobs) if (ov := _inter(box, b.box)) > 0.1 * _area(box)
+                   or ov > 0.5 * _area(b.box)}
+        if p.track_id == 0:
+            if p.hits >= self.opt.confirm_hits:
+                p.track_id, self.next_id = self.next_id, self.next_id + 1
+            elif p.misses >= self.opt.tentative_misses:
+                self.peds.remove(p)
+                return
+        elif self.opt.online_verdicts:
+            self._match(p)
+        H, Wi = self.image_shape
+        u, v = p.est_uv
+        outside = not (math.isfinite(w) and -0.5 * w <= u <= Wi + 0.5 * w and 0 <= v <= H + h)
+        jump = self._velocity_jump(p)
+        if jump:  # lost its object: the implausible frames go, the track ends before them
+            p.rows, p.boxes, p.ground = p.rows[:-jump], p.boxes[:-jump], p.ground[:-jump]
+        if p.coast > self.coast_s or outside or jump:
+            self._end(p)
+
+    def _velocity_jump(self, p: _Ped) -> int:
+        """"3d": frames to drop when the EKF ground velocity changed by more than
+        `max_dv_mps` over the last `dv_window_s` s (faster than a walker or a cyclist turns or
+        brakes: the patch slid onto another object or down a merged blob), else 0. Only once
+        the track is 2 windows old (the filter starts at rest)."""
+        k = max(1, round(self.opt.dv_window_s * float(self.cfg.camera.fps)))
+        if self.opt.dynamics != "3d" or len(p.ground) <= 2 * k:
+            return 0
+        (_, _, vx, vy), (_, _, wx, wy) = p.ground[-1], p.ground[-1 - k]
+        return k if math.hypot(vx - wx, vy - wy) > self.opt.max_dv_mps else 0
+
+    def _duplicates(self) -> None:
+        for i, a in enumerate(self.peds):
+            for b in self.peds[i + 1:]:
+                near = math.hypot(a.est_uv[0] - b.est_uv[0], a.est_uv[1] - b.est_uv[1]) \
+                    < self.opt.duplicate_widths * max(1.0, a.size[0])
+                same = math.hypot(a.step_uv[0] - b.step_uv[0], a.step_uv[1] - b.step_uv[1]) \
+                    < 0.15 * max(1.0, a.size[0])
+                young = b if (b.hits, -b.born) < (a.hits, -a.born) else a
+                young.close = young.close + 1 if near and same else 0
+        for p in list(self.peds):
+            if p.close >= self.opt.duplicate_frames:
+                self._end(p)
+
+    def _match(self, p: _Ped) -> None:
+        """Online: (13)-(15) on each completed run of N frames until Pedestrian (as tracker)."""
+        import jax.numpy as jnp
+
+        from .status import Verdict
+        from .tracker import _classify
+
+        n = self.cfg.thresholds.n
+        if p.decided or len(p.rows) < n * (p.windows_done + 1):
+            return
+        k = n * p.windows_done
+        rows = np.asarray([r[1:8] for r in p.rows[k:k + n]], np.float64)
+        res = _classify(self.cfg, jnp.asarray(rows[:, 4], jnp.float32),
+                        jnp.asarray(rows[:, 0] - rows[0, 0], jnp.float32),
+                        jnp.asarray(rows[:, 5:7], jnp.float32), jnp.asarray(True))
+        p.windows_done += 1
+        p.decided = int(res.verdict) == Verdict.PEDESTRIAN
+        if p.result is None or p.decided:
+            p.result = {"verdict": int(res.verdict)}
+
+    def _end(self, p: _Ped) -> None:
+        if p in self.peds:
+            self.peds.remove(p)
+        if p.track_id == 0:
+            return
+        last = max((i for i, r in enumerate(p.rows) if r[8] == 2), default=-1)
+        p.rows, p.boxes, p.ground = p.rows[:last + 1], p.boxes[:last + 1], p.ground[:last + 1]
+        self.finished.append(p)
+
+    def snapshot(self) -> list[dict]:
+        """Pedestrians now, for drawing: id (0 tentative), box, measured, verdict label."""
+        from .status import VERDICT_LABELS
+
+        out = []
+        for p in self.peds:
+            if not p.boxes:
+                continue
+            _, left, top, w, h, conf, *_ = p.boxes[-1]
+            verdict = None if p.result is None else VERDICT_LABELS[p.result["verdict"]]
+            out.append({"track_id": p.track_id, "box": (left, top, w, h), "measured": conf == 1.0,
+                        "verdict": verdict})
+        return out
+
+    def finish(self):
+        """End every pedestrian; the `count.CountResult` of the tracks (stitched, judged)."""
+        from .count import _result, stitch_level
+
+        for p in list(self.peds):
+            self._end(p)
+        peds = stitch_level(self, sorted(self.finished, key=lambda q: q.track_id))
+        return _result(self, [p for p in peds if len(p.rows) >= self.opt.min_track_frames])
