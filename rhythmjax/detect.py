@@ -149,9 +149,9 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
     its uniform inside does not change), and when the prediction is off by a fraction of the
     body width the regions on the far side lie mostly outside `core` and were dropped, so the
     detection was half a body with the foot point of the wrong part, pulling the estimate
-    further off. Here the remaining regions are added nearest first while the kept regions stay
-    within `body_px` columns and their bottom not below `core`'s by more than a tenth of its
-    height and the dilation (a nearer object's feet)."""
+    further off. Here the other regions with some motion inside `core` are added nearest first
+    while the kept regions stay within `body_px` columns and their bottom not below `core`'s by
+    more than a tenth of its height and the dilation (a nearer object's feet)."""
     u, v = (float(c) for c in center_uv)
     if not (math.isfinite(u) and math.isfinite(v)):
         return None
@@ -194,23 +194,24 @@ def _object_regions(crop: np.ndarray, core: Box, dilate_px: int,
     keep = (2 * inside >= total) & (total > 0)
     keep[int(np.argmax(inside))] = True
     if body_px is not None:
-        _join_body(keep, total, stats, dilate_px, float(body_px),
+        _join_body(keep, inside > 0, stats, dilate_px, float(body_px),
                    cy1 + 0.1 * (cy1 - cy0) + dilate_px)
     return np.where(keep[labels], crop, 0).astype(crop.dtype)
 
 
-def _join_body(keep: np.ndarray, total: np.ndarray, stats: np.ndarray, dilate_px: int,
+def _join_body(keep: np.ndarray, touching: np.ndarray, stats: np.ndarray, dilate_px: int,
                body_px: float, max_bottom: float) -> None:
-    """Add to `keep` (in place) the other moving regions, the one that widens the kept columns
-    least first, while the kept columns span at most `body_px` and the region's bottom row
-    (stats of the dilated regions, less `dilate_px`) is above `max_bottom`."""
+    """Add to `keep` (in place) the other regions with motion inside the core (`touching`), the
+    one that widens the kept columns least first, while the kept columns span at most `body_px`
+    and the region's bottom row (stats of the dilated regions, less `dilate_px`) is above
+    `max_bottom`."""
     x0 = stats[:, cv2.CC_STAT_LEFT] + dilate_px
     x1 = stats[:, cv2.CC_STAT_LEFT] + stats[:, cv2.CC_STAT_WIDTH] - 1 - dilate_px
     bottom = stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT] - 1 - dilate_px
     lo, hi = int(x0[keep].min()), int(x1[keep].max())
     if hi - lo + 1 > body_px:
         return
-    rest = [k for k in np.flatnonzero(~keep & (total > 0)) if bottom[k] <= max_bottom]
+    rest = [k for k in np.flatnonzero(~keep & touching) if bottom[k] <= max_bottom]
     while rest:
         span = [max(hi, x1[k]) - min(lo, x0[k]) + 1 for k in rest]
         j = int(np.argmin(span))

@@ -233,21 +233,22 @@ def test_box_overlap_and_shared_detections_hand_worked():
 
 
 def test_body_parts_apart_are_joined_within_body_px():
-    """A far walker's motion: two torso outlines apart (its uniform inside does not change) and
-    a leg; the prediction (core) is off to the right by half a body. Without `body_px` only the
-    right outline is measured (narrow, foot point on the wrong part); with it the parts within
-    body_px columns are joined (the whole body, foot at the leg), and a neighbour that would
-    widen them beyond body_px is not."""
+    """A far walker's motion: two torso outlines apart (its uniform inside does not change), a
+    leg under the left one; the prediction (core) is off to the right by half a body, so the
+    left part has a single column inside it. Without `body_px` only the right outline is
+    measured (narrow, foot point on the wrong part); with it the parts touching the core within
+    body_px columns are joined (the whole body, foot at the leg), and neither a part outside
+    the core (above it) nor one that would widen them beyond body_px is."""
     m = np.zeros((200, 200), np.uint8)
     m[40:100, 60:63] = 1  # left torso outline, columns 60..62
+    m[100:130, 58:61] = 2  # a leg under it, foot row 129 (one region with the outline)
     m[40:100, 88:91] = 1  # right torso outline, columns 88..90 (apart by 25 px > dilation)
-    m[100:130, 66:69] = 2  # a leg under the left half, foot row 129
-    m[60:128, 140:150] = 1  # a neighbour further right
-    core = (80, 30, 36, 102)  # predicted body box: from column 80, misses the left parts
+    m[10:20, 70:73] = 1  # above the core: not the body's
+    m[60:128, 140:150] = 1  # a neighbour further right, outside the core
+    core = (62, 30, 40, 102)  # predicted body box: columns 62..101, rows 30..131
     kw = dict(halo=0, core=core)
-    alone = detect_in_window(m, (100, 90), (120, 140), **kw)
+    alone = detect_in_window(m, (100, 90), (120, 180), **kw)
     assert alone.box[0] == 88 and alone.width == 3 and alone.v == 99  # the right outline only
-    joined = detect_in_window(m, (100, 90), (120, 140), body_px=40, **kw)
-    assert joined.box[0] == 60 and joined.width == 31 and joined.v == 129
-    assert joined.u == 60 + 30 / 2
-    assert detect_in_window(m, (100, 90), (120, 140), body_px=20, **kw) == alone  # too wide
+    joined = detect_in_window(m, (100, 90), (120, 180), body_px=40, **kw)
+    assert joined.box == (58, 40, 33, 90) and joined.v == 129 and joined.u == 58 + 32 / 2
+    assert detect_in_window(m, (100, 90), (120, 180), body_px=20, **kw) == alone  # too wide
