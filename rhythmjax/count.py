@@ -88,11 +88,11 @@ class CountOptions:
     max_dv_mps: float = 2.5  # "3d": a track whose ground velocity changes by more than this
     dv_window_s: float = 0.5  # ... within this long lost its object: it ends before the change
     stitch: bool = True  # join fragments of one walker (count.stitch_pieces)
-    stitch_max_gap_s: float = 2.0  # from a track's last measured frame to the next one's first
-    stitch_gate_w: float = 0.6  # foot point misfit allowed at zero gap: this many W across ...
-    stitch_gate_h: float = 0.3  # ... and this many H up or down ...
+    stitch_max_gap_s: float = 3.0  # from a track's last measured frame to the next one's first
+    stitch_gate_w: float = 0.9  # foot point misfit allowed at zero gap: this many W across ...
+    stitch_gate_h: float = 0.45  # ... and this many H up or down ...
     stitch_gate_per_s: float = 0.5  # ... growing by this fraction per second of gap
-    stitch_max_dv_w: float = 1.5  # image velocity misfit allowed, W/s
+    stitch_max_dv_w: float = 2.0  # image velocity misfit allowed, W/s
     stitch_fit_s: float = 1.0  # measured foot points fitted at a track's start (and end)
 
     def __post_init__(self):

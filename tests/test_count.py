@@ -219,8 +219,8 @@ def _piece(first, last, start, end, size=(20.0, 60.0), ground=None, fps=15.0):
     return Piece(first, last, first / fps, last / fps, fl(start), fl(end), fl(size), fl(ground))
 
 
-# gates: 0.6 W across, 0.3 H up/down (growing 50 %/s of gap), 1.5 W/s velocity, 2 s gap
-STITCH = {"max_gap_s": 2.0, "gate_w": 0.6, "gate_h": 0.3, "gate_per_s": 0.5, "max_dv_w": 1.5}
+# the defaults: 0.9 W across, 0.45 H up/down (growing 50 %/s of gap), 2 W/s velocity, 3 s gap
+STITCH = {"max_gap_s": 3.0, "gate_w": 0.9, "gate_h": 0.45, "gate_per_s": 0.5, "max_dv_w": 2.0}
 
 
 def test_stitch_links_a_track_that_continues_another():
@@ -230,11 +230,15 @@ def test_stitch_links_a_track_that_continues_another():
     # at frame 45 (1 s later, u = 130)
     a = _piece(0, 30, (40, 150, 30, 0), (100, 150, 30, 0))
     b = _piece(45, 90, (131, 151, 28, 1), (220, 150, 30, 0))
-    bike = _piece(44, 80, (128, 150, 80, 0), (300, 150, 80, 0))  # right place, too fast
-    far = _piece(46, 80, (130, 190, 30, 0), (200, 190, 30, 0))  # 40 px = 0.67 H lower
+    bike = _piece(44, 80, (128, 150, 90, 0), (300, 150, 90, 0))  # right place, too fast
+    far = _piece(46, 80, (130, 210, 30, 0), (200, 210, 30, 0))  # 60 px = 1 H lower
     back = _piece(45, 80, (130, 150, -30, 0), (60, 150, -30, 0))  # walking back
     early = _piece(25, 80, (100, 150, 30, 0), (210, 150, 30, 0))  # overlaps a in time
-    late = _piece(70, 120, (180, 150, 30, 0), (280, 150, 30, 0))  # 2.7 s later
+    late = _piece(80, 120, (180, 150, 30, 0), (280, 150, 30, 0))  # 3.3 s later
+    o = CountOptions()
+    assert STITCH == {"max_gap_s": o.stitch_max_gap_s, "gate_w": o.stitch_gate_w,
+                      "gate_h": o.stitch_gate_h, "gate_per_s": o.stitch_gate_per_s,
+                      "max_dv_w": o.stitch_max_dv_w}
     assert stitch_pieces([a, b], **STITCH) == [1, -1]
     for other in (bike, far, back, early, late):
         assert stitch_pieces([a, other], **STITCH) == [-1, -1]
