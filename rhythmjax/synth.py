@@ -368,8 +368,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     boxes never overlap; with it, overlaps are left as drawn. Deterministic given `seed`."""
     camera = camera or Camera()
     rng = _rng(seed)
-    fps, W, H = float(camera.fps), camera.image_width, camera.image_height
-    afs = camera_tuple(camera)[3] * camera_tuple(camera)[0]
+    fps = float(camera.fps)
     kinds = ["pedestrian"] * n_walkers + ["bicycle"] * n_bicycles + ["dog"] * n_dogs
     placed: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []  # alive, u, hw, v
     actors = []
@@ -380,43 +379,59 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
         life = int(rng.integers(min_life, max_life + 1))
         life = min(life, n_frames, max(16, int(crossing_fraction * (range_m[1] - range_m[0])
                                                / speed * fps)))
-        start = int(rng.integers(0, n_frames - life + 1))
-        alive = (k >= start) & (k < start + life)
         best = None
-        for _ in range(300):
-            head = float(rng.uniform(-math.pi, math.pi))
-            ym = float(rng.uniform(*range_m))
-            half = 0.8 * (W / 2) * ym * math.cos(camera_tuple(camera)[2]) / afs
-            xm = float(rng.uniform(-half, half))
-            tau = (k - start - life / 2) / fps
-            x = xm + speed * tau * math.cos(head)
-            y = ym + speed * tau * math.sin(head)
-            u, v = project_3d(camera, x, y, 0.0)
-            a = alive
-            if not ((y[a] > range_m[0]).all() and (y[a] < range_m[1]).all()
-                    and (u[a] > margin_px).all() and (u[a] < W - margin_px).all()
-                    and (v[a] < H - margin_px).all()):
-                continue
-            d = depth_3d(camera, y, 0.0)
-            hw_px, h_px = sa.EXTENT[kind][0] * afs / d, sa.EXTENT[kind][1] * afs / d
-            clash = 0
-            if not occlusion:
-                for a2, u2, hw2, v2, h2 in placed:
-                    both = a & a2
-                    clash += int(np.sum(both & (np.abs(u - u2) < hw_px + hw2)
-                                        & (v - h_px < v2) & (v2 - h2 < v)))
-            if best is None or clash < best[0]:
-                best = (clash, head, x[start], y[start], u, hw_px, v, h_px)
-            if clash == 0:
-                break
-        if best is None:
-            raise RuntimeError(f"could not place a {kind} path in view within {range_m} m")
+        while best is None:  # a life too long for any path in view: shorten it by 10 %
+            start = int(rng.integers(0, n_frames - life + 1))
+            alive = (k >= start) & (k < start + life)
+            best = _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion,
+                          range_m, margin_px)
+            if best is None:
+                if life <= 16:
+                    raise RuntimeError(f"could not place a {kind} path in view within "
+                                       f"{range_m} m")
+                life = max(16, int(0.9 * life))
         _, head, x0, y0, u, hw_px, v, h_px = best
         placed.append((alive, u, hw_px, v, h_px))
         actors.append(ActorSpec(kind, float(x0), float(y0), head, start_frame=start,
                                 n_frames=life, **kw))
     return SceneSpec(n_frames=n_frames, actors=tuple(actors), camera=camera, noise_std=noise_std,
                      jitter_px=jitter_px)
+
+
+def _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion, range_m,
+           margin_px):
+    """Up to 300 random straight paths for one actor: the first whose image box clashes with no
+    placed actor's, else the least clashing one in view; None when none stays in view."""
+    fps, W, H = float(camera.fps), camera.image_width, camera.image_height
+    afs = camera_tuple(camera)[3] * camera_tuple(camera)[0]
+    best = None
+    for _ in range(300):
+        head = float(rng.uniform(-math.pi, math.pi))
+        ym = float(rng.uniform(*range_m))
+        half = 0.8 * (W / 2) * ym * math.cos(camera_tuple(camera)[2]) / afs
+        xm = float(rng.uniform(-half, half))
+        tau = (k - start - life / 2) / fps
+        x = xm + speed * tau * math.cos(head)
+        y = ym + speed * tau * math.sin(head)
+        u, v = project_3d(camera, x, y, 0.0)
+        a = alive
+        if not ((y[a] > range_m[0]).all() and (y[a] < range_m[1]).all()
+                and (u[a] > margin_px).all() and (u[a] < W - margin_px).all()
+                and (v[a] < H - margin_px).all()):
+            continue
+        d = depth_3d(camera, y, 0.0)
+        hw_px, h_px = sa.EXTENT[kind][0] * afs / d, sa.EXTENT[kind][1] * afs / d
+        clash = 0
+        if not occlusion:
+            for a2, u2, hw2, v2, h2 in placed:
+                both = a & a2
+                clash += int(np.sum(both & (np.abs(u - u2) < hw_px + hw2)
+                                    & (v - h_px < v2) & (v2 - h2 < v)))
+        if best is None or clash < best[0]:
+            best = (clash, head, x[start], y[start], u, hw_px, v, h_px)
+        if clash == 0:
+            break
+    return best
 
 
 __all__ = ["KINDS", "ActorSpec", "ObjectTruth", "Scene", "SceneSpec", "bicycle", "depth_3d", "dog",
