@@ -207,6 +207,9 @@ def eval_synthetic(n_scenes: int, count_frames, log, median_init: bool = False,
                                                       if t and kinds[t] == "pedestrian")
                                                for v in ("pedestrian", "non-pedestrian",
                                                          "unclassified")},
+                       bicycle_tracks_verdicts={v: sum(verdict.get(h) == v for h in bike_tracks)
+                                                for v in ("pedestrian", "non-pedestrian",
+                                                          "unclassified")},
                        walkers_with_a_pedestrian_track=len({
                            t for h, t in own.items() if t and kinds[t] == "pedestrian"
                            and verdict.get(h) == "pedestrian"}),

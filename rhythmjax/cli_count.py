@@ -21,13 +21,16 @@ def cmd_count(args) -> int:
     Fragments of one walker (lost behind another, at a crossing) are first stitched into one
     track when the later one starts where and as fast as the earlier one was going (ground
     plane). The walkers counted are all tracks minus those judged non-pedestrian (bicycles,
-    which the paper counted twice): a track too short to judge (unclassified) still counts.
+    which the paper counted twice): a track too short to judge (unclassified) still counts,
+    unless it moves faster than the walking model accepts for any rhythm (too_fast: 2.6 m/s
+    with the paper's Table 1).
 
     Writes DIR/mot.txt (MOTChallenge: frame (1-based), id, bb_left, bb_top, bb_width,
     bb_height, conf (1 measured, 0.5 predicted), x, y (ground, m), z (0; -1 -1 -1 where the
     foot point has no ground point); no header), DIR/tracks.parquet (the tracks format, which
-    `rhythmjax classify` re-judges), DIR/verdicts.csv and DIR/counts.json (counts: tracks,
-    pedestrians, non_pedestrians, unclassified, walkers; the rule in words; the run summary).
+    `rhythmjax classify` re-judges), DIR/verdicts.csv (with too_fast and counted per track) and
+    DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
+    walkers; the rule in words; the run summary).
     Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
     (dense crowd, camera jump) is not used for detection (pedestrians predict) and the summary
     says how many there were."""
@@ -53,7 +56,8 @@ def cmd_count(args) -> int:
                    "bad_frames": len(src.bad_frames), "notes": notes}
         write_mot(os.path.join(args.output, "mot.txt"), res.mot)
         write_table(os.path.join(args.output, "tracks.parquet"), res.tracks, TRACK_ORDER)
-        write_table(os.path.join(args.output, "verdicts.csv"), res.verdicts, VERDICT_ORDER)
+        write_table(os.path.join(args.output, "verdicts.csv"), res.verdicts,
+                    VERDICT_ORDER + ["too_fast", "counted"])
         with atomic_write(os.path.join(args.output, "counts.json"), "w") as f:
             f.write(dumps_json(summary, indent=2) + "\n")
     if args.json:
@@ -61,8 +65,9 @@ def cmd_count(args) -> int:
         return 0
     c = res.counts
     print(f"{summary['n_frames']} frames: {c['walkers']} walkers = {c['tracks']} tracks - "
-          f"{c['non_pedestrians']} non-pedestrian ({c['pedestrians']} judged pedestrian, "
-          f"{c['unclassified']} unclassified); wrote {args.output}/", file=sys.stderr)
+          f"{c['non_pedestrians']} non-pedestrian - {c['too_fast']} unclassified too fast "
+          f"({c['pedestrians']} judged pedestrian, {c['unclassified']} unclassified); wrote "
+          f"{args.output}/", file=sys.stderr)
     for note in notes:
         _say(args, f"note: {note}")
     return 0

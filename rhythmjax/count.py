@@ -22,12 +22,17 @@ see N samples of a walker it saw only in pieces before.
 
 The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestrian it tracked,
 and its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged
-non-pedestrian. A track the classifier cannot judge (unclassified: shorter than N samples, or
-an unusable rhythm window) is a pedestrian of the paper's method and is counted; a track judged
-pedestrian is counted; only a non-pedestrian verdict removes one. Tracks shorter than
-`min_track_frames` frames (after stitching) are dropped from every output and count first.
-`CountResult.counts` holds all five numbers (tracks, pedestrians, non_pedestrians,
-unclassified, walkers) and `COUNT_RULE` says the rule in words (written to counts.json).
+non-pedestrian - unclassified tracks too fast to walk. A track the classifier cannot judge
+(unclassified: shorter than N samples, or an unusable rhythm window) is a pedestrian of the
+paper's method and is counted, unless its ground speed (`track_speed`) exceeds the fastest the
+walking model's test (14) accepts for any rhythm (`walking_top_speed`: pace and stride both at
++k_sigma3, 2.57 m/s with Table 1): any window of it would be judged non-pedestrian, so it is
+not counted (`too_fast`: short bicycle tracks). A track judged pedestrian is counted; a
+non-pedestrian verdict removes one. Tracks shorter than `min_track_frames` frames (after
+stitching) are dropped from every output and count first. `CountResult.counts` holds the six
+numbers (tracks, pedestrians, non_pedestrians, unclassified, too_fast, walkers), the verdicts
+say per track `too_fast` and `counted`, and `COUNT_RULE` says the rule in words (written to
+counts.json).
 """
 
 from __future__ import annotations
@@ -47,9 +52,11 @@ from .pedestrians import DYNAMICS, PEDESTRIAN_HEIGHT_M
 __all__ = ["COUNT_RULE", "CountOptions", "CountResult", "PedestrianLevel", "count_frames",
            "count_walkers", "stitch_pieces"]
 
-COUNT_RULE = ("walkers = tracks - non_pedestrians: every confirmed track is a pedestrian of the "
-              "paper's method; the rhythm classifier removes the tracks it judges non-pedestrian "
-              "(bicycles); unclassified tracks (too short to judge) are counted")
+COUNT_RULE = ("walkers = tracks - non_pedestrians - too_fast: every confirmed track is a "
+              "pedestrian of the paper's method; the rhythm classifier removes the tracks it "
+              "judges non-pedestrian (bicycles); an unclassified track (too short to judge) is "
+              "counted unless it moves faster than the walking model (14) can accept for any "
+              "rhythm (too_fast)")
 
 
 @dataclass
@@ -132,8 +139,9 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     estimate (m; the EKF state for "3d", the inverse perspective of the estimated foot point
     otherwise) and z = 0 (on the ground plane); x = y = z = -1 (the MOT convention for "no world
     position") where the foot point has no ground point. counts (`count_walkers`): tracks,
-    pedestrians, non_pedestrians, unclassified (shorter than N or unusable) and walkers =
-    tracks - non_pedestrians (`COUNT_RULE`: unclassified tracks count)."""
+    pedestrians, non_pedestrians, unclassified (shorter than N or unusable), too_fast and
+    walkers = tracks - non_pedestrians - too_fast (`COUNT_RULE`: unclassified tracks count
+    unless too fast to walk)."""
     from .cli_video import _progress
 
     opt = options or CountOptions()
@@ -298,19 +306,55 @@ def stitch_level(level: PedestrianLevel, peds: list[_Ped]) -> list[_Ped]:
     return out
 
 
-def count_walkers(verdicts) -> dict[str, int]:
-    """The counts of a verdict list (labels as `status.Verdict`): tracks, pedestrians,
-    non_pedestrians, unclassified, and walkers = tracks - non_pedestrians (`COUNT_RULE`)."""
+def walking_top_speed(cfg: Config) -> float:
+    """The fastest ground speed (m/s) the walking model's test (14) accepts for any rhythm:
+    speed = pace x stride with both within k_sigma3 of the model, so at most
+    (pace_mean + k_sigma3 pace_std) x (stride_mean + k_sigma3 stride_std) (2.57 m/s with the
+    paper's Table 1). A window moving faster is judged non-pedestrian whatever its spectrum."""
+    w, k = cfg.walking, float(cfg.thresholds.k_sigma3)
+    return (float(w.pace_mean) + k * float(w.pace_std)) * \
+        (float(w.stride_mean) + k * float(w.stride_std))
+
+
+def track_speed(p: _Ped) -> float:
+    """Least-squares ground speed (m/s) over a track's measured rows (its ground x, y: the EKF
+    state for "3d"); NaN with fewer than 2 or a span under 0.5 s."""
+    from .status import TrackState
+
+    r = np.asarray([(q[1], q[6], q[7]) for q in p.rows if q[8] == int(TrackState.OBSERVE)],
+                   np.float64).reshape(-1, 3)
+    r = r[np.all(np.isfinite(r), axis=1)]
+    if len(r) < 2 or np.ptp(r[:, 0]) < 0.5:
+        return math.nan
+    tc = r[:, 0] - r[:, 0].mean()
+    v = tc @ (r[:, 1:] - r[:, 1:].mean(axis=0)) / float(tc @ tc)
+    return float(np.hypot(*v))
+
+
+def count_walkers(verdicts, too_fast=None) -> dict[str, int]:
+    """The counts of a verdict list (labels as `status.Verdict`; `too_fast`: per track, faster
+    than `walking_top_speed`, default none): tracks, pedestrians, non_pedestrians, unclassified,
+    too_fast (unclassified and too fast) and walkers = tracks - non_pedestrians - too_fast
+    (`COUNT_RULE`)."""
     v = [str(x) for x in verdicts]
+    fast = [False] * len(v) if too_fast is None else [bool(f) for f in too_fast]
     n, non = len(v), v.count("non-pedestrian")
+    tf = sum(f and w == "unclassified" for w, f in zip(v, fast))
     return {"tracks": n, "pedestrians": v.count("pedestrian"), "non_pedestrians": non,
-            "unclassified": v.count("unclassified"), "walkers": n - non}
+            "unclassified": v.count("unclassified"), "too_fast": tf, "walkers": n - non - tf}
+
+
+def counted(verdicts: dict) -> np.ndarray:
+    """Per track, whether `COUNT_RULE` counts it as a walker: not judged non-pedestrian, and
+    not unclassified and too fast (verdicts["too_fast"], when present)."""
+    v = np.asarray([str(x) for x in verdicts["verdict"]], dtype=object)
+    fast = np.asarray(verdicts.get("too_fast", np.zeros(len(v), bool)), bool)
+    return (v != "non-pedestrian") & ~((v == "unclassified") & fast)
 
 
 def walker_ids(verdicts: dict) -> list[int]:
-    """Track ids counted as walkers: every track not judged non-pedestrian (`COUNT_RULE`)."""
-    return [int(i) for i, w in zip(verdicts["track_id"], verdicts["verdict"])
-            if str(w) != "non-pedestrian"]
+    """Track ids counted as walkers (`counted`)."""
+    return [int(i) for i, c in zip(verdicts["track_id"], counted(verdicts)) if c]
 
 
 def _result(level: PedestrianLevel, peds: list[_Ped]) -> CountResult:
@@ -355,7 +399,10 @@ def _result(level: PedestrianLevel, peds: list[_Ped]) -> CountResult:
     detections = {"frame": det["frame"] + 1, "bb_left": det["x0"], "bb_top": det["y0"],
                   "bb_width": det["x1"] - det["x0"], "bb_height": det["y1"] - det["y0"],
                   "area": det["area"]}
-    counts = count_walkers(verdicts["verdict"])
+    top = walking_top_speed(cfg)
+    verdicts["too_fast"] = np.asarray([track_speed(p) > top for p in peds], bool)
+    verdicts["counted"] = counted(verdicts)
+    counts = count_walkers(verdicts["verdict"], verdicts["too_fast"])
     summary = {"n_frames": level.n_frames, "dynamics": level.opt.dynamics,
                "count_rule": COUNT_RULE, "stitched": level.stitched,
                "crowd_frames": len(level.crowd_frames),

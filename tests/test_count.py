@@ -105,7 +105,8 @@ def test_count_cli_writes_consistent_files(crossing_run):
     mot = read_mot(out / "mot.txt")
     tracks = read_table(out / "tracks.parquet", required=["track_id", "frame", "t", "u", "v",
                                                             "width_px", "intensity"])
-    verdicts = read_table(out / "verdicts.csv", required=["track_id", "verdict", "reason"])
+    verdicts = read_table(out / "verdicts.csv", required=["track_id", "verdict", "reason",
+                                                            "too_fast", "counted"])
     counts = json.loads((out / "counts.json").read_text())
     ids = sorted(set(mot["id"].tolist()))
     assert ids == [1, 2]  # two walkers crossing, two tracks
@@ -115,7 +116,9 @@ def test_count_cli_writes_consistent_files(crossing_run):
     assert c["tracks"] == 2
     assert c["pedestrians"] + c["non_pedestrians"] + c["unclassified"] == 2
     assert c["pedestrians"] == int(np.sum(np.asarray(verdicts["verdict"]) == "pedestrian"))
-    assert c["walkers"] == 2 - int(np.sum(np.asarray(verdicts["verdict"]) == "non-pedestrian"))
+    assert c["walkers"] == 2 - int(np.sum(np.asarray(verdicts["verdict"]) == "non-pedestrian")) \
+        - c["too_fast"]
+    assert sum(str(x).lower() == "true" for x in verdicts["counted"]) == c["walkers"]
     assert "unclassified" in counts["count_rule"]
     # MOT frames are 1-based video frames; the tracks file keeps the 0-based index
     assert mot["frame"].min() == np.asarray(tracks["frame"]).min() + 1
@@ -140,7 +143,7 @@ def test_no_motion_gives_zero_tracks(videos, tmp_path, capsys):
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["counts"] == {"tracks": 0, "pedestrians": 0, "non_pedestrians": 0,
-                                 "unclassified": 0, "walkers": 0}
+                                 "unclassified": 0, "too_fast": 0, "walkers": 0}
     assert "non_pedestrians" in summary["count_rule"]
     assert summary["n_frames"] == 30 and summary["crowd_frames"] == 0
     assert (tmp_path / "mot.txt").read_text() == ""
@@ -195,21 +198,47 @@ def test_missing_frames_predict_only():
 # the counting rule and stitching
 
 
-def test_count_rule_removes_only_non_pedestrians():
-    from rhythmjax.count import COUNT_RULE, count_walkers, walker_ids
+def test_count_rule_removes_non_pedestrians_and_too_fast_unclassified():
+    from rhythmjax.count import COUNT_RULE, count_walkers, counted, walker_ids
 
     v = ["pedestrian", "unclassified", "non-pedestrian", "unclassified", "pedestrian",
-         "non-pedestrian"]
+         "non-pedestrian", "unclassified"]
+    fast = [False, False, True, True, True, False, False]
     c = count_walkers(v)
-    # the paper counts every confirmed track (6); the classifier removes the 2 non-pedestrians;
-    # the 2 too short to judge still count
-    assert c == {"tracks": 6, "pedestrians": 2, "non_pedestrians": 2, "unclassified": 2,
-                 "walkers": 4}
-    ids = walker_ids({"track_id": np.arange(1, 7), "verdict": np.asarray(v, dtype=object)})
-    assert ids == [1, 2, 4, 5]
+    # the paper counts every confirmed track (7); the classifier removes the 2 non-pedestrians;
+    # the 3 too short to judge still count
+    assert c == {"tracks": 7, "pedestrians": 2, "non_pedestrians": 2, "unclassified": 3,
+                 "too_fast": 0, "walkers": 5}
+    # ... unless faster than the walking model accepts (only the unclassified one counts as
+    # too fast: a judged track keeps its verdict)
+    c = count_walkers(v, fast)
+    assert c["too_fast"] == 1 and c["walkers"] == 4
+    verdicts = {"track_id": np.arange(1, 8), "verdict": np.asarray(v, dtype=object),
+                "too_fast": np.asarray(fast)}
+    assert counted(verdicts).tolist() == [True, True, False, False, True, False, True]
+    assert walker_ids(verdicts) == [1, 2, 5, 7]
+    del verdicts["too_fast"]
+    assert walker_ids(verdicts) == [1, 2, 4, 5, 7]
     assert count_walkers([]) == {"tracks": 0, "pedestrians": 0, "non_pedestrians": 0,
-                                 "unclassified": 0, "walkers": 0}
-    assert "non_pedestrians" in COUNT_RULE and "unclassified" in COUNT_RULE
+                                 "unclassified": 0, "too_fast": 0, "walkers": 0}
+    assert "non_pedestrians" in COUNT_RULE and "too_fast" in COUNT_RULE
+
+
+def test_too_fast_is_the_walking_models_top_speed():
+    from rhythmjax.count import track_speed, walking_top_speed
+    from rhythmjax.pedestrian_level import _Ped
+
+    # (14): pace within 3 sigma of 2.05 +- 0.183 Hz, stride within 3 sigma of 0.72 +- 0.09 m
+    assert walking_top_speed(CFG) == pytest.approx((2.05 + 3 * 0.183) * (0.72 + 3 * 0.09),
+                                                   rel=1e-5)
+    p = _Ped(slot=0, born=0)
+    # rows: (index, t, u, v, W, I, x, y, state): 1.5 s at (1.2, -1.6) m/s = 2 m/s, measured
+    p.rows = [(k, k / 15, 100.0, 100.0, 20.0, 1.0, 1.2 * k / 15, 8 - 1.6 * k / 15, 2)
+              for k in range(23)]
+    p.rows[5] = p.rows[5][:8] + (3,)  # a predicted row is left out
+    assert track_speed(p) == pytest.approx(2.0, rel=1e-6)
+    p.rows = p.rows[:5]  # under 0.5 s: unknown
+    assert math.isnan(track_speed(p))
 
 
 def _piece(first, last, start, end, size=(20.0, 60.0), ground=None, fps=15.0):
