@@ -10,7 +10,8 @@
 (b) PETS09-S2L1 (795 frames, 7 fps, `datasets.pets_camera()`, detection range 5-50 m): MOTA,
     IDF1, IDSW vs `datasets.pets_boxes()` (all 19 people, occluded boxes included), walkers
     counted vs 19; the SORT baseline on the same blob detections, scored by the same tool.
-(c) UCSD Ped2 Test002/004/006/010: frame rate unknown, 10 fps assumed; a guessed camera (h 10 m,
+(c) UCSD Ped2 Test002/004/006/010: frame rate unknown, 30 fps assumed (at the usual 10 fps the
+    walkers' rhythm is a third of a walking pace: `eval_real_video.py`); a guessed camera (h 10 m,
     tilt 30 deg, 400 px focal length, principal point at the image centre: a 1.7 m person at
     the centre is ~34 px tall, the median blob height of SOURCE.md). Tracks overlapping the
     anomaly boxes (cyclists, cart) and their verdicts; the walker count (no pedestrian truth).
@@ -42,7 +43,7 @@ from rhythmjax.sort_baseline import ASSIGNMENT_SOLVER, blob_detections, sort_tra
 
 SEED = 4_2024
 PETS_PEOPLE = 19
-UCSD_FPS = 10.0
+UCSD_FPS = 30.0  # not stated; see eval_real_video.py's module doc
 UCSD_CAMERA = {"f_m": 0.008, "h_m": 10.0, "theta_deg": 30.0, "a_px_per_m": 50000.0,
                "b_px_per_m": 50000.0, "uc_px": 180.0, "vc_px": 120.0, "fps": UCSD_FPS,
                "image_width_px": 360, "image_height_px": 240}
@@ -380,8 +381,8 @@ def print_tables(out: dict) -> None:
                       f" {s['mostly_lost']} | {s['n_hyp_ids']} | {walk} |")
     ucsd = out.get("ucsd")
     if ucsd and "skipped" not in ucsd:
-        print("\nUCSD Ped2 (10 fps assumed)\n| clip | tracks | walkers | anomaly tracks | "
-              "non-ped. | ped. | unclassified |\n|" + "---|" * 7)
+        print(f"\nUCSD Ped2 ({UCSD_FPS:g} fps assumed)\n| clip | tracks | walkers | anomaly "
+              "tracks | non-ped. | ped. | unclassified |\n|" + "---|" * 7)
         for r in ucsd["clips"]:
             print(f"| {r['clip']} | {r['counts']['tracks']} | {r['counts']['walkers']} | "
                   f"{r['anomaly_tracks']} | {r['anomaly_non_pedestrian']} | "
