@@ -11,20 +11,24 @@ import numpy as np
 from .params import Camera
 
 
-def camera_tuple(camera: Camera) -> tuple[float, ...]:
-    """(f, h, theta, a, b, uc, vc) as Python floats (m, m, rad, px/m, px/m, px, px)."""
+def camera_tuple(camera: Camera | tuple) -> tuple[float, ...]:
+    """(f, h, theta, a, b, uc, vc) as Python floats (m, m, rad, px/m, px/m, px, px); a tuple
+    passes through unchanged. The roll extension is not carried: these NumPy mirrors of (3)
+    serve the renderer and the pedestrian patches, both for the paper's roll-free camera."""
+    if isinstance(camera, tuple):
+        return camera
     return tuple(float(np.asarray(getattr(camera, k))) for k in ("f", "h", "theta", "a", "b",
                                                                      "uc", "vc"))
 
 
-def depth_3d(camera: Camera, y, z):
+def depth_3d(camera: Camera | tuple, y, z):
     """Denominator of (3) for a point at height z (m): f + y cos(theta) + (h - z) sin(theta)."""
     f, h, th = camera_tuple(camera)[:3]
     return f + np.asarray(y, np.float64) * math.cos(th) + (h - np.asarray(z, np.float64)) * \
         math.sin(th)
 
 
-def project_3d(camera: Camera, x, y, z):
+def project_3d(camera: Camera | tuple, x, y, z):
     """(u, v) px of the point (x, y) m on the ground plane and z m above it: equation (3) with the
     camera height h replaced by h - z (the camera at height h looks down by theta; a point z
     above the ground is seen as a ground point by a camera h - z high). z = 0 is (3) exactly.

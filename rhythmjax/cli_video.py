@@ -65,6 +65,23 @@ def overlay_writer(path, fps, size):
     writer.close()
 
 
+def drive_frames(frames, update, overlay, draw, *, n_frames=None, progress=True, desc=""):
+    """Feed every `(index, t, frame)` item to `update(index, t, frame)`, with a progress bar on
+    a terminal; when the `overlay` writer is open, write `draw(frame, index)` for each decoded
+    frame (a frame that failed to decode is None: nothing is drawn)."""
+    bar = _progress(n_frames, progress, desc)
+    try:
+        for index, t, frame in frames:
+            update(index, t, frame)
+            if overlay is not None and frame is not None:
+                overlay.write(draw(frame, index))
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
 def track_frames(cfg, frames, *, n_frames=None, overlay=None, progress=True, options=None):
     """Run the online tracker over `(index, t, frame)` items; returns (tracks, verdicts, objs,
     tracker). Draws into the open `overlay` writer when given."""
@@ -72,15 +89,9 @@ def track_frames(cfg, frames, *, n_frames=None, overlay=None, progress=True, opt
     from .tracker import OnlineTracker
 
     tracker = OnlineTracker(cfg, options)
-    bar = _progress(n_frames, progress, "track")
-    for index, t, frame in frames:
-        tracker.update(index, t, frame)
-        if overlay is not None and frame is not None:
-            overlay.write(draw_frame(frame, tracker.snapshot(), index))
-        if bar is not None:
-            bar.update(1)
-    if bar is not None:
-        bar.close()
+    drive_frames(frames, tracker.update, overlay,
+                 lambda frame, index: draw_frame(frame, tracker.snapshot(), index),
+                 n_frames=n_frames, progress=progress, desc="track")
     tracks, verdicts, objs = tracker.finish()
     return tracks, verdicts, objs, tracker
 

@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from .camera_np import project_3d
 from .params import Config
 from .pedestrian_level import PedestrianLevel, _Ped
 from .pedestrians import DYNAMICS, PEDESTRIAN_HEIGHT_M
@@ -142,23 +143,16 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     pedestrians, non_pedestrians, unclassified (shorter than N or unusable), too_fast and
     walkers = tracks - non_pedestrians - too_fast (`COUNT_RULE`: unclassified tracks count
     unless too fast to walk)."""
-    from .cli_video import _progress
+    from .cli_video import drive_frames
+    from .overlay import draw_count_frame
 
     opt = options or CountOptions()
     if overlay is None and opt.online_verdicts:
         opt = dataclasses.replace(opt, online_verdicts=False)
     level = PedestrianLevel(cfg, opt)
-    bar = _progress(n_frames, progress, "count")
-    for index, t, frame in frames:
-        level.update(index, t, frame)
-        if overlay is not None and frame is not None:
-            from .overlay import draw_count_frame
-
-            overlay.write(draw_count_frame(frame, level.snapshot(), index))
-        if bar is not None:
-            bar.update(1)
-    if bar is not None:
-        bar.close()
+    drive_frames(frames, level.update, overlay,
+                 lambda frame, index: draw_count_frame(frame, level.snapshot(), index),
+                 n_frames=n_frames, progress=progress, desc="count")
     return level.finish()
 
 
@@ -198,14 +192,6 @@ def _line_fit(t: np.ndarray, uv: np.ndarray, at: float) -> tuple[float, float, f
     return float(coef[0, 0]), float(coef[0, 1]), float(coef[1, 0]), float(coef[1, 1])
 
 
-def _project(camera: tuple, x, y) -> tuple[float, float]:
-    """Equation (3) in float64 (`pedestrians.ground_point`'s inverse): foot point of (x, y)."""
-    f, h, th, a, b, uc, vc = camera
-    s, c = math.sin(th), math.cos(th)
-    d = f + y * c + h * s
-    return uc + a * f * x / d, vc - b * f * (y * s - h * c) / d
-
-
 def piece_of(p: _Ped, shape, dynamics: str, fit_s: float) -> Piece:
     """The `Piece` of a pedestrian's rows: a line fit over its measured foot points in its first
     `fit_s` s gives its start; its end is the EKF ground state at its last (measured) row for
@@ -225,8 +211,8 @@ def piece_of(p: _Ped, shape, dynamics: str, fit_s: float) -> Piece:
     if dynamics == "3d":
         ground = tuple(float(q) for q in p.ground[-1])
         x, y, vx, vy = ground
-        u, v = _project(shape.camera, x, y)
-        u2, v2 = _project(shape.camera, x + 0.1 * vx, y + 0.1 * vy)
+        u, v = project_3d(shape.camera, x, y, 0.0)
+        u2, v2 = project_3d(shape.camera, x + 0.1 * vx, y + 0.1 * vy, 0.0)
         end = (u, v, (u2 - u) / 0.1, (v2 - v) / 0.1)
     else:
         tail = use & (t >= t1 - fit_s)
@@ -239,7 +225,7 @@ def _predict(A: Piece, dt: float, camera: tuple | None) -> np.ndarray:
     one, else in the image."""
     if A.end_ground is not None and camera is not None:
         x, y, vx, vy = A.end_ground
-        return np.asarray(_project(camera, x + vx * dt, y + vy * dt))
+        return np.asarray(project_3d(camera, x + vx * dt, y + vy * dt, 0.0))
     e = np.asarray(A.end)
     return e[:2] + e[2:] * dt
 

@@ -39,6 +39,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .camera import measure
+from .camera_np import camera_tuple
 from .ekf import Carry, FromAnnotations, Gaussian, empty_carry, inverse_2x2, predict, select, step
 from .params import Camera, Config, Noise
 from .tracker import _join, _split
@@ -52,18 +53,10 @@ PEDESTRIAN_HEIGHT_M = 1.7  # average pedestrian height (m); width: cfg.width.mea
 # shape (NumPy float64)
 
 
-def _cam(camera) -> tuple[float, ...]:
-    """(f, h, theta, a, b, uc, vc) as Python floats (a tuple passes through unchanged)."""
-    if isinstance(camera, tuple):
-        return camera
-    return tuple(float(np.asarray(getattr(camera, k))) for k in ("f", "h", "theta", "a", "b",
-                                                                     "uc", "vc"))
-
-
 def ground_point(camera: Camera | tuple, u, v):
     """Inverse of (3) in NumPy float64: ground (x, y) m of the foot point (u, v) px, and `ok`
     (below the horizon, in front of the camera); x = y = 0 where not ok."""
-    f, h, th, a, b, uc, vc = _cam(camera)
+    f, h, th, a, b, uc, vc = camera_tuple(camera)
     u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
     s, c = math.sin(th), math.cos(th)
     dv = vc - v
@@ -80,7 +73,7 @@ def patch_size_3d(camera: Camera | tuple, u, v, width_m: float,
                   height_m: float = PEDESTRIAN_HEIGHT_M):
     """3-D shape: (w, h) px of an average pedestrian standing at the foot point (u, v) px, and
     `ok`; NaN where the foot point has no ground point or the head is behind the camera."""
-    f, hc, th, a, b, uc, vc = _cam(camera)
+    f, hc, th, a, b, uc, vc = camera_tuple(camera)
     _, y, ok = ground_point(camera, u, v)
     s, c = math.sin(th), math.cos(th)
     d_foot = f + y * c + hc * s
@@ -95,7 +88,7 @@ def patch_size_3d(camera: Camera | tuple, u, v, width_m: float,
 
 def middle_foot_point(cfg: Config) -> tuple[float, float]:
     """Foot point (u, v) px of x = 0, y = middle of the detection range: the 2-D shape's place."""
-    f, h, th, a, b, uc, vc = _cam(cfg.camera)
+    f, h, th, a, b, uc, vc = camera_tuple(cfg.camera)
     y = 0.5 * (float(cfg.thresholds.range_min) + float(cfg.thresholds.range_max))
     s, c = math.sin(th), math.cos(th)
     return uc, vc - b * f * (y * s - h * c) / (f + y * c + h * s)
@@ -105,7 +98,7 @@ def middle_foot_point(cfg: Config) -> tuple[float, float]:
 class ShapeModel:
     """Patch size as a function of the foot point: 3-D (per place) or 2-D (fixed)."""
 
-    camera: tuple[float, ...]  # (f, h, theta, a, b, uc, vc), host floats (see `_cam`)
+    camera: tuple[float, ...]  # (f, h, theta, a, b, uc, vc), host floats (`camera_tuple`)
     width_m: float
     height_m: float
     fixed: tuple[float, float] | None = None  # (w, h) px for the 2-D shape
@@ -119,7 +112,7 @@ class ShapeModel:
         if dynamics == "2d":
             w, h, _ = patch_size_3d(cfg.camera, *middle_foot_point(cfg), width_m, height_m)
             fixed = (float(w), float(h))
-        return cls(_cam(cfg.camera), width_m, height_m, fixed)
+        return cls(camera_tuple(cfg.camera), width_m, height_m, fixed)
 
     def size(self, u, v):
         """(w, h) px arrays (NaN where the 3-D shape has no ground point)."""
@@ -143,7 +136,7 @@ def image_noise(cfg: Config) -> Noise:
     """Image-plane noise for the 2-D dynamics: the ground q and initial speed spread times the
     px per m at the middle of the detection range; R as the config's (px)."""
     _, y, _ = ground_point(cfg.camera, *middle_foot_point(cfg))
-    f, hc, th, a, *_ = _cam(cfg.camera)
+    f, hc, th, a, *_ = camera_tuple(cfg.camera)
     px_per_m = a * f / (f + float(y) * math.cos(th) + hc * math.sin(th))
     R = np.asarray(cfg.noise.R(), np.float64)
     r = np.sqrt(np.diag(R))

@@ -283,13 +283,14 @@ def test_stitch_links_a_track_that_continues_another():
 
 
 def test_stitch_predicts_on_the_ground_plane_with_the_ekf_state():
-    from rhythmjax.count import _project, stitch_pieces
+    from rhythmjax.camera_np import project_3d
+    from rhythmjax.count import stitch_pieces
     from rhythmjax.pedestrians import ShapeModel
 
     shape = ShapeModel.from_config(CFG, "3d")
     cam = shape.camera
     # walking away from the camera at 1.4 m/s: lost at y = 6 m, back 1 s later at y = 7.4 m
-    uv = lambda x, y: _project(cam, x, y)
+    uv = lambda x, y: tuple(float(q) for q in project_3d(cam, x, y, 0.0))
     vel = lambda x, y, vx, vy: tuple((np.asarray(uv(x + 0.1 * vx, y + 0.1 * vy))
                                       - np.asarray(uv(x, y))) / 0.1)
     a = _piece(0, 30, (*uv(0.5, 3.2), *vel(0.5, 3.2, 0, 1.4)), (*uv(0.5, 6.0),
