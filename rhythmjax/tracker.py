@@ -64,11 +64,10 @@ class TrackerOptions:
     # younger is still settling (fewer than merge_young frames)
     merge_young: int = 10
     shared_overlap: float = 0.5  # two tracks' detections overlapping by this fraction of the
-    # smaller box are one (merged) blob: neither is updated from it (both predict)
-    shared_nearest: bool = True  # a shared blob still updates the track whose predicted foot
-    # point is nearest its foot point (in W), when the others' are more than twice as far
-    shared_missing: bool = True  # a shared blob's frame gives no rhythm sample (NaN)
-    exclude_windows: bool = False  # True: no new object inside a track's whole detection window
+    # smaller box are one (merged) blob: it updates only the track whose predicted foot point is
+    # nearest its foot point (in W) when the others' are more than twice as far, else none (they
+    # predict); a shared blob's frame gives no rhythm sample (NaN). New objects are not sought
+    # inside a tracked object's predicted body box or its detection.
     downscale: int = 4  # new objects are labelled on a 4x smaller mask (detect.find_objects)
     global_change_fraction: float = 0.5  # more than this of the frame changed: a glitch frame
 
@@ -212,16 +211,13 @@ class OnlineTracker:
             uv = self._next_uv[s]
             box_w, box_h, Wp = self._window_size(uv, self._next_W[s])
             centre = (uv[0], uv[1] - opt.window_raise * box_h / opt.window_heights)
-            if opt.exclude_windows:
-                boxes.append(_box(centre, box_w, box_h))
             if math.isfinite(Wp):
                 near.append((uv[0], uv[1], opt.near_widths * Wp))
             if not np.all(np.isfinite(uv)) or not math.isfinite(Wp):
                 continue
             core_h = opt.core_heights * box_h / opt.window_heights
             cores[s] = _box((uv[0], uv[1] - 0.45 * core_h), opt.core_widths * Wp, core_h)
-            if not opt.exclude_windows:
-                boxes.append(cores[s])
+            boxes.append(cores[s])
             if glitch:
                 continue
             det = detect.detect_in_window(M, centre, (box_w, box_h), fraction=opt.fraction,
@@ -230,13 +226,11 @@ class OnlineTracker:
             if det is not None:
                 dets[s] = det
         shared = detect.shared_detections(dets, opt.shared_overlap)
-        if opt.shared_nearest:
-            shared -= self._nearest_claims(dets, shared)
+        shared -= self._nearest_claims(dets, shared)
         for s, det in dets.items():
             if s not in shared:
                 z[s], width[s] = (det.u, det.v), det.width
-            if not opt.exclude_windows:
-                boxes.append(det.box)
+            boxes.append(det.box)
         if not glitch:
             free = [s for s, o in enumerate(self._slots) if o is None]
             found = detect.find_objects(M, min_area=opt.min_area, exclude_boxes=boxes,
@@ -261,7 +255,7 @@ class OnlineTracker:
             if obj is not None:
                 self._after_step(s, obj, index, t, dt, z[s], width[s], bool(valid[s]),
                                  bool(started[s]), mean[s], est_uv[s], float(W[s]), D,
-                                 glitch or (opt.shared_missing and s in shared))
+                                 glitch or s in shared)
         self._merge(est_uv, W, mean)
 
     def _nearest_claims(self, dets: dict, shared: set) -> set:
