@@ -30,7 +30,8 @@ from .ekf import Carry, empty_carry, predict, step
 from .gates import PaperGates
 from .params import Config
 from .rhythm import MAX_MISSING_FRACTION, classify_window
-from .status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
+from .status import VERDICT_LABELS, TrackState, Verdict
+from .tracker_columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 
 
 @dataclass(frozen=True)
@@ -70,6 +71,10 @@ class TrackerOptions:
     # inside a tracked object's predicted body box or its detection.
     downscale: int = 4  # new objects are labelled on a 4x smaller mask (detect.find_objects)
     global_change_fraction: float = 0.5  # more than this of the frame changed: a glitch frame
+    high_foot_widths: float = 0.25  # a settled track's foot point measured more than this many W
+    # above its prediction is dropped (no measurement): the motion's bottom was not the feet
+    high_foot_frames: int = 3  # ... for at most this many frames in a row (then the prediction,
+    # not the measurement, is taken to be wrong: double support lasts ~2 frames at 15 Hz)
 
 
 @dataclass
@@ -85,6 +90,7 @@ class _Object:
     last_W: float = math.nan  # window-B width W, px
     close_frames: int = 0  # frames in a row its estimate coincided with an older track's
     win_start: int = 0  # first row of the next rhythm window
+    high_run: int = 0  # frames in a row its measured foot point lay too high (_foot_too_high)
 
 
 def _advance(cfg: Config, carry: Carry, reset, z, width, dt, present):
@@ -227,8 +233,11 @@ class OnlineTracker:
                 dets[s] = det
         shared = detect.shared_detections(dets, opt.shared_overlap)
         shared -= self._nearest_claims(dets, shared)
+        held = set()  # slots whose object was seen, its foot point unusable: no time-out
         for s, det in dets.items():
-            if s not in shared:
+            if s not in shared and self._foot_too_high(s, det):
+                held.add(s)
+            elif s not in shared:
                 z[s], width[s] = (det.u, det.v), det.width
             boxes.append(det.box)
         if not glitch:
@@ -255,8 +264,19 @@ class OnlineTracker:
             if obj is not None:
                 self._after_step(s, obj, index, t, dt, z[s], width[s], bool(valid[s]),
                                  bool(started[s]), mean[s], est_uv[s], float(W[s]), D,
-                                 glitch or s in shared)
+                                 glitch or s in shared, s in held)
         self._merge(est_uv, W, mean)
+
+    def _foot_too_high(self, s: int, det) -> bool:
+        """A settled track's detection whose foot point lies more than `high_foot_widths` W
+        above the predicted one: the feet did not move (the motion's bottom is a knee or the
+        torso), so it is no foot point; the slot predicts instead."""
+        obj, r = self._slots[s], self.opt.high_foot_widths
+        if r <= 0 or obj is None or len(obj.rows) < self.opt.merge_young:
+            return False
+        high = bool(det.v < self._next_uv[s][1] - r * float(self._next_W[s]))
+        obj.high_run = obj.high_run + 1 if high else 0
+        return high and obj.high_run <= self.opt.high_foot_frames
 
     def _nearest_claims(self, dets: dict, shared: set) -> set:
         """Of the slots sharing a blob, those whose predicted foot point is at most half as far
@@ -311,7 +331,7 @@ class OnlineTracker:
         return self.opt.window_widths * Wp, self.opt.window_heights * height_px, Wp
 
     def _after_step(self, s, obj, index, t, dt, z, width, valid, started, mean, est_uv, W, D,
-                    no_sample):
+                    no_sample, held=False):
         if obj.state == TrackState.DETECT:
             if not started:  # outside the detection range: back to NONE, nothing recorded
                 self._slots[s] = None
@@ -322,7 +342,7 @@ class OnlineTracker:
             obj.state, obj.predict_time = TrackState.OBSERVE, 0.0
         else:
             obj.state = TrackState.PREDICT
-            obj.predict_time += dt
+            obj.predict_time += 0.0 if held else dt
         measured = bool(np.all(np.isfinite(z)))
         fu, fv = (z if measured and not self.opt.sample_estimate else est_uv)
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
@@ -396,43 +416,3 @@ def _box(uv, w, h) -> tuple[int, int, int, int]:
     if not np.all(np.isfinite(uv)) or w <= 0:
         return (0, 0, 0, 0)
     return (int(uv[0] - w / 2), int(uv[1] - h / 2), int(w), int(h))
-
-
-TRACK_COLUMNS = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",
-                 "state"]
-
-
-def tracks_columns(objs: list[_Object]) -> dict[str, np.ndarray]:
-    """The tracks format (ARCHITECTURE.md) plus the filter's ground estimate and the state."""
-    rows = [(o.track_id, *r) for o in objs for r in o.rows]
-    cols = list(zip(*rows)) if rows else [[] for _ in TRACK_COLUMNS]
-    out = {k: np.asarray(c) for k, c in zip(TRACK_COLUMNS, cols)}
-    out["track_id"] = out["track_id"].astype(np.int64)
-    out["frame"] = out["frame"].astype(np.int64)
-    out["state"] = np.asarray([TrackState(int(s)).name.lower() for s in out["state"]],
-                              dtype=object)
-    for k in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est"):
-        out[k] = out[k].astype(np.float64)
-    return out
-
-
-def verdict_columns(objs: list[_Object], n: int) -> dict[str, np.ndarray]:
-    """One row per track, the columns of the verdicts format."""
-    cols: dict[str, list] = {k: [] for k in ("track_id", "verdict", "reason", "pace_hz",
-                                             "stride_m", "ratio", "speed_mps", "n_samples")}
-    for o in objs:
-        r = o.result
-        cols["track_id"].append(o.track_id)
-        cols["n_samples"].append(len(o.rows))
-        if r is None:
-            cols["verdict"].append(VERDICT_LABELS[Verdict.UNCLASSIFIED])
-            cols["reason"].append(REASON_LABELS[Reason.TOO_SHORT])
-            for k in ("pace_hz", "stride_m", "ratio", "speed_mps"):
-                cols[k].append(math.nan)
-            continue
-        cols["verdict"].append(VERDICT_LABELS[int(r["verdict"])])
-        cols["reason"].append(REASON_LABELS[int(r["reason"])])
-        for k in ("pace_hz", "stride_m", "ratio", "speed_mps"):
-            cols[k].append(float(r[k]))
-    return {k: np.asarray(v, dtype=object if k in ("verdict", "reason") else None)
-            for k, v in cols.items()}

@@ -1,6 +1,7 @@
 """The online tracker: Fig. 3's state machine on small synthetic scenes, and its verdicts
 reproduced by `rhythmjax classify` on the tracks it writes."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 
 from rhythmjax import synth
 from rhythmjax.params import Config, config_from_dict
+from rhythmjax.status import TrackState
 from rhythmjax.tracker import OnlineTracker
 
 
@@ -183,14 +185,14 @@ def test_body_parts_measured_together():
     """A walker crossing at 8 m: its motion splits into parts (torso outlines, legs), and with
     the body's parts within body_widths W joined the measured width is the body's (median ratio
     to the true width ~0.9), not a part's (0.78 with body_widths=0, which also broke the walker
-    into more tracks)."""
+    into more tracks). The high-foot drop is off here: it also removes a part's measurement."""
     from rhythmjax.tracker import TrackerOptions
 
     scene = _walker_scene(y=8.0)
     truth = scene.truth[0]
     ratio, n_tracks = {}, {}
     for bw in (0.0, TrackerOptions().body_widths):
-        tr = OnlineTracker(CFG, TrackerOptions(body_widths=bw))
+        tr = OnlineTracker(CFG, TrackerOptions(body_widths=bw, high_foot_widths=0.0))
         for i, f in enumerate(scene.frames):
             tr.update(i, i / 15.0, f)
         tracks, _, _ = tr.finish()
@@ -200,3 +202,36 @@ def test_body_parts_measured_together():
         n_tracks[bw] = len(np.unique(tracks["track_id"]))
     assert ratio[1.8] > 0.85 > 0.8 > ratio[0.0]
     assert n_tracks[1.8] < n_tracks[0.0]
+
+
+def test_foot_point_far_above_the_prediction_is_dropped(walker_scene, monkeypatch):
+    """A settled track's detection whose foot point lies more than high_foot_widths W above the
+    predicted one is no measurement (u, v NaN, the slot predicts without running down its
+    time-out), for at most high_foot_frames frames in a row; the rule by hand: frames 30-31 and
+    40-42 dropped, 43-45 (the 4th-6th high frames in a row) kept, everything else as measured."""
+    from rhythmjax import detect
+    from rhythmjax.tracker import TrackerOptions
+
+    opt = TrackerOptions()
+    assert opt.high_foot_widths == 0.25 and opt.high_foot_frames == 3
+    high = {30, 31, *range(40, 46)}
+    real, frame = detect.detect_in_window, [0]
+
+    def shifted(*a, **kw):
+        det = real(*a, **kw)
+        if det is None or frame[0] not in high:
+            return det
+        return dataclasses.replace(det, v=det.v - 30.0)  # W ~ 33 px at 12 m: 0.9 W up
+
+    monkeypatch.setattr(detect, "detect_in_window", shifted)
+    tr = OnlineTracker(CFG, opt)
+    for i, f in enumerate(walker_scene.frames[:60]):
+        frame[0] = i
+        tr.update(i, i / 15.0, f)
+    tracks, _, objs = tr.finish()
+    assert len(objs) == 1 and objs[0].rows[0][0] < 20
+    rows = {int(r[0]): r for r in objs[0].rows}
+    assert all(not math.isfinite(rows[k][3]) for k in (30, 31, 40, 41, 42))
+    assert all(math.isfinite(rows[k][3]) for k in (29, 32, 39, 43, 44, 45, 46))
+    assert rows[42][8] == TrackState.PREDICT and rows[32][8] == TrackState.OBSERVE
+    assert objs[0].predict_time == 0.0

@@ -1,0 +1,50 @@
+"""The tracker's output tables: tracks (ARCHITECTURE.md's format plus the filter's ground
+estimate and the state) and verdicts, one row per track, from the tracker's objects."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
+
+
+TRACK_COLUMNS = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",
+                 "state"]
+
+
+def tracks_columns(objs: list) -> dict[str, np.ndarray]:
+    """The tracks format (ARCHITECTURE.md) plus the filter's ground estimate and the state."""
+    rows = [(o.track_id, *r) for o in objs for r in o.rows]
+    cols = list(zip(*rows)) if rows else [[] for _ in TRACK_COLUMNS]
+    out = {k: np.asarray(c) for k, c in zip(TRACK_COLUMNS, cols)}
+    out["track_id"] = out["track_id"].astype(np.int64)
+    out["frame"] = out["frame"].astype(np.int64)
+    out["state"] = np.asarray([TrackState(int(s)).name.lower() for s in out["state"]],
+                              dtype=object)
+    for k in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est"):
+        out[k] = out[k].astype(np.float64)
+    return out
+
+
+def verdict_columns(objs: list, n: int) -> dict[str, np.ndarray]:
+    """One row per track, the columns of the verdicts format."""
+    cols: dict[str, list] = {k: [] for k in ("track_id", "verdict", "reason", "pace_hz",
+                                             "stride_m", "ratio", "speed_mps", "n_samples")}
+    for o in objs:
+        r = o.result
+        cols["track_id"].append(o.track_id)
+        cols["n_samples"].append(len(o.rows))
+        if r is None:
+            cols["verdict"].append(VERDICT_LABELS[Verdict.UNCLASSIFIED])
+            cols["reason"].append(REASON_LABELS[Reason.TOO_SHORT])
+            for k in ("pace_hz", "stride_m", "ratio", "speed_mps"):
+                cols[k].append(math.nan)
+            continue
+        cols["verdict"].append(VERDICT_LABELS[int(r["verdict"])])
+        cols["reason"].append(REASON_LABELS[int(r["reason"])])
+        for k in ("pace_hz", "stride_m", "ratio", "speed_mps"):
+            cols[k].append(float(r[k]))
+    return {k: np.asarray(v, dtype=object if k in ("verdict", "reason") else None)
+            for k, v in cols.items()}
