@@ -93,7 +93,7 @@ class CountOptions:
     online_verdicts: bool = True  # with an overlay: judge each N-frame window as it completes
     # (the labels drawn); without one it is skipped (saves a compilation)
     classify: bool = True  # judge the tracks at the end (False: all unclassified, no compile)
-    max_dv_mps: float = 2.5  # "3d": a track whose ground velocity changes by more than this
+    max_dv_mps: float = 1.5  # "3d": a track whose ground velocity changes by more than this
     dv_window_s: float = 0.5  # ... within this long lost its object: it ends before the change
     stitch: bool = True  # join fragments of one walker (count.stitch_pieces)
     stitch_max_gap_s: float = 3.0  # from a track's last measured frame to the next one's first

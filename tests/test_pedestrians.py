@@ -259,3 +259,25 @@ def test_a_track_whose_ground_velocity_jumps_ends_before_the_jump():
     p.ground = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)] + [(3.0, 8.0, 1.4, -4.0)] * 4
     assert level2._velocity_jump(p) == 0
     assert level._velocity_jump(p) == k
+
+
+def test_a_swap_between_crossing_walkers_ends_the_track():
+    """The default limit (1.5 m/s within 0.5 s: 3 m/s^2, no walker turns or brakes that fast)
+    catches a patch that moves from one walker to another crossing at right angles at the
+    same 1.4 m/s: |dv| = 1.4 x sqrt(2) = 1.98 m/s; a walker speeding up from 1.0 to 1.4 m/s
+    over the window, or turning by 45 degrees (|dv| = 2 x 1.4 x sin(22.5 deg) = 1.07 m/s),
+    is not lost."""
+    from rhythmjax.pedestrian_level import PedestrianLevel, _Ped
+
+    level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False))
+    assert level.opt.max_dv_mps == 1.5
+    k = round(0.5 * 15)
+    p = _Ped(slot=0, born=0)
+    walk = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)]
+    p.ground = walk + [(3.0, 8.0 + 0.1 * i, 0.0, 1.4) for i in range(1, k + 1)]
+    assert level._velocity_jump(p) == k
+    p.ground = walk + [(3.0 + 0.1 * i, 8.0 + 0.1 * i, 1.4 * math.cos(math.pi / 4),
+                        1.4 * math.sin(math.pi / 4)) for i in range(1, k + 1)]
+    assert level._velocity_jump(p) == 0
+    p.ground = [(0.1 * i, 8.0, 1.0 + 0.4 * min(1.0, i / 30), 0.0) for i in range(40)]
+    assert level._velocity_jump(p) == 0
