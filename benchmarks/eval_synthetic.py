@@ -28,7 +28,7 @@ from rhythmjax.params import Config, config_from_dict, config_to_dict
 
 SEED = 20240603
 N_FRAMES = 180
-RECOMMENDED = SYNTHETIC_CONFIG  # the demo's config
+RECOMMENDED = SYNTHETIC_CONFIG  # the demo's config (and its tracker options, SYNTHETIC_OPTIONS)
 
 
 def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, camera=None):
@@ -54,7 +54,10 @@ def run_scene(cfg, seed, spec, options=None):
 
     scene = render_scene(seed, spec)
     frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
-    tracks, verdicts, _, _ = track_frames(cfg, frames, progress=False, options=options)
+    from rhythmjax.cli_video import synthetic_options
+
+    tracks, verdicts, _, _ = track_frames(cfg, frames, progress=False,
+                                          options=options or synthetic_options())
     return score(tracks, verdicts, scene.truth), tracks, verdicts, scene
 
 

@@ -71,8 +71,9 @@ class TrackerOptions:
     # inside a tracked object's predicted body box or its detection.
     downscale: int = 4  # new objects are labelled on a 4x smaller mask (detect.find_objects)
     global_change_fraction: float = 0.5  # more than this of the frame changed: a glitch frame
-    high_foot_widths: float = 0.25  # a settled track's foot point measured more than this many W
+    high_foot_widths: float = 0.0  # a settled track's foot point measured more than this many W
     # above its prediction is dropped (no measurement): the motion's bottom was not the feet
+    # (0: off; cli_video.SYNTHETIC_OPTIONS sets 0.25 for the synthetic scenes)
     high_foot_frames: int = 3  # ... for at most this many frames in a row (then the prediction,
     # not the measurement, is taken to be wrong: double support lasts ~2 frames at 15 Hz)
 

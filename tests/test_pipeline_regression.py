@@ -1,6 +1,7 @@
 """Pipeline regression: a small fixed-seed set of synthetic scenes through the whole pipeline
-(render -> detect -> online tracker -> rhythm windows -> evaluate.score) must not score worse
-than the stored baseline (tests/pipeline_baseline.json) beyond the stated margins:
+(render -> detect -> online tracker with the demo's options -> rhythm windows -> evaluate.score)
+must not score worse than the stored baseline (tests/pipeline_baseline.json) beyond the stated
+margins:
 
 - walker Pedestrian rate: at most MARGIN_RATE below the baseline (one walker of the 14);
 - bicycles and dogs judged Non-pedestrian: at most one fewer; judged Pedestrian: none more;
@@ -15,7 +16,7 @@ import math
 import os
 from pathlib import Path
 
-from rhythmjax.cli_video import SYNTHETIC_CONFIG
+from rhythmjax.cli_video import SYNTHETIC_CONFIG, SYNTHETIC_OPTIONS, synthetic_options
 from rhythmjax.evaluate import score, summarise
 from rhythmjax.params import config_from_dict
 from rhythmjax.synth import random_spec, render_scene
@@ -38,7 +39,7 @@ def _figures() -> dict:
                            min_life=100, max_life=140, bicycle_speed=(3.0, 3.4),
                            range_m=(3.3, 19.7))
         scene = render_scene(seed, spec)
-        tr = OnlineTracker(cfg)
+        tr = OnlineTracker(cfg, synthetic_options())
         for k, f in enumerate(scene.frames):
             tr.update(k, k / scene.fps, f)
         tracks, verdicts, _ = tr.finish()
@@ -55,7 +56,8 @@ def test_pipeline_not_worse_than_baseline():
             "others_judged", "others_non_pedestrian", "others_pedestrian", "pace_mae_hz",
             "stride_median_err_m")
     if os.environ.get("RHYTHMJAX_WRITE_BASELINE"):
-        BASELINE.write_text(json.dumps({"config": CONFIG, "seeds": list(SEEDS),
+        BASELINE.write_text(json.dumps({"config": CONFIG, "options": SYNTHETIC_OPTIONS,
+                                        "seeds": list(SEEDS),
                                         **{k: got[k] for k in keys}}, indent=1) + "\n")
     base = json.loads(BASELINE.read_text())
     assert got["walkers"] == base["walkers"] and got["others"] == base["others"]
