@@ -2,7 +2,8 @@
 filterpy's `ExtendedKalmanFilter` (one Python object per track) and dynamax's
 `extended_kalman_filter` (jit + vmap), on synthetic walkers of T = 64 steps.
 
-    python benchmarks/bench_ekf.py [--quick]
+    python benchmarks/bench_ekf.py [--quick] [--sizes 1 64 ...]
+    JAX_PLATFORMS=cuda python benchmarks/bench_ekf.py   # on a GPU (peers' rows stay on CPU)
 
 Prints a markdown table: track-steps per second (best warm call) with the outputs dynamax is
 asked for (filtered means and covariances per step: the ratios use this rate) and with every
@@ -201,7 +202,9 @@ def matmul_gflops() -> float:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="sizes 1 and 64 only")
-    sizes = SIZES[:2] if parser.parse_args().quick else SIZES
+    parser.add_argument("--sizes", type=int, nargs="+", help=f"batch sizes (default {SIZES})")
+    opts = parser.parse_args()
+    sizes = opts.sizes or (SIZES[:2] if opts.quick else SIZES)
     rng = np.random.default_rng(0)
     dynamax_runs, dynamax_msg = make_dynamax()
     dynamax_run, dynamax_means = dynamax_runs or (None, None)
