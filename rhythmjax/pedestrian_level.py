@@ -241,8 +241,11 @@ class PedestrianLevel:
             # not jump to a nearer person its blob has merged with)
             v_max = None if k > 1 or p.track_id else float(max(blobs[j].box[3] - 1
                                                                 for j in mine))
+            bx = [blobs[j].box for j in mine]
+            bbox = (min(b[0] for b in bx), min(b[1] for b in bx), max(b[2] for b in bx),
+                    max(b[3] for b in bx))
             pl = place_patch(labels, lab, claimed, self.shape, *p.next_uv, radius_px=radius,
-                             v_max=v_max, min_cover=opt.min_cover)
+                             v_max=v_max, min_cover=opt.min_cover, bbox=bbox)
             if pl is None:
                 continue
             p.z = (pl.u, pl.v)

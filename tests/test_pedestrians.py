@@ -281,3 +281,53 @@ def test_a_swap_between_crossing_walkers_ends_the_track():
     assert level._velocity_jump(p) == 0
     p.ground = [(0.1 * i, 8.0, 1.0 + 0.4 * min(1.0, i / 30), 0.0) for i in range(40)]
     assert level._velocity_jump(p) == 0
+
+
+def test_scalar_patch_size_is_the_array_one_exactly():
+    """`ShapeModel.size` on two floats (plain arithmetic) gives the float64 values of the NumPy
+    path (`patch_size_3d`), NaN where there is no ground point, for both shapes."""
+    rng = np.random.default_rng(3)
+    u, v = rng.uniform(-100, 400, 3000), rng.uniform(-200, 400, 3000)
+    v[:30], u[30:60] = np.nan, np.inf
+    for dyn in ("3d", "2d"):
+        shape = ShapeModel.from_config(CFG, dyn)
+        wa, ha = np.broadcast_arrays(*shape.size(u, v))
+        one = np.array([shape.size(float(a), float(b)) for a, b in zip(u, v)])
+        if dyn == "3d":
+            assert np.isnan(wa).sum() > 100  # above the horizon, off the ground
+        np.testing.assert_array_equal(one[:, 0], wa)
+        np.testing.assert_array_equal(one[:, 1], ha)
+
+
+def test_placement_cut_to_the_related_blobs_box_is_the_same():
+    """place_patch with `bbox` (the related blobs' box) gives the placement of the full search
+    window on random blob images, claimed pixels and predictions."""
+    from rhythmjax.blobs import find_blobs
+
+    shape = ShapeModel.from_config(CFG, "3d")
+    rng = np.random.default_rng(11)
+    same = found = n = 0
+    for _ in range(300):
+        mask = np.zeros((192, 256), np.uint8)
+        for _ in range(int(rng.integers(1, 6))):
+            x, y = int(rng.integers(0, 240)), int(rng.integers(30, 180))
+            mask[max(0, y - int(rng.integers(5, 60))):y, x:x + int(rng.integers(3, 30))] = 1
+        blobs, labels = find_blobs(mask, min_area=1)
+        if not blobs:
+            continue
+        rel = rng.choice(len(blobs), size=int(rng.integers(1, len(blobs) + 1)), replace=False)
+        bx = [blobs[j].box for j in rel]
+        bbox = (min(b[0] for b in bx), min(b[1] for b in bx), max(b[2] for b in bx),
+                max(b[3] for b in bx))
+        claimed = rng.random(labels.shape) < 0.1 if rng.random() < 0.5 else None
+        b = blobs[int(rel[0])]
+        pu, pv = b.bottom_center[0] + rng.normal(0, 8), b.bottom_center[1] + rng.normal(0, 6)
+        lab = np.asarray([blobs[j].label for j in rel])
+        kw = dict(radius_px=float(rng.uniform(2, 20)),
+                  v_max=None if rng.random() < 0.5 else float(bbox[3] - 1))
+        full = place_patch(labels, lab, claimed, shape, pu, pv, **kw)
+        cut = place_patch(labels, lab, claimed, shape, pu, pv, bbox=bbox, **kw)
+        same += full == cut
+        n += 1
+        found += full is not None
+    assert same == n > 250 and found > 100
