@@ -95,6 +95,8 @@ class CountOptions:
     classify: bool = True  # judge the tracks at the end (False: all unclassified, no compile)
     max_dv_mps: float = 1.5  # "3d": a track whose ground velocity changes by more than this
     dv_window_s: float = 0.5  # ... within this long lost its object: it ends before the change
+    # (1.5 m/s in 0.5 s is 3 m/s^2: no walker turns or brakes that hard, while a patch moving
+    # between two walkers crossing at right angles at 1.4 m/s changes by 2 m/s)
     stitch: bool = True  # join fragments of one walker (count.stitch_pieces)
     stitch_max_gap_s: float = 3.0  # from a track's last measured frame to the next one's first
     stitch_gate_w: float = 0.9  # foot point misfit allowed at zero gap: this many W across ...
