@@ -235,3 +235,31 @@ def test_foot_point_far_above_the_prediction_is_dropped(walker_scene, monkeypatc
     assert all(math.isfinite(rows[k][3]) for k in (29, 32, 39, 43, 44, 45, 46))
     assert rows[42][8] == TrackState.PREDICT and rows[32][8] == TrackState.OBSERVE
     assert objs[0].predict_time == 0.0
+
+
+def test_velocity_jump_ends_the_track():
+    """max_dv_mps 1.8 within dv_window_s 1.0 at 15 fps: k = 15 frames. By hand: 30 rows at
+    (vx, vy) = (1.0, 0.0) m/s, then a 31st at (1.0, 1.9): |dv| against row 16 (15 back) is
+    1.9 > 1.8, the track is 31 > 2k = 30 rows old, so its last 15 rows go and it ends with 16;
+    at (1.0, 1.7) (|dv| 1.7) or with the rule off (0) it goes on with 31."""
+    from rhythmjax.tracker import TrackerOptions, _Object
+
+    def run(vy, max_dv):
+        tr = OnlineTracker(CFG, TrackerOptions(max_dv_mps=max_dv, dv_window_s=1.0))
+        obj = _Object(track_id=1, state=TrackState.OBSERVE)
+        for i in range(30):
+            obj.rows.append((i, i / 15.0, 100.0, 300.0, 30.0, 1.0, 0.0, 10.0, 1))
+            obj.vel.append((1.0, 0.0))
+        tr._slots[0] = obj
+        tr._after_step(0, obj, 30, 2.0, 1 / 15.0, np.array([100.0, 300.0]), 30.0, True, True,
+                       np.array([0.0, 1.0, 10.0, vy]), np.array([100.0, 300.0]), 30.0, None,
+                       True)
+        return tr, obj
+
+    tr, obj = run(1.9, 1.8)
+    assert tr._slots[0] is None and tr.finished == [obj] and len(obj.rows) == 16
+    assert [r[0] for r in obj.rows] == list(range(16))
+    for vy, max_dv in ((1.7, 1.8), (1.9, 0.0)):
+        tr, obj = run(vy, max_dv)
+        assert tr._slots[0] is obj and len(obj.rows) == 31
+    assert TrackerOptions().max_dv_mps == 0.0  # off by default
