@@ -345,6 +345,18 @@ def _camera(values: dict[str, float], f: float, like: Camera) -> Camera:
                   image_width=like.image_width, image_height=like.image_height)
 
 
+GTOL = 1e-8  # the orthogonality test of MINPACK's gtol: a stationary point of the squared sum
+
+
+def _stationarity(J: np.ndarray, r: np.ndarray) -> float:
+    """Largest |cosine| between the residual vector and a Jacobian column (0 at a least-squares
+    stationary point, whatever the parameters' scales)."""
+    norms = np.linalg.norm(J, axis=0) * np.linalg.norm(r)
+    with np.errstate(all="ignore"):
+        cos = np.abs(J.T @ r) / np.where(norms > 0, norms, 1.0)
+    return float(np.max(cos)) if np.all(np.isfinite(cos)) else math.inf
+
+
 def _report(best, fit, loss, n) -> CameraFit:
     cost, val, static, args, res, steps = best
     full = eqx.combine(val, static)
@@ -373,6 +385,11 @@ def _report(best, fit, loss, n) -> CameraFit:
     se = {k: float(se_arr[i]) for i, k in enumerate(fit)}
     msg = optx.RESULTS[res]
     success = res == optx.RESULTS.successful
+    if res == optx.RESULTS.nonlinear_max_steps_reached:
+        cos = _stationarity(J, np.asarray(residuals(val, args)))
+        if cos <= GTOL:
+            success, msg = True, (f"stationary at max_steps (largest |cos(J_i, r)| {cos:.1e} <= "
+                                  f"{GTOL:g}); the 1e-10 step test was not met")
     reasons = []
     if not success:
         reasons.append(f"solver: {msg}")

@@ -248,3 +248,27 @@ def test_pets_fit_lands_near_tsai():
     assert r.rms_px < 1.1 * ref
     r0 = fit_pairs(u, v, X, Y, c0, roll=False)  # the paper's camera: measured 3.50 px
     assert r0.rms_px > 1.3 * r.rms_px
+
+
+def test_max_steps_at_a_stationary_point_counts_as_converged():
+    # LM can stop at max_steps with the minimum reached but the 1e-10 step test unmet (seen on an
+    # H100, where float64 sums at the noise floor are not deterministic). The orthogonality test
+    # (largest |cos(J_i, r)| <= GTOL = 1e-8) then reports success: camera 7 of the rng(11)
+    # sequence reaches cos 3e-12 by step 30 (converged fit: 45 steps); after 5 steps it is still
+    # 41 px off and must fail.
+    rng = np.random.default_rng(11)
+    for _ in range(8):
+        cam = random_camera(rng)
+        tr = truth(cam)
+        u, v, x, y, _ = footprints(cam, rng)
+    start = _start(tr, FIT5)
+    full = fit_camera(u, v, x, y, start, fit=FIT5, n_starts=1)
+    cut = fit_camera(u, v, x, y, start, fit=FIT5, n_starts=1, max_steps=30)
+    early = fit_camera(u, v, x, y, start, fit=FIT5, n_starts=1, max_steps=5)
+    assert full.success and full.num_steps > 30
+    assert cut.num_steps == 30 and cut.success and not cut.ill_determined, cut.summary()
+    assert "stationary at max_steps" in cut.result
+    for k in FIT5:  # the cut fit is the converged one, to far below its standard error
+        assert abs(cut.values[k] - full.values[k]) < 1e-4 * full.se[k], k
+    assert early.num_steps == 5 and not early.success and early.ill_determined
+    assert early.rms_px > 10.0
