@@ -17,6 +17,7 @@ import sys
 
 import numpy as np
 
+
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from eval_count import SEED, owner_of_tracks, scene_specs, truth_boxes  # noqa: E402

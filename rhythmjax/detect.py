@@ -276,15 +276,18 @@ def _keep(dets, exclude_boxes, max_objects) -> list[Detection]:
     return out
 
 
+def block_any(mask: np.ndarray, s: int) -> np.ndarray:
+    """(ceil(H/s), ceil(W/s)) uint8: 1 where some pixel of the s x s block is non-zero (the last
+    blocks may be partial). A dilation anchored at the block's corner, read every s pixels:
+    3x cheaper than a block mean by INTER_AREA resizing (bench_pipeline)."""
+    grown = cv2.dilate(mask, np.ones((s, s), np.uint8), anchor=(0, 0))  # max over [x, x + s)
+    return (grown[::s, ::s] > 0).astype(np.uint8)
+
+
 def _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction, max_objects,
                          halo, s) -> list[Detection]:
     H, W = motion.shape
-    Hs, Ws = -(-H // s), -(-W // s)
-    binary = cv2.threshold(motion, 0, 255, cv2.THRESH_BINARY)[1]
-    if (Hs * s, Ws * s) != (H, W):
-        binary = cv2.copyMakeBorder(binary, 0, Hs * s - H, 0, Ws * s - W, cv2.BORDER_CONSTANT, 0)
-    # the block mean of 0/255 is > 0 exactly when some pixel of the block moves
-    small = (cv2.resize(binary, (Ws, Hs), interpolation=cv2.INTER_AREA) > 0).astype(np.uint8)
+    small = block_any(motion, s)
     r = -(-dilate_px // s)
     if r > 0:
         small = cv2.dilate(small, np.ones((2 * r + 1, 2 * r + 1), np.uint8))

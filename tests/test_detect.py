@@ -14,6 +14,7 @@ import pytest
 from rhythmjax.camera import project
 from rhythmjax.detect import (
     Detection,
+    block_any,
     box_overlap,
     detect_in_window,
     find_objects,
@@ -252,3 +253,20 @@ def test_body_parts_apart_are_joined_within_body_px():
     joined = detect_in_window(m, (100, 90), (120, 180), body_px=40, **kw)
     assert joined.box == (58, 40, 33, 90) and joined.v == 129 and joined.u == 58 + 32 / 2
     assert detect_in_window(m, (100, 90), (120, 180), body_px=20, **kw) == alone  # too wide
+
+
+@pytest.mark.parametrize("s", [2, 4, 5, 8])
+def test_block_any_matches_a_numpy_loop(s):
+    """`block_any` against a plain loop over the s x s blocks (partial ones at the right and
+    bottom edges included), on sparse random masks with values 0-2 and sizes not divisible by s;
+    exact."""
+    rng = np.random.default_rng(s)
+    for H, W in ((37, 53), (64, 64), (5, 3)):
+        mask = (rng.random((H, W)) < 0.03).astype(np.uint8) * rng.integers(1, 3, (H, W)).astype(
+            np.uint8)
+        Hs, Ws = -(-H // s), -(-W // s)
+        ref = np.zeros((Hs, Ws), np.uint8)
+        for i in range(Hs):
+            for j in range(Ws):
+                ref[i, j] = mask[i * s:(i + 1) * s, j * s:(j + 1) * s].any()
+        np.testing.assert_array_equal(block_any(mask, s), ref)
