@@ -97,17 +97,26 @@ def _extent(p: np.ndarray, fraction: Number) -> tuple[int, int] | None:
     return int(idx[0]), int(idx[-1])
 
 
+def _project(m: np.ndarray, axis: int) -> np.ndarray:
+    """Sums of `m` over `axis` (0: per column, 1: per row) as integers; OpenCV's reduce for
+    uint8 (exact in int32 below 8e6 rows or columns of 255), NumPy otherwise."""
+    if m.dtype == np.uint8 and m.size:
+        return cv2.reduce(m, axis, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
+    return m.sum(axis=axis, dtype=np.int64)
+
+
 def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: int,
                   halo: int) -> Detection | None:
     """Projections of the motion crop `m` (top-left at (x0, y0) px) sliced into a Detection."""
-    cols = m.sum(axis=0, dtype=np.int64)  # vertical projection: one value per column
+    cols = _project(m, 0)  # vertical projection: one value per column
     ext = _extent(cols, fraction)
     if ext is None:
         return None
     c0, c1 = ext
-    rows = m[:, c0:c1 + 1].sum(axis=1, dtype=np.int64)  # horizontal projection within the extent
+    rows = _project(m[:, c0:c1 + 1], 1)  # horizontal projection within the extent
     r0, r1 = _extent(rows, fraction) or (0, 0)  # never None: the extent holds motion
-    area = int(np.count_nonzero(m[r0:r1 + 1, c0:c1 + 1]))
+    box = m[r0:r1 + 1, c0:c1 + 1]
+    area = cv2.countNonZero(box) if box.dtype == np.uint8 else int(np.count_nonzero(box))
     if area < min_area:
         return None
     width = float(max(c1 - c0 + 1 - 2 * halo, 1))
@@ -300,8 +309,9 @@ def _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction, m
                 return  # block area bounds the motion area
             x0, y0 = x * s, y * s
             x1, y1 = min((x + w) * s, W), min((y + h) * s, H)
-            lab = np.repeat(np.repeat(labels[y:y + h, x:x + w] == k, s, 0), s, 1)
-            crop = np.where(lab[:y1 - y0, :x1 - x0], motion[y0:y1, x0:x1], 0)
+            mine = (labels[y:y + h, x:x + w] == k).astype(np.uint8)  # block -> its s x s pixels
+            lab = cv2.resize(mine, (w * s, h * s), interpolation=cv2.INTER_NEAREST_EXACT)
+            crop = motion[y0:y1, x0:x1] * lab[:y1 - y0, :x1 - x0]
             yield _bottom_point(crop, x0, y0, fraction, min_area, halo)
 
     return _keep(regions(), exclude_boxes, max_objects)
