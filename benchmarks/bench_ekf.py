@@ -9,10 +9,10 @@ Prints a markdown table: track-steps per second (best warm call) with the output
 asked for (filtered means and covariances per step: the ratios use this rate) and with every
 output of `FilterOutput` (predictions, innovations, NIS, log-likelihood, gate flags as well),
 then a second like-for-like pair with the filtered means alone (what classification uses;
-dynamax asked for `filtered_means` only),
-compile time (trace + lower + compile, timed apart), the ratios ours/filterpy and ours/dynamax,
-and achieved GFLOP/s from
-the flop count of one EKF step against the machine's measured float32 matmul rate. filterpy
+dynamax asked for `filtered_means` only), compile time (trace + lower + compile, timed apart),
+the ratios ours/filterpy and ours/dynamax, and achieved GFLOP/s from the flop count of one EKF
+step against the machine's measured float32 matmul rate (on a GPU that column compares with
+the host's CPU, so it means nothing there). filterpy
 is timed on at most 64 tracks (its cost is linear in the number of tracks; the rate is per
 track-step). dynamax is optional: it is skipped with a message when it does not import.
 Timings on a shared machine vary with its load; the load average is printed with them.

@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from rhythmjax.cli_video import SYNTHETIC_CONFIG
+from rhythmjax.cli_video import SYNTHETIC_CONFIG, synthetic_options
 from rhythmjax.evaluate import summarise
 from rhythmjax.params import Config, config_from_dict, config_to_dict
 
@@ -54,8 +54,6 @@ def run_scene(cfg, seed, spec, options=None):
 
     scene = render_scene(seed, spec)
     frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
-    from rhythmjax.cli_video import synthetic_options
-
     tracks, verdicts, _, _ = track_frames(cfg, frames, progress=False,
                                           options=options or synthetic_options())
     return score(tracks, verdicts, scene.truth), tracks, verdicts, scene
