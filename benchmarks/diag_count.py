@@ -1,7 +1,9 @@
 """Per-walker diagnostics of the walker count on the synthetic scenes of `eval_count.py`.
 
-For every true walker: its visible frames, the ground range it walks, and the tracks that own it
-(`eval_count.owner_of_tracks`: IoU >= 0.3 in most of the track's frames) with their verdicts and
+For every true walker: its visible frames, the ground range it walks, the fraction of its frames
+in which at least half its box's columns are covered by no other object's box (`free`: where a
+blob detector can see it apart), and the tracks that own it (`eval_count.owner_of_tracks`: IoU
+>= 0.3 in most of the track's frames) with their verdicts, their first and last frames, and
 whether `count.COUNT_RULE` counts them; then the counted tracks owned by no walker (a bicycle,
 two walkers merged, nothing). The count error of a scene is (walkers with k counted tracks:
 k - 1 each) - (walkers with none) + (counted tracks owned by no walker).
@@ -23,6 +25,25 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from eval_count import SEED, owner_of_tracks, scene_specs, truth_boxes  # noqa: E402
 
 
+def free_fraction(truth, t: int, min_free: float = 0.5) -> float:
+    """Fraction of walker t's truth frames in which at least `min_free` of its box's columns
+    are covered by no other object's box (a blob detector can see it apart there)."""
+    fr, ids = truth["frame"], truth["id"]
+    x0, x1 = truth["bb_left"], truth["bb_left"] + truth["bb_width"]
+    k = np.flatnonzero(ids == t)
+    n = 0
+    for r in k:
+        o = np.flatnonzero((fr == fr[r]) & (ids != t))
+        cols = np.arange(int(x0[r]), int(np.ceil(x1[r])))
+        if not cols.size:
+            continue
+        hid = np.zeros(cols.size, bool)
+        for q in o:
+            hid |= (cols >= x0[q]) & (cols < x1[q])
+        n += (1 - hid.mean()) >= min_free
+    return n / max(1, k.size)
+
+
 def diagnose(scene, res, off: int = -1) -> dict:
     truth, kinds = truth_boxes(scene)
     own = owner_of_tracks(truth, res.mot, off)
@@ -30,6 +51,8 @@ def diagnose(scene, res, off: int = -1) -> dict:
     info = {int(i): (str(w), bool(c), bool(f), str(r)) for i, w, c, f, r in
             zip(v["track_id"], v["verdict"], v["counted"], v["too_fast"], v["reason"])}
     nfr = np.bincount(res.mot["id"])
+    span = {int(h): (int(res.mot["frame"][res.mot["id"] == h].min()) + off,
+                     int(res.mot["frame"][res.mot["id"] == h].max()) + off) for h in own}
     walkers, extra = [], []
     seen = set(truth["id"].tolist())
     for t, k in kinds.items():
@@ -37,11 +60,12 @@ def diagnose(scene, res, off: int = -1) -> dict:
             continue
         tr = scene.truth[t - 1]
         vis = np.flatnonzero(tr.visible)
-        tracks = [(h, int(nfr[h]), *info[h]) for h, o in own.items() if o == t]
+        tracks = [(h, int(nfr[h]), *info[h], span[h]) for h, o in own.items() if o == t]
         top = truth["bb_top"][truth["id"] == t]
         walkers.append({"id": t, "visible": int(vis.size), "frames": (int(vis[0]), int(vis[-1])),
                         "y_m": (float(np.nanmin(tr.y)), float(np.nanmax(tr.y))),
                         "head_clipped": float(np.mean(top <= 0)),
+                        "free": free_fraction(truth, t),
                         "tracks": tracks, "counted": sum(x[3] for x in tracks)})
     reasons: dict = {}
     for h, o in own.items():
@@ -86,9 +110,11 @@ def main(argv=None) -> int:
         for w in d["walkers"]:
             flag = "MISSED" if w["counted"] == 0 else ("OVER" if w["counted"] > 1 else "")
             print(f"  walker {w['id']}: vis {w['visible']} {w['frames']} y {w['y_m'][0]:.1f}-"
-                  f"{w['y_m'][1]:.1f} m head-clipped {w['head_clipped']:.2f} {flag}")
+                  f"{w['y_m'][1]:.1f} m head-clipped {w['head_clipped']:.2f} "
+                  f"free {w['free']:.2f} {flag}")
             for t in w["tracks"]:
-                print(f"      track {t[0]} frames {t[1]} {t[2]} counted={t[3]} fast={t[4]} {t[5]}")
+                print(f"      track {t[0]} frames {t[1]} {t[6]} {t[2]} counted={t[3]} fast={t[4]} "
+                      f"{t[5]}")
         for e in d["extra"]:
             print(f"  extra counted track {e[0]} frames {e[1]} owner {e[2]} {e[3]} {e[6]}")
     print("tracks by owner:verdict:reason: " + ", ".join(f"{k} {n}" for k, n in

@@ -248,8 +248,8 @@ def _piece(first, last, start, end, size=(20.0, 60.0), ground=None, fps=15.0):
     return Piece(first, last, first / fps, last / fps, fl(start), fl(end), fl(size), fl(ground))
 
 
-# the defaults: 0.9 W across, 0.45 H up/down (growing 50 %/s of gap), 2 W/s velocity, 3 s gap
-STITCH = {"max_gap_s": 3.0, "gate_w": 0.9, "gate_h": 0.45, "gate_per_s": 0.5, "max_dv_w": 2.0}
+# the defaults: 0.9 W across, 0.45 H up/down (growing 50 %/s of gap), 2 W/s velocity, 5 s gap
+STITCH = {"max_gap_s": 5.0, "gate_w": 0.9, "gate_h": 0.45, "gate_per_s": 0.5, "max_dv_w": 2.0}
 
 
 def test_stitch_links_a_track_that_continues_another():
@@ -263,7 +263,7 @@ def test_stitch_links_a_track_that_continues_another():
     far = _piece(46, 80, (130, 210, 30, 0), (200, 210, 30, 0))  # 60 px = 1 H lower
     back = _piece(45, 80, (130, 150, -30, 0), (60, 150, -30, 0))  # walking back
     early = _piece(25, 80, (100, 150, 30, 0), (210, 150, 30, 0))  # overlaps a in time
-    late = _piece(80, 120, (180, 150, 30, 0), (280, 150, 30, 0))  # 3.3 s later
+    late = _piece(111, 150, (265, 150, 30, 0), (340, 150, 30, 0))  # 5.4 s later, on its line
     o = CountOptions()
     assert STITCH == {"max_gap_s": o.stitch_max_gap_s, "gate_w": o.stitch_gate_w,
                       "gate_h": o.stitch_gate_h, "gate_per_s": o.stitch_gate_per_s,
@@ -277,6 +277,13 @@ def test_stitch_links_a_track_that_continues_another():
     # chains: a -> b -> c
     c = _piece(100, 130, (220 + 30 * 10 / 15, 150, 30, 0), (280, 150, 30, 0))
     assert stitch_pieces([a, b, c], **STITCH) == [1, 2, -1]
+    assert stitch_pieces([a, c], **STITCH) == [1, -1]  # c fits a alone, but b comes first
+    # 4 s hidden (behind a group): the gate has grown to 3 x (0.9 W, 0.45 H) = (54, 81) px
+    # at 20 x 60 px; B taken 2 s back and A 2 s on meet 50 px apart across: linked, 60 px: not
+    hid = _piece(90, 130, (100 + 30 * 4 + 50, 150, 30, 0), (400, 150, 30, 0))
+    assert stitch_pieces([a, hid], **STITCH) == [1, -1]
+    hid = _piece(90, 130, (100 + 30 * 4 + 60, 150, 30, 0), (400, 150, 30, 0))
+    assert stitch_pieces([a, hid], **STITCH) == [-1, -1]
     # unknown end state (no ground point): never linked
     nan = _piece(0, 30, (40, 150, 30, 0), (math.nan,) * 4)
     assert stitch_pieces([nan, b], **STITCH) == [-1, -1]
