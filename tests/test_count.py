@@ -274,10 +274,10 @@ def test_stitch_links_a_track_that_continues_another():
     # the best fitting one wins, each piece has one successor and one predecessor
     b2 = _piece(45, 90, (138, 150, 30, 0), (220, 150, 30, 0))  # 8 px off: a worse fit
     assert stitch_pieces([a, b2, b, far], **STITCH) == [2, -1, -1, -1]
-    # chains: a -> b -> c
-    c = _piece(100, 130, (220 + 30 * 10 / 15, 150, 30, 0), (280, 150, 30, 0))
+    # chains: a -> b -> c (c 8.7 s after a: beyond the 5 s gap, 4.7 s after b, on b's line)
+    c = _piece(160, 190, (220 + 30 * 70 / 15, 150, 30, 0), (420, 150, 30, 0))
     assert stitch_pieces([a, b, c], **STITCH) == [1, 2, -1]
-    assert stitch_pieces([a, c], **STITCH) == [1, -1]  # c fits a alone, but b comes first
+    assert stitch_pieces([a, c], **STITCH) == [-1, -1]
     # 4 s hidden (behind a group): the gate has grown to 3 x (0.9 W, 0.45 H) = (54, 81) px
     # at 20 x 60 px; B taken 2 s back and A 2 s on meet 50 px apart across: linked, 60 px: not
     hid = _piece(90, 130, (100 + 30 * 4 + 50, 150, 30, 0), (400, 150, 30, 0))
