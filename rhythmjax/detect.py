@@ -70,6 +70,11 @@ def motion_from_diff(absdiff: np.ndarray, *, diff_threshold: Number,
     image D (borders reflected without repeating the edge pixel, OpenCV's BORDER_REFLECT_101).
     `edge_threshold` (grey levels of the Sobel response) defaults to 4 * diff_threshold, the
     response to a step of height diff_threshold; it must be below 255."""
+    return _motion(absdiff, diff_threshold, edge_threshold)[0]
+
+
+def _motion(absdiff, diff_threshold, edge_threshold):
+    """(M, [D > diff_threshold]) of `motion_from_diff`."""
     te = 4.0 * diff_threshold if edge_threshold is None else float(edge_threshold)
     if not 0 <= te < 255 or not 0 <= diff_threshold < 255:
         raise ValueError(f"thresholds must lie in [0, 255): diff {diff_threshold}, edge {te}")
@@ -77,7 +82,7 @@ def motion_from_diff(absdiff: np.ndarray, *, diff_threshold: Number,
     _, thr = cv2.threshold(absdiff, float(diff_threshold), 1, cv2.THRESH_BINARY)
     sobel = cv2.convertScaleAbs(cv2.Sobel(absdiff, cv2.CV_16S, 1, 0, ksize=3))  # |d/dx D|, sat. 255
     _, edges = cv2.threshold(sobel, te, 1, cv2.THRESH_BINARY)  # vertical edges of the difference
-    return cv2.add(thr, edges)  # the two maps added (Sec. 2: "in parallel", then added)
+    return cv2.add(thr, edges), thr  # the two maps added (Sec. 2: "in parallel", then added)
 
 
 def motion_image(prev: np.ndarray, cur: np.ndarray, *, diff_threshold: Number,
@@ -86,6 +91,16 @@ def motion_image(prev: np.ndarray, cur: np.ndarray, *, diff_threshold: Number,
     two successive (H, W) uint8 grey frames. D is what `window_b_intensity` sums."""
     d = frame_difference(prev, cur)
     return motion_from_diff(d, diff_threshold=diff_threshold, edge_threshold=edge_threshold), d
+
+
+def motion_image_changed(prev: np.ndarray, cur: np.ndarray, *, diff_threshold: Number
+                         ) -> tuple[np.ndarray, np.ndarray, int]:
+    """(M, D, n): `motion_image` and the number n of pixels with D > diff_threshold, counted
+    on the thresholded map M is built from (what `is_global_change` counts, without a second
+    threshold pass)."""
+    d = frame_difference(prev, cur)
+    m, thr = _motion(d, diff_threshold, None)
+    return m, d, cv2.countNonZero(thr)
 
 
 def _extent(p: np.ndarray, fraction: Number) -> tuple[int, int] | None:
@@ -315,6 +330,17 @@ def _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction, m
             yield _bottom_point(crop, x0, y0, fraction, min_area, halo)
 
     return _keep(regions(), exclude_boxes, max_objects)
+
+
+def motion_outside(motion: np.ndarray, boxes: Sequence[Box]) -> int:
+    """Number of motion pixels (M > 0) outside every box (x0, y0, w, h) px, boxes clipped to
+    the frame. A new object needs `min_area` of them (the tracker skips `find_objects` below)."""
+    rest = motion.copy()
+    H, W = motion.shape
+    for x, y, w, h in boxes:
+        x0, y0 = min(max(x, 0), W), min(max(y, 0), H)
+        rest[y0:min(max(y + h, y0), H), x0:min(max(x + w, x0), W)] = 0
+    return cv2.countNonZero(rest)
 
 
 def shared_detections(dets: dict[int, Detection], overlap: Number = 0.5) -> set[int]:

@@ -19,7 +19,7 @@ Dynamics, equation (1) with zero-mean Gaussian acceleration noise, one of three 
         core's EKF (`ekf.step`, measurement (3)) with `ekf.FromAnnotations` validity: the
         pedestrians level does its own association, so every measurement it gives is used.
 All slots advance in ONE jitted, vmapped call per frame (`SlotFilter`), compiled once per
-(variant, slot count), as `tracker._advance_flat` does.
+(variant, slot count), as `tracker._advance_flat` does (`flat_tree`).
 
 Placement ("Calculating pedestrian positions"): `place_patch` moves the patch horizontally around
 its predicted foot point to cover as many pixels of its related blobs as it can (an integral
@@ -41,8 +41,8 @@ import numpy as np
 from .camera import measure
 from .camera_np import camera_tuple
 from .ekf import Carry, FromAnnotations, Gaussian, empty_carry, inverse_2x2, predict, select, step
+from .flat_tree import join as _join, split as _split
 from .params import Camera, Config, Noise
-from .tracker import _join, _split
 
 
 DYNAMICS = ("2d", "3d-shape", "3d")

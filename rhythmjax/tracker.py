@@ -27,6 +27,7 @@ import numpy as np
 from . import detect
 from .camera import image_width, measure
 from .ekf import Carry, empty_carry, predict, step
+from .flat_tree import join as _join, split as _split
 from .gates import PaperGates
 from .params import Config
 from .rhythm import MAX_MISSING_FRACTION, classify_window
@@ -39,7 +40,8 @@ class TrackerOptions:
     """Detection settings (px, grey levels) and capacity."""
 
     diff_threshold: float = 15.0  # |frame difference| threshold, grey levels
-    min_area: int = 40  # motion pixels for a new object
+    min_area: int = 40  # motion pixels for a new object; with fewer outside every tracked
+    # object's boxes the frame is not searched at all (detect.motion_outside)
     max_objects: int = 8  # object slots advanced together in one jitted call
     window_widths: float = 2.5  # detection window width, in walker widths W
     window_heights: float = 1.45  # detection window height, in walker heights (1.7 m)
@@ -118,46 +120,16 @@ def _advance(cfg: Config, carry: Carry, reset, z, width, dt, present):
     return carry, host  # one (S, 13) array: one device-to-host transfer per frame
 
 
-class _Structure:
-    """The hashable rest of a pytree, its hash computed once: jit hashes static arguments on
-    every call, and hashing an equinox Module walks its fields in Python."""
-
-    __slots__ = ("value", "_hash")
-
-    def __init__(self, value):
-        self.value, self._hash = value, hash(value)
-
-    def __hash__(self):
-        return self._hash
-
-    def __eq__(self, other):
-        return isinstance(other, _Structure) and (self.value is other.value
-                                                  or self.value == other.value)
-
-
-_INTERNED: dict[_Structure, _Structure] = {}
-
-
-def _split(tree):
-    """Array leaves (a flat tuple) and the hashable rest, so jax's C++ dispatch skips the Python
-    flattening of Config and Carry pytrees that dominates a per-frame call (~3 ms to ~0.1 ms).
-    The rest is interned: a later tracker with an equal config gets the very object jit cached,
-    so the cache lookup is an identity test, not an equinox tree comparison (~0.6 ms a frame)."""
-    dyn, static = eqx.partition(tree, eqx.is_array)
-    leaves, treedef = jax.tree.flatten(dyn)
-    structure = _Structure((treedef, static))
-    return tuple(leaves), _INTERNED.setdefault(structure, structure)
-
-
-def _join(leaves, structure):
-    treedef, static = structure.value
-    return eqx.combine(jax.tree.unflatten(treedef, leaves), static)
-
-
 @functools.partial(jax.jit, static_argnums=(0, 1))
-def _advance_flat(cfg_structure, carry_structure, cfg_leaves, carry_leaves, *args):
+def _advance_flat(cfg_structure, carry_structure, cfg_leaves, carry_leaves, frame_in):
+    """`_advance` on flat leaves; the frame's inputs come packed in one (S, 6) float32 array
+    (reset, u, v, width, present, dt): one host-to-device transfer instead of five halves the
+    call's cost (~110 to ~50 us a frame)."""
+    reset, z, width = frame_in[:, 0] > 0.5, frame_in[:, 1:3], frame_in[:, 3]
+    present, dt = frame_in[:, 4] > 0.5, frame_in[0, 5]
     carry, host = _advance(_join(cfg_leaves, cfg_structure), _join(carry_leaves,
-                                                                   carry_structure), *args)
+                                                                   carry_structure),
+                           reset, z, width, dt, present)
     return _split(carry)[0], host
 
 
@@ -184,7 +156,8 @@ class OnlineTracker:
         self._range = (float(thr.range_min), float(thr.range_max))
         self._timeout = float(thr.predict_timeout)
         self._height_per_W = 1.7 / float(cfg.width.mean)
-        self.finished: list[_Object] = []
+        self._finished: list[_Object] = []
+        self._pending: tuple | None = None  # the last frame's step, its results not yet read
         self.glitch_frames: list[int] = []
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
@@ -201,19 +174,22 @@ class OnlineTracker:
         dt = t - self._last_t
         self._last_t = t
         S, opt = self.opt.max_objects, self.opt
-        z, width = np.full((S, 2), np.nan, np.float32), np.full(S, np.nan, np.float32)
+        frame_in = np.full((S, 6), np.nan, np.float32)  # see _advance_flat
+        z, width = frame_in[:, 1:3], frame_in[:, 3]
         present, reset = np.zeros(S, bool), np.zeros(S, bool)
         D = M = None
         glitch = frame is None
         if frame is not None:
-            M, D = detect.motion_image(self._prev, frame, diff_threshold=opt.diff_threshold)
+            M, D, changed = detect.motion_image_changed(self._prev, frame,
+                                                        diff_threshold=opt.diff_threshold)
             self._prev = frame
-            if detect.is_duplicate(D):
+            if changed == 0 and detect.is_duplicate(D):
                 self.duplicate_frames.append(index)
                 glitch = True
-            elif detect.is_global_change(D, opt.diff_threshold, opt.global_change_fraction):
+            elif changed > opt.global_change_fraction * D.size:  # detect.is_global_change
                 self.glitch_frames.append(index)
                 glitch = True
+        self._flush()  # the previous frame's step ran meanwhile (XLA dispatch is asynchronous)
         boxes, near, cores, dets = [], [], {}, {}
         for s, obj in enumerate(self._slots):
             if obj is None:
@@ -245,7 +221,7 @@ class OnlineTracker:
             elif s not in shared:
                 z[s], width[s] = (det.u, det.v), det.width
             boxes.append(det.box)
-        if not glitch:
+        if not glitch and detect.motion_outside(M, boxes) >= opt.min_area:
             free = [s for s, o in enumerate(self._slots) if o is None]
             found = detect.find_objects(M, min_area=opt.min_area, exclude_boxes=boxes,
                                         max_objects=len(free) + len(near),
@@ -257,9 +233,19 @@ class OnlineTracker:
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT)
                 present[s], reset[s] = True, True
                 z[s], width[s] = (det.u, det.v), det.width
+        frame_in[:, 0], frame_in[:, 4], frame_in[:, 5] = reset, present, dt
         self._carry, host = _advance_flat(self._cfg_structure, self._carry_structure,
-                                          self._cfg_leaves, self._carry, reset, z, width,
-                                          np.float32(dt), present)
+                                          self._cfg_leaves, self._carry, frame_in)
+        self._pending = (host, index, t, dt, z, width, D, glitch, shared, held)
+
+    def _flush(self) -> None:
+        """Read the last step's results and advance every object's state machine with them.
+        `update` calls it once the next frame's motion image is computed, so the step's
+        arithmetic overlaps it; `finished`, `snapshot` and `finish` call it first."""
+        if self._pending is None:
+            return
+        host, index, t, dt, z, width, D, glitch, shared, held = self._pending
+        self._pending = None
         host = np.asarray(host)
         valid, started, mean = host[:, 0] > 0.5, host[:, 1] > 0.5, host[:, 2:6]
         next_uv, est_uv, W = host[:, 6:8], host[:, 8:10], host[:, 10]
@@ -408,8 +394,15 @@ class OnlineTracker:
             obj.result["window"] = (k, k + n)
         obj.decided = pedestrian
 
+    @property
+    def finished(self) -> list[_Object]:
+        """The objects whose tracks have ended, in the order they ended."""
+        self._flush()
+        return self._finished
+
     def snapshot(self) -> list[dict]:
         """The objects being tracked now, for drawing: id, foot point, W, state, verdict."""
+        self._flush()
         out = []
         for o in self._slots:
             if o is None or o.state == TrackState.DETECT:
@@ -421,16 +414,17 @@ class OnlineTracker:
 
     def _end(self, s: int) -> None:
         self._match(self._slots[s], final=True)
-        self.finished.append(self._slots[s])
+        self._finished.append(self._slots[s])
         self._slots[s] = None
 
     # ------------------------------------------------------------------------------------------
     def finish(self) -> tuple[dict, dict, list[_Object]]:
         """End every track; return (tracks columns, verdict columns, the objects)."""
+        self._flush()
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._end(s)
-        objs = sorted(self.finished, key=lambda o: o.track_id)
+        objs = sorted(self._finished, key=lambda o: o.track_id)
         return tracks_columns(objs), verdict_columns(objs, self.cfg.thresholds.n), objs
 
 

@@ -270,3 +270,36 @@ def test_block_any_matches_a_numpy_loop(s):
             for j in range(Ws):
                 ref[i, j] = mask[i * s:(i + 1) * s, j * s:(j + 1) * s].any()
         np.testing.assert_array_equal(block_any(mask, s), ref)
+
+
+def test_motion_image_changed_counts_the_thresholded_difference():
+    """M and D equal `motion_image`'s and n equals a NumPy count of D > threshold, exactly, on
+    random frames (including thresholds at the grey levels present)."""
+    from rhythmjax.detect import motion_image_changed
+
+    rng = np.random.default_rng(5)
+    for thr in (0, 7, 15, 60):
+        a, b = (rng.integers(0, 256, (37, 53), dtype=np.uint8) for _ in range(2))
+        m, d, n = motion_image_changed(a, b, diff_threshold=thr)
+        m0, d0 = motion_image(a, b, diff_threshold=thr)
+        np.testing.assert_array_equal(m, m0)
+        np.testing.assert_array_equal(d, d0)
+        assert n == int(np.sum(np.abs(a.astype(int) - b.astype(int)) > thr))
+
+
+def test_motion_outside_counts_motion_pixels_outside_the_boxes():
+    """Against a NumPy mask loop: boxes overlapping each other, the border and the frame's
+    outside (negative corners, past the edge), and none."""
+    from rhythmjax.detect import motion_outside
+
+    rng = np.random.default_rng(6)
+    m = (rng.random((40, 60)) < 0.3).astype(np.uint8) * rng.integers(1, 3, (40, 60)).astype(
+        np.uint8)
+    boxes = [(-5, -3, 12, 10), (8, 4, 20, 15), (20, 10, 10, 40), (55, 35, 30, 30), (0, 0, 0, 5)]
+    for k in range(len(boxes) + 1):
+        keep = np.ones(m.shape, bool)
+        for x, y, w, h in boxes[:k]:
+            for yy in range(max(y, 0), min(y + h, 40)):
+                for xx in range(max(x, 0), min(x + w, 60)):
+                    keep[yy, xx] = False
+        assert motion_outside(m, boxes[:k]) == int(np.sum((m > 0) & keep))
