@@ -407,11 +407,14 @@ def walker_width_px(camera: Camera, width_model: WidthModel, u: Number | np.ndar
     return float(out) if out.ndim == 0 else out
 
 
-def is_global_change(absdiff: np.ndarray, threshold: Number, fraction: Number = 0.5) -> bool:
+def is_global_change(absdiff: np.ndarray, threshold: Number, fraction: Number = 0.5, *,
+                     changed: int | None = None) -> bool:
     """True if more than `fraction` of the pixels have D > threshold: a corrupt frame, camera jitter
     or a sudden illumination change (RELIABILITY item 7-8). Such a frame is no measurement for
-    every object (each track predicts), and must yield no detection."""
-    n = cv2.countNonZero(cv2.threshold(absdiff, float(threshold), 1, cv2.THRESH_BINARY)[1])
+    every object (each track predicts), and must yield no detection. `changed`: that count if
+    already known (`motion_image_changed`)."""
+    n = changed if changed is not None else cv2.countNonZero(
+        cv2.threshold(absdiff, float(threshold), 1, cv2.THRESH_BINARY)[1])
     return n > fraction * absdiff.size
 
 

@@ -186,7 +186,8 @@ class OnlineTracker:
             if changed == 0 and detect.is_duplicate(D):
                 self.duplicate_frames.append(index)
                 glitch = True
-            elif changed > opt.global_change_fraction * D.size:  # detect.is_global_change
+            elif detect.is_global_change(D, opt.diff_threshold, opt.global_change_fraction,
+                                         changed=changed):
                 self.glitch_frames.append(index)
                 glitch = True
         self._flush()  # the previous frame's step ran meanwhile (XLA dispatch is asynchronous)

@@ -285,6 +285,8 @@ def test_motion_image_changed_counts_the_thresholded_difference():
         np.testing.assert_array_equal(m, m0)
         np.testing.assert_array_equal(d, d0)
         assert n == int(np.sum(np.abs(a.astype(int) - b.astype(int)) > thr))
+        for f in (0.3, 0.5, 0.9):
+            assert is_global_change(d, thr, f, changed=n) == is_global_change(d, thr, f)
 
 
 def test_motion_outside_counts_motion_pixels_outside_the_boxes():
