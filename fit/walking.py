@@ -39,7 +39,7 @@ from rhythmjax.camera import ground_width
 from rhythmjax.ekf import filter_track
 from rhythmjax.gates import PaperGates
 from rhythmjax.params import Config, Thresholds, WalkingModel, WidthModel
-from rhythmjax.rhythm import RhythmResult, classify_window, match
+from rhythmjax.rhythm import RhythmResult, classify_window, match, window_grid
 from rhythmjax.status import Reason, Verdict
 
 
@@ -74,14 +74,14 @@ def _windows(cfg: Config, z, width, intensity, dt, present) -> tuple[RhythmResul
     n_tracked = jnp.sum(present & out.started)
     t = jnp.cumsum(jnp.where(idx == 0, 0.0, dt))
     xy = out.mean[:, jnp.array([0, 2])]
-    j = jnp.arange(T // n)
-    complete = out.started[k0] & (n_tracked >= n * (j + 1))
+    j, complete = window_grid(T, n, cfg.thresholds.hop_samples, n_tracked)
+    complete = out.started[k0] & complete
 
     def one(start, usable):
         window = lambda a: jax.lax.dynamic_slice_in_dim(a, jnp.clip(start, 0, T - n), n)
         return classify_window(cfg, window(intensity), window(t), window(xy), usable)
 
-    every = jax.vmap(one)(k0 + n * j, complete)
+    every = jax.vmap(one)(k0 + cfg.thresholds.hop_samples * j, complete)
     short = jnp.where(jnp.any(out.available), Reason.TOO_SHORT, Reason.NO_MEASUREMENTS)
     return every, jnp.where(complete[0], every.reason[0], short).astype(jnp.int32)
 

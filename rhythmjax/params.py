@@ -153,7 +153,12 @@ class Thresholds(eqx.Module):
     p_thr: peak power threshold of (13), in the units of the normalised rhythm signal (see
     `rhythm.normalise_intensity`); r_thr: evaluation threshold after (15); k_sigma1..3: approval
     thresholds of (10), (11), (14); n: samples in the rhythm window; m: AR order; range_min/max:
-    detection range (m); predict_timeout: seconds in PREDICT before a track is dropped.
+    detection range (m); predict_timeout: seconds in PREDICT before a track is dropped;
+    hop: samples between the starts of successive rhythm windows (N: the paper's back-to-back
+    windows; 0, the default: N/2, each sample in two windows); harmonic_ratio: a peak that
+    passes (14) is refused when a peak within 10 % of twice its frequency holds at least this
+    fraction of its power (a trotting dog's half-pace component; 0: off, the paper's (13)-(15)
+    exactly); see `rhythm.half_pace`.
     """
 
     p_thr: Float[Array, ""] = eqx.field(converter=_f32, default=10.0)
@@ -164,8 +169,15 @@ class Thresholds(eqx.Module):
     range_min: Float[Array, ""] = eqx.field(converter=_f32, default=3.0)
     range_max: Float[Array, ""] = eqx.field(converter=_f32, default=20.0)
     predict_timeout: Float[Array, ""] = eqx.field(converter=_f32, default=1.0)
+    harmonic_ratio: Float[Array, ""] = eqx.field(converter=_f32, default=0.25)
     n: int = eqx.field(static=True, default=64)
     m: int = eqx.field(static=True, default=15)
+    hop: int = eqx.field(static=True, default=0)
+
+    @property
+    def hop_samples(self) -> int:
+        """Samples between rhythm-window starts: `hop`, or N // 2 when `hop` is 0."""
+        return self.hop or max(1, self.n // 2)
 
 
 @final
@@ -192,7 +204,8 @@ _NOISE_KEYS = ("q_std_mps_per_sqrt_s", "r_std_px", "r_corr", "init_speed_std_mps
 _WIDTH_KEYS = ("mean_m", "std_m")
 _WALKING_KEYS = ("pace_mean_hz", "pace_std_hz", "stride_mean_m", "stride_std_m")
 _THRESHOLD_KEYS = ("p_thr", "r_thr", "k_sigma1", "k_sigma2", "k_sigma3", "n_samples", "ar_order",
-                   "range_min_m", "range_max_m", "predict_timeout_s")
+                   "range_min_m", "range_max_m", "predict_timeout_s", "window_hop_samples",
+                   "harmonic_max_ratio")
 SECTIONS = {"camera": _CAMERA_KEYS, "noise": _NOISE_KEYS, "width": _WIDTH_KEYS,
             "walking": _WALKING_KEYS, "thresholds": _THRESHOLD_KEYS}
 
@@ -221,7 +234,8 @@ def config_to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
             "p_thr": _s(t.p_thr), "r_thr": _s(t.r_thr), "k_sigma1": _s(t.k_sigma1),
             "k_sigma2": _s(t.k_sigma2), "k_sigma3": _s(t.k_sigma3), "n_samples": int(t.n),
             "ar_order": int(t.m), "range_min_m": _s(t.range_min), "range_max_m": _s(t.range_max),
-            "predict_timeout_s": _s(t.predict_timeout),
+            "predict_timeout_s": _s(t.predict_timeout), "window_hop_samples": int(t.hop),
+            "harmonic_max_ratio": _s(t.harmonic_ratio),
         },
     }
 
@@ -311,7 +325,11 @@ def config_from_dict(d: Any) -> Config:
         k_sigma3=_num("thresholds", "k_sigma3", t["k_sigma3"], lo=0.0),
         range_min=rmin, range_max=rmax,
         predict_timeout=_num("thresholds", "predict_timeout_s", t["predict_timeout_s"], lo=0.0),
+        harmonic_ratio=_num("thresholds", "harmonic_max_ratio", t["harmonic_max_ratio"], lo=0.0,
+                            lo_open=False),
         n=n_samples, m=ar_order,
+        hop=_num("thresholds", "window_hop_samples", t["window_hop_samples"], lo=0, lo_open=False,
+                 integer=True),
     )
     return Config(camera, noise, width, walking, thresholds)
 

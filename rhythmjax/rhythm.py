@@ -97,6 +97,18 @@ def ground_speed(t: Float[Array, " n"], xy: Float[Array, "n 2"]) -> Float[Array,
     return jnp.sqrt(jnp.sum(vel**2))
 
 
+def half_pace(peaks: mem.Peaks, ratio: Float[Array, ""]) -> Bool[Array, " k"]:
+    """Per peak: a peak within 10 % of twice its frequency holds at least `ratio` of its power
+    (so it is a half-pace component of a faster gait, such as a trotting dog's at 3-5 Hz);
+    all False when `ratio` is 0. Measured on the rhythm windows of the synthetic scenes
+    (seeds 5555 and 6666, which chose the default): walkers' matched peaks 0.00-0.12, the dog
+    judged Pedestrian 0.42."""
+    f, p, ok = peaks.freq, peaks.power, peaks.mask
+    near = ok[None, :] & (jnp.abs(f[None, :] - 2 * f[:, None]) <= 0.2 * f[:, None])
+    p2 = jnp.max(jnp.where(near, p[None, :], 0.0), axis=1)
+    return ok & (ratio > 0) & (p2 >= ratio * p)
+
+
 def match(
     peaks: mem.Peaks, speed: Float[Array, ""], walking: WalkingModel, thr: Thresholds
 ) -> tuple[Int[Array, ""], Int[Array, ""], Float[Array, ""], Float[Array, ""], Float[Array, ""]]:
@@ -107,6 +119,7 @@ def match(
     S = jnp.sum(jnp.where(strong, peaks.power, 0.0))
     stride = speed / jnp.where(peaks.mask, peaks.freq, 1.0)  # (12) with D = speed * N dt
     passes = strong & walking_ok(walking, thr.k_sigma3, peaks.freq, stride)  # (14)
+    passes = passes & ~half_pace(peaks, thr.harmonic_ratio)
     ratio = peaks.power / jnp.where(S > 0, S, 1.0)  # (15)
     best = jnp.argmax(jnp.where(passes, ratio, -1.0))
     any_peak, any_pass = jnp.any(strong), jnp.any(passes)
@@ -166,6 +179,14 @@ def classify_window(
     )
 
 
+def window_grid(T: int, n: int, hop: int, n_tracked) -> tuple[Array, Bool[Array, " J"]]:
+    """Rhythm windows of a padded track of T frames: the window indices j (window j starts
+    j * hop frames after the track's first, N long; as many as fit in T) and which of them lie
+    within the `n_tracked` frames tracked."""
+    j = jnp.arange(max(0, (T - n) // hop + 1))
+    return j, n_tracked >= n + hop * j
+
+
 def classify_track(
     cfg: Config,
     z: Float[Array, "T 2"],
@@ -176,12 +197,14 @@ def classify_track(
 ) -> RhythmResult:
     """Track one padded track with the paper's gates, then match its rhythm windows.
 
-    The windows are successive runs of N frames from the frame the track started; as in the
-    paper, matching goes on window after window until one says Pedestrian, and then stops. The
+    The windows are N frames long and start every `thresholds.hop_samples` frames from the frame the
+    track started (`window_grid`); as in the paper, matching goes on window after window until
+    one says Pedestrian, and then stops. The
     result is that window's, or the first window's when none matched. T must be >= N (pad with
     present=False). Reasons: `no-measurements` when no measurement is finite; `too-short` when
     fewer than N frames follow the start (Sec. 5: never guess)."""
-    n = cfg.thresholds.n
+    thr = cfg.thresholds
+    n = thr.n
     T = z.shape[0]
     if T < n:
         raise ValueError(f"tracks must be padded to at least N = {n} frames, got {T}")
@@ -193,14 +216,14 @@ def classify_track(
     n_tracked = jnp.sum(present & out.started)
     t = jnp.cumsum(jnp.where(idx == 0, 0.0, dt))
     xy = out.mean[:, jnp.array([0, 2])]
-    j = jnp.arange(T // n)
-    complete = started & (n_tracked >= n * (j + 1))
+    j, complete = window_grid(T, n, thr.hop_samples, n_tracked)
+    complete = started & complete
 
     def one_window(start, usable):
         window = lambda a: jax.lax.dynamic_slice_in_dim(a, jnp.clip(start, 0, T - n), n)
         return classify_window(cfg, window(intensity), window(t), window(xy), usable)
 
-    every = jax.vmap(one_window)(k0 + n * j, complete)
+    every = jax.vmap(one_window)(k0 + thr.hop_samples * j, complete)
     matched = complete & (every.verdict == Verdict.PEDESTRIAN)
     pick = jnp.where(jnp.any(matched), jnp.argmax(matched), 0)
     res = jax.tree.map(lambda a: a[pick], every)

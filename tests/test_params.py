@@ -74,6 +74,9 @@ def test_params_are_pytrees_with_array_leaves():
         ({"noise": {"r_corr": 1.0}}, r"noise\.r_corr"),
         ({"thresholds": {"ar_order": 70}}, r"AR order 70 must be < n_samples - 1"),
         ({"thresholds": {"n_samples": 3.5}}, r"expected an integer"),
+        ({"thresholds": {"window_hop_samples": -1}}, r"window_hop_samples: must be >= 0"),
+        ({"thresholds": {"window_hop_samples": 16.5}}, r"window_hop_samples: expected an integer"),
+        ({"thresholds": {"harmonic_max_ratio": -0.1}}, r"harmonic_max_ratio: must be >= 0"),
         ({"walking": {"pace_mean_hz": "2"}}, r"expected a number"),
         ({"walking": {"pace_std_hz": math.inf}}, r"must be finite"),
         ([1, 2], r"top level"),
@@ -82,6 +85,18 @@ def test_params_are_pytrees_with_array_leaves():
 def test_bad_config_values_name_the_key(d, match):
     with pytest.raises(ConfigError, match=match):
         config_from_dict(d)
+
+
+def test_window_hop_and_harmonic_ratio_round_trip():
+    """0 (the default) means N/2; the paper's back-to-back windows are hop = N; the half-pace
+    rule's default 0.25 and 0 (off, the paper's (13)-(15))."""
+    t = config_to_dict(Config())["thresholds"]
+    assert (t["window_hop_samples"], t["harmonic_max_ratio"]) == (0, 0.25)
+    assert Config().thresholds.hop_samples == 32
+    cfg = config_from_dict({"thresholds": {"window_hop_samples": 64, "harmonic_max_ratio": 0}})
+    assert (cfg.thresholds.hop_samples, float(cfg.thresholds.harmonic_ratio)) == (64, 0.0)
+    d = config_to_dict(cfg)["thresholds"]
+    assert (d["window_hop_samples"], d["harmonic_max_ratio"]) == (64, 0.0)
 
 
 def test_roll_key_round_trips_and_defaults_to_the_paper():

@@ -2,21 +2,30 @@
 
 import math
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from rhythmjax import mem
 from rhythmjax.params import Config, Thresholds, WalkingModel
-from rhythmjax.rhythm import classify_batch, classify_track, fill_gaps, ground_speed, match
+from rhythmjax.rhythm import (
+    classify_batch,
+    classify_track,
+    fill_gaps,
+    ground_speed,
+    match,
+    window_grid,
+)
 from rhythmjax.status import Reason, Verdict
 
 
-WALK, THR = WalkingModel(), Thresholds()
+WALK, THR = WalkingModel(), Thresholds(harmonic_ratio=0.0)  # the paper's (13)-(15) exactly
 
 
-def match_reference(freqs, powers, speed, p_thr=10.0, r_thr=0.1, k=3.0):
-    """Sec. 4.2 step by step, in plain Python floats."""
+def match_reference(freqs, powers, speed, p_thr=10.0, r_thr=0.1, k=3.0, harmonic=0.0):
+    """Sec. 4.2 step by step, in plain Python floats; `harmonic` > 0: a matching peak is
+    dropped when any peak within 10 % of twice its frequency has >= harmonic x its power."""
     peaks = [(f, p) for f, p in zip(freqs, powers) if p > p_thr]  # (13)
     if not peaks:
         return "non-pedestrian", "no-peak", None
@@ -24,6 +33,10 @@ def match_reference(freqs, powers, speed, p_thr=10.0, r_thr=0.1, k=3.0):
     sets = [(f, p, speed / f) for f, p in peaks]  # (12) with D = speed * N * dt
     ok = [(f, p, T) for f, p, T in sets
           if (f - 2.05) ** 2 / 0.183**2 <= k**2 and (T - 0.72) ** 2 / 0.09**2 <= k**2]  # (14)
+    if harmonic > 0:
+        ok = [(f, p, T) for f, p, T in ok
+              if not any(abs(f2 - 2 * f) <= 0.1 * 2 * f and p2 >= harmonic * p
+                         for f2, p2 in zip(freqs, powers))]
     if not ok:
         return "non-pedestrian", "no-model-match", None
     f, p, T = max(ok, key=lambda s: s[1] / S)  # (15): greatest R_m
@@ -72,17 +85,47 @@ def test_match_branches_agree_with_reference(name):
         assert ratio == pytest.approx(ref_vals[2], rel=1e-5)
 
 
-def test_match_random_peak_sets_agree_with_reference():
+@pytest.mark.parametrize("harmonic", [0.0, 0.25])
+def test_match_random_peak_sets_agree_with_reference(harmonic):
+    """Random peak sets; with harmonic = 0.25 about a third of them hold a peak near twice a
+    matching one (drawn so), so the half-pace rule decides some of the cases."""
     rng = np.random.default_rng(0)
-    for _ in range(300):
-        k = int(rng.integers(0, 9))
+    thr = Thresholds(harmonic_ratio=harmonic)
+    decided = 0
+    for _ in range(400):
+        k = int(rng.integers(0, 8))
         freqs = list(rng.uniform(0.3, 7.0, k))
+        if rng.random() < 0.35:  # a walker-like peak and one near its double
+            f0 = float(rng.uniform(1.6, 2.5))
+            freqs += [f0, 2 * f0 * float(rng.uniform(0.85, 1.15))]
         powers = [float(rng.uniform(0, 10) if rng.random() < 0.4 else rng.uniform(10, 300))
-                  for _ in range(k)]
-        speed = float(rng.uniform(0.2, 3.0))
-        v, r, *_ = match(_peaks(freqs, powers), jnp.float32(speed), WALK, THR)
-        ref_v, ref_r, _ = match_reference(freqs, powers, speed)
+                  for _ in freqs]
+        freqs, powers = freqs[:8], powers[:8]
+        speed = float(rng.uniform(0.2, 3.0)) if rng.random() < 0.5 else 0.72 * freqs[-1] \
+            if freqs else 1.0
+        v, r, *_ = match(_peaks(freqs, powers), jnp.float32(speed), WALK, thr)
+        ref_v, ref_r, _ = match_reference(freqs, powers, speed, harmonic=harmonic)
         assert (Verdict(int(v)).label, Reason(int(r)).label) == (ref_v, ref_r)
+        decided += ref_r != match_reference(freqs, powers, speed)[1]
+    assert (decided > 10) == (harmonic > 0)
+
+
+def test_half_pace_rule_by_hand():
+    """A trotting dog's window: peaks at 1.71 Hz (35.6) and 3.40 Hz (11.9, within 10 % of
+    3.42): 11.9 / 35.6 = 0.33 >= 0.25, so 1.71 Hz is a half-pace component and the pace model
+    match is refused; a walker's 2F harmonic at 12 % of its power is not (measured on the
+    synthetic set); at 4.5 Hz the second peak is no longer near 2F (|4.5 - 3.42| > 0.342)."""
+    dog = _peaks([1.71, 3.40, 0.22], [35.6, 11.9, 9.6])
+    speed = jnp.float32(1.14)  # stride 0.67 m at 1.71 Hz: inside the walking model
+    on, off = Thresholds(harmonic_ratio=0.25), Thresholds(harmonic_ratio=0.0)
+    assert Reason(int(match(dog, speed, WALK, on)[1])).label == "no-model-match"
+    assert Reason(int(match(dog, speed, WALK, off)[1])).label == "matched"
+    walker = _peaks([1.71, 3.40], [35.6, 0.12 * 35.6])
+    assert Reason(int(match(walker, speed, WALK, on)[1])).label == "matched"
+    far = _peaks([1.71, 4.5], [35.6, 35.0])
+    assert Reason(int(match(far, speed, WALK, on)[1])).label == "matched"
+    edge = _peaks([2.0, 4.0 * 1.099], [40.0, 10.0])  # inside by 0.1 %, ratio exactly 0.25
+    assert Reason(int(match(edge, jnp.float32(1.44), WALK, on)[1])).label == "no-model-match"
 
 
 def test_fill_gaps_is_linear_interpolation():
@@ -167,13 +210,31 @@ def test_too_short_and_no_measurements_are_unclassified():
 
 
 def test_bad_signal_gaps_and_irregular_sampling():
+    """With the paper's back-to-back windows (hop N) a 100-frame track has one window, frames
+    0-63; with the default hop N/2 also frames 32-95, which the damage below misses."""
     cfg, (z, w, i, dt, p) = _walker(n=100)
+    paper = eqx.tree_at(lambda c: c.thresholds, cfg, Thresholds(hop=64))
     holes = i.at[5:25].set(jnp.nan)  # 20 of the first 64 missing > 25 %
-    assert Reason(int(classify_track(cfg, z, w, holes, dt, p).reason)) == Reason.BAD_SIGNAL
-    few = i.at[5:15].set(jnp.nan)  # 10 of 64: interpolated, still classified
-    assert Reason(int(classify_track(cfg, z, w, few, dt, p).reason)) == Reason.MATCHED
     jitter = dt.at[30].set(dt[30] * 1.5)
-    assert Reason(int(classify_track(cfg, z, w, i, jitter, p).reason)) == Reason.BAD_SIGNAL
+    few = i.at[5:15].set(jnp.nan)  # 10 of 64: interpolated, still classified
+    for c, bad in ((paper, Reason.BAD_SIGNAL), (cfg, Reason.MATCHED)):
+        assert Reason(int(classify_track(c, z, w, holes, dt, p).reason)) == bad
+        assert Reason(int(classify_track(c, z, w, i, jitter, p).reason)) == bad
+        assert Reason(int(classify_track(c, z, w, few, dt, p).reason)) == Reason.MATCHED
+    late = i.at[70:90].set(jnp.nan)  # only in the second window: the first one decides
+    assert Reason(int(classify_track(cfg, z, w, late, dt, p).reason)) == Reason.MATCHED
+
+
+def test_window_grid_by_hand():
+    """Windows of N = 64 every 32 frames in a 128-frame padded track start at 0, 32, 64; with
+    100 frames tracked the first two are complete (64 and 96 <= 100), the third is not."""
+    j, complete = window_grid(128, 64, 32, jnp.asarray(100))
+    assert np.asarray(j).tolist() == [0, 1, 2]
+    assert np.asarray(complete).tolist() == [True, True, False]
+    j, complete = window_grid(128, 64, 64, jnp.asarray(128))  # the paper's back-to-back
+    assert np.asarray(j).tolist() == [0, 1] and np.asarray(complete).all()
+    assert Thresholds().hop_samples == 32 and Thresholds(n=48).hop_samples == 24
+    assert Thresholds(hop=5).hop_samples == 5
 
 
 def test_batch_equals_single_tracks_and_isolates_a_bad_track():

@@ -142,10 +142,12 @@ def test_rhythm_window_restarts_after_missing_run():
             assert obj.result is None, k
         if k == 31:
             assert obj.win_start == 15  # restarted after row 14, the last missing one
-        if k == 46:
-            assert obj.win_start == 47 and obj.result["window"] == (15, 47)
-    # decided on the first window: matching stops there; else the next window (47, 79) ran
-    assert obj.win_start == (47 if obj.decided and obj.result["window"] == (15, 47) else 79)
+        if k == 46:  # the next window starts hop = N/2 = 16 rows later
+            assert obj.win_start == 31 and obj.result["window"] == (15, 47)
+    # windows (15, 47), (31, 63), (47, 79) run until one says Pedestrian, then matching stops
+    k0 = obj.result["window"][0]
+    assert obj.win_start == (k0 + 16 if obj.decided else 63)
+    assert obj.windows_done == ((k0 - 15) // 16 + 1 if obj.decided else 3)
 
 
 def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
