@@ -1,6 +1,6 @@
 """Pipeline regression: a small fixed-seed set of synthetic scenes through the whole pipeline
-(render -> detect -> online tracker with the demo's options -> rhythm windows -> evaluate.score)
-must not score worse than the stored baseline (tests/pipeline_baseline.json) beyond the stated
+(render -> detect -> online tracker with the demo's options -> rhythm windows -> evaluate.score,
+each object's verdict from the rhythm windows that looked at it) must not score worse than the stored baseline (tests/pipeline_baseline.json) beyond the stated
 margins:
 
 - walker Pedestrian rate: at most MARGIN_RATE below the baseline (one walker of the 14);
@@ -18,7 +18,7 @@ import os
 from pathlib import Path
 
 from rhythmjax.cli_video import SYNTHETIC_CONFIG, SYNTHETIC_OPTIONS, synthetic_options
-from rhythmjax.evaluate import score, summarise
+from rhythmjax.evaluate import deciding_windows, score, summarise
 from rhythmjax.params import config_from_dict
 from rhythmjax.synth import random_spec, render_scene
 from rhythmjax.tracker import OnlineTracker
@@ -44,8 +44,8 @@ def _figures() -> dict:
         tr = OnlineTracker(cfg, synthetic_options())
         for k, f in enumerate(scene.frames):
             tr.update(k, k / scene.fps, f)
-        tracks, verdicts, _ = tr.finish()
-        rows += score(tracks, verdicts, scene.truth)["objects"]
+        tracks, verdicts, objs = tr.finish()
+        rows += score(tracks, verdicts, scene.truth, windows=deciding_windows(objs))["objects"]
     out = summarise(rows)
     out["others_pedestrian"] = sum(r["kind"] != "pedestrian" and r["verdict"] == "pedestrian"
                                    for r in rows)
