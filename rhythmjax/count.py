@@ -79,7 +79,9 @@ class CountOptions:
     new_min_widths: float = 0.6  # unexplained blob columns needed to start a pedestrian, W
     new_min_fill: float = 0.15  # ... holding at least this fraction of a patch area in pixels
     new_min_height: float = 0.5  # ... spanning at least this many H
-    new_max_lift: float = 0.25  # ... reaching down to within this many H of the blob's bottom
+    new_max_lift: float = 0.25  # ... reaching down to within this many H of the blob's bottom,
+    new_lifted_height: float = 0.55  # ... or, lifted higher, spanning this fraction of its H
+    # (clipped at the image top) at its own foot point: a farther walker merged with a nearer one
     new_in_range: bool = True  # ... standing in the config's detection range (ground y, m)
     confirm_hits: int = 3
     tentative_misses: int = 2

@@ -19,9 +19,11 @@ Per frame (`PedestrianLevel.update`):
 4. Refinement: blob columns no pedestrian explains (a pedestrian explains `walker_widths` W
    around its foot point: a walker's blob spans its stance foot to its leading arm), at least
    `new_min_widths` W wide, holding enough pixels and reaching the blob's bottom (feet, not
-   arms), with the foot point's ground point in the config's detection range (range_min to
-   range_max m: where `rhythmjax track` detects; `new_in_range`), start new pedestrians, one
-   per `walker_widths` W of the run, side by side (groups);
+   arms) or, lifted above it, standing `new_lifted_height` of its patch height tall (clipped at
+   the image top; a farther walker merged with a nearer object: an arm is shorter), with the
+   foot point's ground point in the config's detection range (range_min to range_max m: where
+   `rhythmjax track` detects; `new_in_range`), start new pedestrians, one per `walker_widths`
+   W of the run, side by side (groups);
    a new pedestrian gets an id after `confirm_hits` measured frames (dropped if it misses
    `tentative_misses` before); a pedestrian without measurement predicts for
    `coast_s` s (default: the config's predict_timeout_s), then ends; with the "3d" dynamics
@@ -283,9 +285,12 @@ class PedestrianLevel:
                 if not (math.isfinite(w) and w > 0):
                     continue
                 n = max(1, int(round((c1 - c0) / (opt.walker_widths * w))))
+                span = rows[-1] - rows[0] + 1
+                lifted = vb < y1 - 1 - opt.new_max_lift * hb  # above the blob's bottom: an arm,
+                # or a farther walker merged with a nearer object (it stands taller than an arm)
                 if ((c1 - c0) < opt.new_min_widths * w or sub.sum() < opt.new_min_fill * w * h * n
-                        or rows[-1] - rows[0] + 1 < opt.new_min_height * h
-                        or not vb >= y1 - 1 - opt.new_max_lift * hb):  # feet, not arms
+                        or span < opt.new_min_height * h
+                        or (lifted and span < opt.new_lifted_height * min(h, vb + 1.0))):
                     continue
                 for k in range(n):
                     a0, a1 = c0 + (c1 - c0) * k // n, c0 + (c1 - c0) * (k + 1) // n

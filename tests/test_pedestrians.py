@@ -331,3 +331,49 @@ def test_placement_cut_to_the_related_blobs_box_is_the_same():
         n += 1
         found += full is not None
     assert same == n > 250 and found > 100
+
+
+def _lifted_scene(level, span_frac: float):
+    """Labels (one blob, label 1): a near walker's patch standing on (80, 170) and, right of
+    the 1.8 W its pedestrian explains, a farther walker's columns standing on (u2, 110), spanning
+    `span_frac` of its patch height up from its feet; the near pedestrian already placed."""
+    from rhythmjax.blobs import Blob
+    from rhythmjax.pedestrian_level import _Ped
+
+    w, h = level.shape.size(80.0, 170.0)
+    w2, h2 = level.shape.size(130.0, 110.0)
+    u2 = 80.0 + 0.9 * w + 0.5 * w2 + 2.0
+    lab = np.zeros((192, 256), np.int32)
+    lab[max(0, round(171 - h)):171, round(80 - w / 2):round(80 + w / 2)] = 1
+    lab[max(0, round(111 - span_frac * h2)):111, round(u2 - w2 / 2):round(u2 + w2 / 2)] = 1
+    ys, xs = np.nonzero(lab)
+    blob = Blob((int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1),
+                int(ys.size), 0.0, (float(xs.mean()), float(ys.mean())), 0.5, 1)
+    p = _Ped(slot=0, born=0)
+    p.z = (80.0, 170.0)
+    level.peds = [p]
+    return [blob], lab, u2, h, h2
+
+
+@pytest.mark.parametrize("span_frac, lifted_height, starts", [
+    (1.0, 0.55, True),   # a farther walker merged with a nearer one: its feet far above the
+    (0.52, 0.55, False),  # blob's bottom; an arm-high run (>= new_min_height, < lifted) does not
+    (0.52, 0.5, True),   # ... (it is the lifted rule that stops it)
+    (1.0, 2.0, False),   # the rule off: only runs reaching the blob's bottom start one
+])
+def test_a_walker_merged_above_a_nearer_one_starts_a_pedestrian(span_frac, lifted_height,
+                                                                 starts):
+    from rhythmjax.pedestrian_level import PedestrianLevel
+
+    level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False,
+                                              new_lifted_height=lifted_height))
+    assert level.opt.new_min_height == 0.5 and CountOptions().new_lifted_height == 0.55
+    blobs, lab, u2, h, h2 = _lifted_scene(level, span_frac)
+    assert 110 < 170 - level.opt.new_max_lift * h  # lifted: above the blob's bottom band
+    assert level._in_range((u2, 110.0))
+    new = level._new_pedestrians(blobs, lab)
+    if starts:
+        assert len(new) == 1
+        assert abs(new[0].z[0] - u2) <= 1.0 and new[0].z[1] == 110.0
+    else:
+        assert new == []
