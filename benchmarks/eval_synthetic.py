@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from rhythmjax.cli_video import SYNTHETIC_CONFIG, synthetic_options
+from rhythmjax.cli_video import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
 from rhythmjax.evaluate import summarise
 from rhythmjax.params import Config, config_from_dict, config_to_dict
 
@@ -40,9 +40,7 @@ def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, 
         s = seed + 1000 * i
         out.append((s, random_spec(s, n_walkers=4 if i < 5 else 3, n_bicycles=1,
                                    n_dogs=1 if i % 2 == 0 else 0, n_frames=n_frames,
-                                   camera=camera, min_life=110, max_life=150,
-                                   bicycle_speed=(3.0, 3.2), range_m=(3.1, 19.9),
-                                   crossing_fraction=0.95)))
+                                   camera=camera, **SCENE_OPTIONS)))
     return out
 
 

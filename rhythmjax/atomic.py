@@ -82,6 +82,16 @@ def atomic_path(path: PathLike) -> Iterator[str]:
         raise
 
 
+def make_output_dir(path: PathLike) -> None:
+    """Create the output directory `path` (and its parents) if needed; a path that cannot be a
+    directory (a file in the way, no permission) is a `BadInput` naming it."""
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as e:
+        raise BadInput(os.fspath(path), f"cannot create the output directory: "
+                                        f"{e.strerror or e}") from None
+
+
 def check_writable(path: PathLike) -> None:
     """Fail fast (before any work) if `path` cannot be written: its directory is missing or not
     writable, or `path` is a directory. Probes with a real temp file, so it holds for root too."""

@@ -24,6 +24,7 @@ from .io_tables import (
     atomic_path as atomic_path,
     atomic_write as atomic_write,
     check_writable as check_writable,
+    make_output_dir as make_output_dir,
     read_table as read_table,
     write_table as write_table,
 )
@@ -394,6 +395,6 @@ def dumps_json(obj: Any, **kwargs: Any) -> str:
 
 __all__: Sequence[str] = (
     "BadInput", "Table", "Tracks", "TrackBatch", "atomic_path", "atomic_write", "check_writable",
-    "dumps_json", "read_config", "read_footprints", "read_table", "read_tracks", "to_batch",
-    "write_config", "write_table",
+    "dumps_json", "make_output_dir", "read_config", "read_footprints", "read_table",
+    "read_tracks", "to_batch", "write_config", "write_table",
 )

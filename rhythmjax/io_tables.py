@@ -20,7 +20,12 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
-from .atomic import atomic_path as atomic_path, atomic_write, check_writable as check_writable
+from .atomic import (
+    atomic_path as atomic_path,
+    atomic_write,
+    check_writable as check_writable,
+    make_output_dir as make_output_dir,
+)
 from .errors import BadInput as BadInput, PathLike
 
 

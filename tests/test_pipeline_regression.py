@@ -1,7 +1,7 @@
 """Pipeline regression: a small fixed-seed set of synthetic scenes through the whole pipeline
 (render -> detect -> online tracker with the demo's options -> rhythm windows -> evaluate.score,
-each object's verdict from the rhythm windows that looked at it) must not score worse than the stored baseline (tests/pipeline_baseline.json) beyond the stated
-margins:
+each object's verdict from the rhythm windows that looked at it) must not score worse than the
+stored baseline (tests/pipeline_baseline.json) beyond the stated margins:
 
 - walker Pedestrian rate: at most MARGIN_RATE below the baseline (one walker of the 14);
 - bicycles and dogs judged Non-pedestrian: at most one fewer; judged Pedestrian: none more;
