@@ -58,9 +58,9 @@ def gap_rows(last: tuple, index: int, t: float, xy) -> list[tuple]:
     return out
 
 
-def best_match(lost: list, anchors: list, camera, t: float, uv, W: float, **gate) -> int:
-    """Index into `lost` of the track whose gate misfit with the new foot point is smallest and
-    at most 1; -1 when none is."""
+def best_match(anchors: list, camera, t: float, uv, W: float, **gate) -> int:
+    """Index into `anchors` (`last_observed` of each lost track; None: skipped) of the track
+    whose gate misfit with the new foot point is smallest and at most 1; -1 when none is."""
     best, best_d = -1, 1.0
     for i, anchor in enumerate(anchors):
         if anchor is None:

@@ -197,12 +197,12 @@ def classify_track(
 ) -> RhythmResult:
     """Track one padded track with the paper's gates, then match its rhythm windows.
 
-    The windows are N frames long and start every `thresholds.hop_samples` frames from the frame the
-    track started (`window_grid`); as in the paper, matching goes on window after window until
-    one says Pedestrian, and then stops. The
-    result is that window's, or the first window's when none matched. T must be >= N (pad with
-    present=False). Reasons: `no-measurements` when no measurement is finite; `too-short` when
-    fewer than N frames follow the start (Sec. 5: never guess)."""
+    The windows are N frames long and start every `thresholds.hop_samples` frames from the
+    frame the track started (`window_grid`); as in the paper, matching goes on window after
+    window until one says Pedestrian, and then stops. The result is that window's, or the first
+    window's when none matched. T must be >= N (pad with present=False). Reasons:
+    `no-measurements` when no measurement is finite; `too-short` when fewer than N frames follow
+    the start (Sec. 5: never guess)."""
     thr = cfg.thresholds
     n = thr.n
     T = z.shape[0]

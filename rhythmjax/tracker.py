@@ -323,10 +323,10 @@ class OnlineTracker:
         return k if math.hypot(vx - wx, vy - wy) > self.opt.max_dv_mps else 0
 
     def _match(self, obj: _Object, *, final: bool = False) -> None:
-        """(13)-(15) on each completed window of N frames (one every `thresholds.hop_samples`) until
-        Pedestrian (Sec. 4.2). `final`
-        (the track ends with N rows or more but no window judged, every one having been
-        restarted past missing samples): the N rows with the fewest missing are judged."""
+        """(13)-(15) on each completed window of N frames (one every `thresholds.hop_samples`)
+        until Pedestrian (Sec. 4.2). `final` (the track ends with N rows or more but no window
+        judged, every one having been restarted past missing samples): the N rows with the
+        fewest missing are judged."""
         n = self.cfg.thresholds.n
         k = obj.win_start
         if final:
@@ -391,9 +391,8 @@ class OnlineTracker:
         self._lost = [e for e in self._lost if t - e[1][0] <= self.opt.relink_s]
         if not self._lost or not np.all(np.isfinite(z)):
             return False
-        i = relink.best_match([e[0] for e in self._lost], [e[1] for e in self._lost],
-                              self._camera, t, z, W, gate_w=self.opt.relink_gate_w,
-                              gate_h=self.opt.relink_gate_h,
+        i = relink.best_match([e[1] for e in self._lost], self._camera, t, z, W,
+                              gate_w=self.opt.relink_gate_w, gate_h=self.opt.relink_gate_h,
                               gate_per_s=self.opt.relink_gate_per_s,
                               height_per_W=self._height_per_W)
         if i < 0:

@@ -60,8 +60,8 @@ def test_gate_distance_by_hand():
         1.0, rel=1e-9)
     assert relink.gate_distance(cam, anchor, 2.0, (u0, v0), 30.0, **gate) == math.inf  # before
     anchors = [None, anchor, (3.0, 5.0, 10.0, 0.0, 0.0)]
-    assert relink.best_match([0, 1, 2], anchors, cam, 5.0, (u, v), 30.0, **gate) == 1
-    assert relink.best_match([0, 1, 2], anchors, cam, 5.0, (u + 90.0, v), 30.0, **gate) == -1
+    assert relink.best_match(anchors, cam, 5.0, (u, v), 30.0, **gate) == 1
+    assert relink.best_match(anchors, cam, 5.0, (u + 90.0, v), 30.0, **gate) == -1
 
 
 def _hidden_walker_frames(hide=(40, 62), n_frames=110, seed=3):
