@@ -8,12 +8,15 @@ whether `count.COUNT_RULE` counts them; then the counted tracks owned by no walk
 two walkers merged, nothing). The count error of a scene is (walkers with k counted tracks:
 k - 1 each) - (walkers with none) + (counted tracks owned by no walker).
 
-    python benchmarks/diag_count.py [--seed S] [--scenes 10] [--only 0,3]
+    python benchmarks/diag_count.py [--seed S] [--scenes 10] [--only 0,3] [--set KEY=JSON ...]
+
+--set overrides a `count.CountOptions` field (e.g. `--set new_lifted_height=2.0`, repeatable).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 
@@ -78,7 +81,7 @@ def diagnose(scene, res, off: int = -1) -> dict:
 
 def main(argv=None) -> int:
     from rhythmjax.cli_video import SYNTHETIC_CONFIG
-    from rhythmjax.count import count_frames
+    from rhythmjax.count import CountOptions, count_frames
     from rhythmjax.params import config_from_dict
     from rhythmjax.synth import render_scene
 
@@ -86,21 +89,27 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=SEED)
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--only", default="")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=JSON",
+                   help="a CountOptions field, e.g. new_lifted_height=2.0 (repeatable)")
     a = p.parse_args(argv)
+    opt = CountOptions(**{k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
     only = {int(x) for x in a.only.split(",") if x}
     cfg = config_from_dict(SYNTHETIC_CONFIG)
-    tot = {"missed": 0, "over": 0, "extra": 0}
+    tot = {"true": 0, "counted": 0, "missed": 0, "over": 0, "extra": 0}
     reasons: dict = {}
     for i, (s, spec) in enumerate(scene_specs(a.scenes, seed=a.seed, camera=cfg.camera)):
         if only and i not in only:
             continue
         scene = render_scene(s, spec)
         res = count_frames(cfg, iter([(k, k / scene.fps, f) for k, f in
-                                      enumerate(scene.frames)]), n_frames=len(scene.frames))
+                                      enumerate(scene.frames)]), n_frames=len(scene.frames),
+                           options=opt)
         d = diagnose(scene, res)
         missed = sum(w["counted"] == 0 for w in d["walkers"])
         over = sum(max(0, w["counted"] - 1) for w in d["walkers"])
         tot["missed"] += missed
+        tot["true"] += len(d["walkers"])
+        tot["counted"] += res.counts["walkers"]
         tot["over"] += over
         tot["extra"] += len(d["extra"])
         for k, n in d["reasons"].items():
