@@ -332,12 +332,14 @@ def _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction, m
     return _keep(regions(), exclude_boxes, max_objects)
 
 
-def motion_outside(motion: np.ndarray, boxes: Sequence[Box]) -> int:
-    """Number of motion pixels (M > 0) outside every box (x0, y0, w, h) px, boxes clipped to
-    the frame. A new object needs `min_area` of them (the tracker skips `find_objects` below)."""
+def motion_outside(motion: np.ndarray, boxes: Sequence[Box], margin: int = 0) -> int:
+    """Number of motion pixels (M > 0) outside every box (x0, y0, w, h) px grown by `margin` px
+    on each side, boxes clipped to the frame. A new object needs `min_area` of them (the tracker
+    skips `find_objects` below)."""
     rest = motion.copy()
     H, W = motion.shape
     for x, y, w, h in boxes:
+        x, y, w, h = x - margin, y - margin, w + 2 * margin, h + 2 * margin
         x0, y0 = min(max(x, 0), W), min(max(y, 0), H)
         rest[y0:min(max(y + h, y0), H), x0:min(max(x + w, x0), W)] = 0
     return cv2.countNonZero(rest)

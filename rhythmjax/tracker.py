@@ -180,7 +180,7 @@ class OnlineTracker:
             elif s not in shared:
                 z[s], width[s] = (det.u, det.v), det.width
             boxes.append(det.box)
-        if not glitch and detect.motion_outside(M, boxes) >= opt.min_area:
+        if not glitch and detect.motion_outside(M, boxes, opt.outside_margin_px) >= opt.min_area:
             free = [s for s, o in enumerate(self._slots) if o is None]
             found = detect.find_objects(M, min_area=opt.min_area, exclude_boxes=boxes,
                                         max_objects=len(free) + len(near),

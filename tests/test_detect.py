@@ -305,3 +305,10 @@ def test_motion_outside_counts_motion_pixels_outside_the_boxes():
                 for xx in range(max(x, 0), min(x + w, 60)):
                     keep[yy, xx] = False
         assert motion_outside(m, boxes[:k]) == int(np.sum((m > 0) & keep))
+    for margin in (1, 3):  # the boxes grown by `margin` on each side
+        keep = np.ones(m.shape, bool)
+        for x, y, w, h in boxes:
+            for yy in range(max(y - margin, 0), min(y + h + margin, 40)):
+                for xx in range(max(x - margin, 0), min(x + w + margin, 60)):
+                    keep[yy, xx] = False
+        assert motion_outside(m, boxes, margin) == int(np.sum((m > 0) & keep))
