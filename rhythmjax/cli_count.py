@@ -36,13 +36,13 @@ def cmd_count(args) -> int:
     says how many there were."""
     from .cli import _load_config, _say
     from .count import CountOptions, count_frames
-    from .io import atomic_write, check_writable, dumps_json, write_table
+    from .io import atomic_write, check_writable, dumps_json, make_output_dir, write_table
     from .mot import write_mot
     from .params import ConfigError
 
     if args.min_frames < 1:
         raise ConfigError("--min-frames", f"must be >= 1, got {args.min_frames}")
-    os.makedirs(args.output, exist_ok=True)
+    make_output_dir(args.output)
     check_writable(os.path.join(args.output, "counts.json"))
     cfg = _load_config(args.config)
     opt = CountOptions(dynamics=args.dynamics, min_track_frames=args.min_frames)

@@ -172,6 +172,13 @@ def test_bad_inputs_exit_2(videos, tmp_path, capsys):
     assert "camera.h_m" in capsys.readouterr().err
     assert main(["count", str(videos["still"]), "-c", str(videos["config"]), "-o",
                  str(tmp_path / "o"), "--fps", "15", "--min-frames", "0", "--quiet"]) == 2
+    assert "--min-frames" in capsys.readouterr().err
+    blocker = tmp_path / "file"  # an output directory that cannot be created
+    blocker.write_text("x")
+    assert main(["count", str(videos["still"]), "-c", str(videos["config"]), "-o",
+                 str(blocker / "o"), "--fps", "15", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "cannot create the output directory" in err and "\n" not in err
 
 
 def test_help_explains(capsys):
