@@ -38,8 +38,9 @@ def draw_frame(gray: np.ndarray, objects: list[dict], index: int) -> np.ndarray:
                                                        else "")
         cv2.putText(img, label, (int(u - W / 2), max(10, int(v - H) - 3)),
                     cv2.FONT_HERSHEY_SIMPLEX, 0.4, c, 1, cv2.LINE_AA)
-    cv2.putText(img, f"frame {index}", (5, 15), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 0), 1,
-                cv2.LINE_AA)
+    # bottom left: the labels of far objects sit at the top of the image
+    cv2.putText(img, f"frame {index}", (5, img.shape[0] - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
+                (255, 255, 0), 1, cv2.LINE_AA)
     return img
 
 
@@ -116,6 +117,6 @@ def draw_count_frame(gray: np.ndarray, pedestrians: list[dict], index: int) -> n
         cv2.putText(img, label, (x0, max(10, y0 - 3)), cv2.FONT_HERSHEY_SIMPLEX, 0.4, c, 1,
                     cv2.LINE_AA)
         shown += p["track_id"] != 0
-    cv2.putText(img, f"frame {index}  in view {shown}", (5, 15), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
-                (255, 255, 0), 1, cv2.LINE_AA)
+    cv2.putText(img, f"frame {index}  in view {shown}", (5, img.shape[0] - 6),
+                cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 0), 1, cv2.LINE_AA)
     return img
