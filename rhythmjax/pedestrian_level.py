@@ -390,16 +390,16 @@ class PedestrianLevel:
                 self._end(p)
 
     def _match(self, p: _Ped) -> None:
-        """Online: (13)-(15) on each completed run of N frames until Pedestrian (as tracker)."""
+        """Online: (13)-(15) on each completed window of N frames, one every
+        `thresholds.hop_samples` (`rhythm.window_grid`'s windows), until Pedestrian."""
         import jax.numpy as jnp
 
         from .status import Verdict
         from .tracker import _classify
 
-        n = self.cfg.thresholds.n
-        if p.decided or len(p.rows) < n * (p.windows_done + 1):
+        n, k = self.cfg.thresholds.n, self.cfg.thresholds.hop_samples * p.windows_done
+        if p.decided or len(p.rows) < k + n:
             return
-        k = n * p.windows_done
         rows = np.asarray([r[1:8] for r in p.rows[k:k + n]], np.float64)
         res = _classify(self.cfg, jnp.asarray(rows[:, 4], jnp.float32),
                         jnp.asarray(rows[:, 0] - rows[0, 0], jnp.float32),

@@ -377,3 +377,23 @@ def test_a_walker_merged_above_a_nearer_one_starts_a_pedestrian(span_frac, lifte
         assert abs(new[0].z[0] - u2) <= 1.0 and new[0].z[1] == 110.0
     else:
         assert new == []
+
+
+def test_online_verdict_windows_start_every_hop_samples():
+    """The pedestrians level's online verdict (drawn on the overlay) judges the same windows as
+    `rhythm.classify_track`: N = 32 rows, one starting every hop = 16 rows; a constant signal
+    (no peak, never Pedestrian) is judged at 32, 48 and 64 rows, and not in between."""
+    from rhythmjax.pedestrian_level import PedestrianLevel, _Ped
+
+    cfg = config_from_dict({"thresholds": {"n_samples": 32}})
+    level = PedestrianLevel(cfg, CountOptions(classify=False))
+    p = _Ped(slot=0, born=0)
+    judged_at = []
+    for k in range(70):  # (index, t, u, v, width, intensity, x, y, state)
+        p.rows.append((k, k / 15.0, 100.0, 200.0, 30.0, 5.0, 0.1 * k, 10.0, 2))
+        before = p.windows_done
+        level._match(p)
+        if p.windows_done > before:
+            judged_at.append(len(p.rows))
+    assert judged_at == [32, 48, 64]
+    assert not p.decided and p.result == {"verdict": 2}
