@@ -74,12 +74,14 @@ def _windows(cfg: Config, z, width, intensity, dt, present) -> tuple[RhythmResul
     n_tracked = jnp.sum(present & out.started)
     t = jnp.cumsum(jnp.where(idx == 0, 0.0, dt))
     xy = out.mean[:, jnp.array([0, 2])]
+    observed = jnp.where(out.valid[:, None], z, jnp.nan)
     j, complete = window_grid(T, n, cfg.thresholds.hop_samples, n_tracked)
     complete = out.started[k0] & complete
 
     def one(start, usable):
         window = lambda a: jax.lax.dynamic_slice_in_dim(a, jnp.clip(start, 0, T - n), n)
-        return classify_window(cfg, window(intensity), window(t), window(xy), usable)
+        return classify_window(cfg, window(intensity), window(t), window(xy), usable,
+                               window(observed))
 
     every = jax.vmap(one)(k0 + cfg.thresholds.hop_samples * j, complete)
     short = jnp.where(jnp.any(out.available), Reason.TOO_SHORT, Reason.NO_MEASUREMENTS)

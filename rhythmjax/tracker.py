@@ -336,8 +336,9 @@ class OnlineTracker:
             k = int(np.argmin(bad[n:] - bad[:-n]))
         elif obj.decided or len(obj.rows) < k + n:
             return
-        rows = np.asarray([r[1:8] for r in obj.rows[k:k + n]], np.float64)
+        rows = np.asarray([r[1:9] for r in obj.rows[k:k + n]], np.float64)
         t, intensity, xy = rows[:, 0], rows[:, 4], rows[:, 5:7]
+        observed = np.where((rows[:, 7] == TrackState.OBSERVE)[:, None], rows[:, 1:3], np.nan)
         missing = np.flatnonzero(~np.isfinite(intensity))
         if not final and len(missing) > MAX_MISSING_FRACTION * n:  # mixed with a neighbour:
             obj.win_start = k + int(missing[-1]) + 1  # restart after it
@@ -345,7 +346,7 @@ class OnlineTracker:
         obj.win_start = k + self.cfg.thresholds.hop_samples
         res = _classify(self.cfg, jnp.asarray(intensity, jnp.float32),
                         jnp.asarray(t - t[0], jnp.float32), jnp.asarray(xy, jnp.float32),
-                        jnp.asarray(True))
+                        jnp.asarray(True), jnp.asarray(observed, jnp.float32))
         obj.windows_done += 1
         pedestrian = int(res.verdict) == Verdict.PEDESTRIAN
         if obj.result is None or pedestrian:

@@ -3,11 +3,13 @@
 import math
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from rhythmjax import mem
+from rhythmjax.camera import project
 from rhythmjax.params import Config, Thresholds, WalkingModel
 from rhythmjax.rhythm import (
     classify_batch,
@@ -16,6 +18,7 @@ from rhythmjax.rhythm import (
     ground_speed,
     match,
     window_grid,
+    window_speed,
 )
 from rhythmjax.status import Reason, Verdict
 
@@ -153,6 +156,59 @@ def test_ground_speed_is_theil_sen_by_hand():
     x = 1.4 * t + jnp.where(jnp.arange(64) >= 54, 1.5, 0.0)
     assert float(ground_speed(t, jnp.stack([x, jnp.full(64, 8.0)], -1))) == pytest.approx(
         1.4, rel=0.05)
+
+
+def test_ground_speed_over_the_used_pairs_matches_a_numpy_loop():
+    rng = np.random.default_rng(3)
+    t = np.arange(20) / 15.0
+    xy = np.stack([0.5 + 1.3 * t, 9.0 - 0.4 * t], -1) + rng.normal(0, 0.05, (20, 2))
+    use = rng.random(20) > 0.3
+    xy_nan = np.where(use[:, None], xy, np.nan)  # unused samples hold NaN: ignored
+    slopes = [(xy[j] - xy[i]) / (t[j] - t[i]) for i in range(20) for j in range(i + 1, 20)
+              if use[i] and use[j]]
+    want = float(np.hypot(*np.median(np.asarray(slopes), axis=0)))
+    got = float(ground_speed(jnp.asarray(t, jnp.float32), jnp.asarray(xy_nan, jnp.float32),
+                             jnp.asarray(use)))
+    assert got == pytest.approx(want, rel=1e-5)
+
+
+def _walk_seen(cfg, n=64, vx=2.5, vy=-1.0):
+    """A straight walk on the ground and its exact foot points (px) through (3)."""
+    t = np.arange(n) / 15.0
+    x, y = -1.0 + vx * t, 14.0 + vy * t
+    u, v = project(cfg.camera, jnp.asarray(x), jnp.asarray(y))
+    return (jnp.asarray(t, jnp.float32), np.stack([x, y], -1),
+            np.stack([np.asarray(u), np.asarray(v)], -1).astype(np.float32))
+
+
+def test_window_speed_takes_the_measured_foot_points_not_the_lagging_filter():
+    cfg = Config()
+    t, xy, uv = _walk_seen(cfg)
+    true = math.hypot(2.5, 1.0)
+    lagging = jnp.asarray(xy[:1] + 0.6 * (xy - xy[:1]), jnp.float32)  # a filter at 60 % speed
+    assert float(window_speed(cfg, t, lagging, None)) == pytest.approx(0.6 * true, rel=1e-4)
+    holes = uv.copy()
+    holes[::3] = np.nan  # a third of the frames without an accepted measurement
+    got = float(window_speed(cfg, t, lagging, jnp.asarray(holes)))
+    assert got == pytest.approx(true, rel=2e-3)  # float32 inverse perspective at 10-14 m
+    holes[1::3] = np.nan  # two thirds without: under half measured, the filtered speed
+    assert float(window_speed(cfg, t, lagging, jnp.asarray(holes))) == pytest.approx(
+        0.6 * true, rel=1e-4)
+
+
+def test_window_speed_gradient_in_camera_height_matches_finite_differences():
+    # the NaN of frames without a measurement must not reach the gradient (double where)
+    cfg = Config()
+    t, xy, uv = _walk_seen(cfg)
+    uv[5:9] = np.nan
+    obs = jnp.asarray(uv)
+    speed_of = lambda h: window_speed(eqx.tree_at(lambda c: c.camera.h, cfg, h), t,  # noqa: E731
+                                      jnp.asarray(xy, jnp.float32), obs)
+    h, e = float(cfg.camera.h), 0.02
+    g = float(jax.grad(speed_of)(jnp.float32(h)))
+    fd = (float(speed_of(jnp.float32(h + e))) - float(speed_of(jnp.float32(h - e)))) / (2 * e)
+    assert math.isfinite(g) and g > 0.1
+    assert g == pytest.approx(fd, rel=2e-3)
 
 
 # ----------------------------------------------------------------------------------------------
