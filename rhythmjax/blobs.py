@@ -165,35 +165,49 @@ def _blob_of_contour(m: np.ndarray, contour: np.ndarray, rect: np.ndarray, alone
     """The blob whose outer contour is `contour` (box `rect` = x, y, w, h), from its box crop
     only; None below `min_area`. `alone`: no other region's box meets this one, so every
     non-zero pixel of the crop is the blob's; with 0/1 values, area and centroid are then plain
-    sums. Otherwise connected components of the crop pick the blob as the component of the
-    contour's first point (one of its pixels). Returns the Blob (label 0 for now), its pixels
-    in the crop, and whether they are the whole crop's non-zero pixels."""
+    sums (`cv2.reduce`, exact integers). Otherwise the blob is the 8-connected component of
+    non-zero pixels of the crop holding the contour's first point (one of its pixels), found by
+    `_component`. Returns the Blob (label 0 for now), its pixels in the crop, and whether they
+    are the whole crop's non-zero pixels."""
     x, y, w, h = (int(v) for v in rect)
     if w * h < min_area:
         return None
     crop = m[y:y + h, x:x + w]
     if alone:
-        cols = crop.sum(0, dtype=np.int64)
+        cols = cv2.reduce(crop, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
         area = cv2.countNonZero(crop)
         if int(cols.sum()) == area:  # 0/1 values
             if area < min_area:
                 return None
-            rows = crop.sum(1, dtype=np.int64)
+            rows = cv2.reduce(crop, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
             cu = x + float(cols @ np.arange(w)) / area
             cv = y + float(rows @ np.arange(h)) / area
             return Blob(box=(x, y, x + w, y + h), area=area,
                         perimeter=float(cv2.arcLength(contour, True)), centroid=(cu, cv),
                         density=area / (w * h), label=0), crop, True
-    _, cl, st, ce = cv2.connectedComponentsWithStats(crop, connectivity=8, ltype=cv2.CV_32S)
     px, py = (int(v) for v in contour[0, 0])
-    lab = int(cl[py - y, px - x])
-    area = int(st[lab, cv2.CC_STAT_AREA])
+    own, area = _component(crop, px - x, py - y)
     if area < min_area:
         return None
+    one = own.view(np.uint8)
+    xs = cv2.reduce(one, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
+    ys = cv2.reduce(one, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
     blob = Blob(box=(x, y, x + w, y + h), area=area, perimeter=float(cv2.arcLength(contour, True)),
-                centroid=(float(ce[lab, 0]) + x, float(ce[lab, 1]) + y),
+                centroid=(float(xs @ np.arange(w)) / area + x, float(ys @ np.arange(h)) / area + y),
                 density=area / (w * h), label=0)
-    return blob, cl == lab, False
+    return blob, own, False
+
+
+def _component(crop: np.ndarray, u: int, v: int) -> tuple[np.ndarray, int]:
+    """(bool mask, pixel count) of the 8-connected component of non-zero pixels of `crop`
+    holding pixel (u, v) (non-zero): a flood fill over the values 1-255 (the component
+    `cv2.connectedComponentsWithStats` labels there, without labelling the rest)."""
+    h, w = crop.shape
+    fill = np.zeros((h + 2, w + 2), np.uint8)
+    seed = int(crop[v, u])
+    flags = 8 | cv2.FLOODFILL_MASK_ONLY | cv2.FLOODFILL_FIXED_RANGE | (1 << 8)
+    n = cv2.floodFill(crop, fill, (u, v), 0, seed - 1, 255 - seed, flags)[0]
+    return fill[1:-1, 1:-1].view(bool), int(n)
 
 
 def _alone(rects: np.ndarray) -> np.ndarray:
@@ -287,6 +301,28 @@ def is_crowd(blobs: Sequence[Blob], shape: tuple[int, int], *, fraction: Number 
         raise ValueError(f"fraction must lie in (0, 1], got {fraction}")
     frame = float(shape[0]) * float(shape[1])
     return any(b.width * b.height >= fraction * frame for b in blobs)
+
+
+def box_table(blobs: Sequence[Blob]) -> list[tuple]:
+    """Per blob (x0, y0, x1, y1, half its box area px^2), for `meeting`."""
+    return [(*b.box, 0.5 * float(max(0, b.box[2] - b.box[0]) * max(0, b.box[3] - b.box[1])))
+            for b in blobs]
+
+
+def meeting(box, table: list[tuple], frac: float) -> set[int]:
+    """Indices of the blobs of `table` (`box_table`) whose box meets `box` (x0, y0, x1, y1 px,
+    floats) by an intersection area above `frac` of box's area or above half their own."""
+    x0, y0, x1, y1 = box
+    lim = frac * float(max(0.0, x1 - x0) * max(0.0, y1 - y0))
+    out = set()
+    for j, (bx0, by0, bx1, by1, half) in enumerate(table):
+        w = min(x1, bx1) - max(x0, bx0)
+        h = min(y1, by1) - max(y0, by0)
+        if w > 0 and h > 0:  # else the intersection is 0 and passes neither test
+            ov = float(w * h)
+            if ov > lim or ov > half:
+                out.add(j)
+    return out
 
 
 def foreground_fraction(mask: np.ndarray) -> float:

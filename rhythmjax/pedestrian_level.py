@@ -49,7 +49,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .blobs import box_table, meeting
+from .detect import window_b_intensity
 from .params import Config
+from .pedestrians import ShapeModel, SlotFilter, ground_point, patch_box, place_patch
+from .status import TrackState
 
 
 if TYPE_CHECKING:
@@ -80,16 +84,6 @@ class _Ped:
     z: tuple = (math.nan, math.nan)  # this frame's measurement
 
 
-def _inter(a, b) -> float:
-    w = min(a[2], b[2]) - max(a[0], b[0])
-    h = min(a[3], b[3]) - max(a[1], b[1])
-    return float(max(0.0, w) * max(0.0, h))
-
-
-def _area(a) -> float:
-    return float(max(0.0, a[2] - a[0]) * max(0.0, a[3] - a[1]))
-
-
 def _finite(uv) -> bool:
     return math.isfinite(uv[0]) and math.isfinite(uv[1])
 
@@ -98,8 +92,6 @@ class PedestrianLevel:
     """Feed frames with `update(index, t, gray)`; `finish()` returns the `CountResult`."""
 
     def __init__(self, cfg: Config, opt: CountOptions):
-        from .pedestrians import ShapeModel, SlotFilter
-
         self.cfg, self.opt = cfg, opt
         self.shape = ShapeModel.from_config(cfg, opt.dynamics, opt.height_m)
         self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
@@ -119,6 +111,7 @@ class PedestrianLevel:
         self.stitched = 0  # tracks joined onto an earlier one at the end (count.stitch_level)
         self.detections: list[tuple] = []
         self.image_shape: tuple[int, int] | None = None
+        self._dv_frames = max(1, round(opt.dv_window_s * float(cfg.camera.fps)))
 
     # ------------------------------------------------------------------------------------------
     def update(self, index: int, t: float, gray: np.ndarray | None) -> None:
@@ -151,7 +144,8 @@ class PedestrianLevel:
                 self.detections += [(index, *b.box, b.area) for b in blobs]
         for p in self.peds:
             p.z = (math.nan, math.nan)  # no measurement unless placed below
-        rel = self._relate(graph, blobs)
+        boxes = box_table(blobs)
+        rel = self._relate(graph, blobs, boxes)
         S = self.filter.slots
         z = np.full((S, 2), np.nan)
         present, reset = np.zeros(S, bool), np.zeros(S, bool)
@@ -166,11 +160,11 @@ class PedestrianLevel:
                 z[p.slot] = p.z
         host = self.filter.step(reset, z, present, dt)
         for p in list(self.peds):
-            self._after(p, host[p.slot], index, t, dt, blobs, D)
+            self._after(p, host[p.slot], index, t, dt, boxes, D)
         self._duplicates()
         self.prev_blobs = blobs
 
-    def _relate(self, graph, blobs) -> dict[int, set]:
+    def _relate(self, graph, blobs, boxes) -> dict[int, set]:
         """Relations of frame i: through the blob graph, Hungarian on shared splits, then
         re-acquisition by overlap for pedestrians left without a blob."""
         from scipy.optimize import linear_sum_assignment
@@ -196,11 +190,7 @@ class PedestrianLevel:
         for p in self.peds:
             if rel[id(p)] or not _finite(p.next_uv):
                 continue
-            box = self._box(p.next_uv)
-            for j, b in enumerate(blobs):
-                ov = _inter(box, b.box)
-                if ov > 0.2 * _area(box) or ov > 0.5 * _area(b.box):
-                    rel[id(p)].add(j)
+            rel[id(p)].update(meeting(self._box(p.next_uv), boxes, 0.2))
         return rel
 
     def _dist(self, p: _Ped, b) -> float:
@@ -210,21 +200,17 @@ class PedestrianLevel:
         return math.hypot(p.next_uv[0] - bu, p.next_uv[1] - bv)
 
     def _box(self, uv):
-        from .pedestrians import patch_box
-
         w, h = (float(q) for q in self.shape.size(*uv))
         return patch_box(uv[0], uv[1], w, h) if math.isfinite(w) else (0, 0, 0, 0)
 
     def _place(self, rel, blobs, labels) -> None:
         """Measurements: each related pedestrian's patch placement (older first, claiming)."""
-        from .pedestrians import place_patch
-
         opt = self.opt
         users: dict[int, int] = {}
         for p in self.peds:
             for j in rel[id(p)]:
                 users[j] = users.get(j, 0) + 1
-        claimed = np.zeros(labels.shape, bool)
+        claimed = None  # pixels taken by shared placements, made on the first one
         for p in sorted(self.peds, key=lambda q: (-q.hits, q.born)):
             mine = rel[id(p)]
             if not mine or not _finite(p.next_uv):
@@ -254,6 +240,8 @@ class PedestrianLevel:
             if k > 1:
                 x0, y0, x1, y1 = (int(round(q)) for q in (pl.u - pl.w / 2, pl.v - pl.h,
                                                           pl.u + pl.w / 2, pl.v + 1))
+                if claimed is None:
+                    claimed = np.zeros(labels.shape, bool)
                 claimed[max(0, y0):max(0, y1), max(0, x0):max(0, x1)] = True
 
     def _new_pedestrians(self, blobs, labels) -> list[_Ped]:
@@ -269,14 +257,18 @@ class PedestrianLevel:
         new: list[_Ped] = []
         for b in blobs:
             x0, y0, x1, y1 = b.box
-            hb = float(self.shape.size(0.5 * (x0 + x1 - 1), y1 - 1)[1])
-            crop = labels[y0:y1, x0:x1] == b.label
-            cols = crop.any(axis=0)
+            free = np.ones(x1 - x0, bool)  # columns no patch covers
             for c in cover:
                 if c[1] < y1 and c[3] > y0:
-                    cols[max(0, int(math.floor(c[0])) - x0):max(0, int(math.ceil(c[2])) - x0)] \
+                    free[max(0, int(math.floor(c[0])) - x0):max(0, int(math.ceil(c[2])) - x0)] \
                         = False
-            edges = np.flatnonzero(np.diff(np.r_[0, cols.astype(np.int8), 0]))
+            if not free.any():  # every column covered: no run (the blob's pixels not needed)
+                continue
+            hb = float(self.shape.size(0.5 * (x0 + x1 - 1), y1 - 1)[1])
+            crop = labels[y0:y1, x0:x1] == b.label
+            ext = np.zeros(free.size + 2, np.int8)  # run edges of the free blob columns
+            np.logical_and(crop.any(axis=0), free, out=ext[1:-1].view(bool))
+            edges = np.flatnonzero(np.diff(ext))
             for c0, c1 in zip(edges[::2], edges[1::2]):
                 sub = crop[:, c0:c1]
                 rows = np.flatnonzero(sub.any(axis=1))
@@ -309,19 +301,13 @@ class PedestrianLevel:
     def _in_range(self, uv) -> bool:
         """The foot point's ground point lies in the config's detection range (range_min to
         range_max m ahead): where `rhythmjax track` detects, and where a new pedestrian starts."""
-        from .pedestrians import ground_point
-
         if not self.opt.new_in_range:
             return True
         _, y, ok = ground_point(self.shape.camera, *uv)
         thr = self.cfg.thresholds
         return bool(ok) and float(thr.range_min) <= float(y) <= float(thr.range_max)
 
-    def _after(self, p: _Ped, host, index, t, dt, blobs, D) -> None:
-        from .detect import window_b_intensity
-        from .pedestrians import ground_point
-        from .status import TrackState
-
+    def _after(self, p: _Ped, host, index, t, dt, boxes, D) -> None:
         if host[0] < 0.5:  # the first measurement had no ground point (above the horizon)
             self.peds.remove(p)
             return
@@ -345,9 +331,7 @@ class PedestrianLevel:
         p.boxes.append((index, p.est_uv[0] - w / 2, p.est_uv[1] - h, w, h,
                         1.0 if measured else 0.5, gx, gy, bool(ok)))
         p.ground.append((gx, gy, host[7], host[8]))
-        box = self._box(p.est_uv)
-        p.blobs = {j for j, b in enumerate(blobs) if (ov := _inter(box, b.box)) > 0.1 * _area(box)
-                   or ov > 0.5 * _area(b.box)}
+        p.blobs = meeting(self._box(p.est_uv), boxes, 0.1)
         if p.track_id == 0:
             if p.hits >= self.opt.confirm_hits:
                 p.track_id, self.next_id = self.next_id, self.next_id + 1
@@ -370,7 +354,7 @@ class PedestrianLevel:
         `max_dv_mps` over the last `dv_window_s` s (faster than a walker or a cyclist turns or
         brakes: the patch slid onto another object or down a merged blob), else 0. Only once
         the track is 2 windows old (the filter starts at rest)."""
-        k = max(1, round(self.opt.dv_window_s * float(self.cfg.camera.fps)))
+        k = self._dv_frames
         if self.opt.dynamics != "3d" or len(p.ground) <= 2 * k:
             return 0
         (_, _, vx, vy), (_, _, wx, wy) = p.ground[-1], p.ground[-1 - k]

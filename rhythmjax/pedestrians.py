@@ -47,6 +47,7 @@ from .params import Camera, Config, Noise
 
 DYNAMICS = ("2d", "3d-shape", "3d")
 PEDESTRIAN_HEIGHT_M = 1.7  # average pedestrian height (m); width: cfg.width.mean (0.5 m)
+_SCALARS = (float, int, np.float64)  # ShapeModel.size: types taken as scalars without np.ndim
 
 
 # ----------------------------------------------------------------------------------------------
@@ -117,13 +118,19 @@ class ShapeModel:
     def size(self, u, v):
         """(w, h) px arrays (NaN where the 3-D shape has no ground point); two floats for two
         scalars (`_size_scalar`, the same arithmetic without NumPy's per-call cost)."""
-        if np.ndim(u) == 0 and np.ndim(v) == 0:
+        if (type(u) in _SCALARS and type(v) in _SCALARS) or (np.ndim(u) == 0 and np.ndim(v) == 0):
             return self._size_scalar(float(u), float(v))
         if self.fixed is not None:
             ones = np.ones(np.broadcast(np.asarray(u), np.asarray(v)).shape)
             return self.fixed[0] * ones, self.fixed[1] * ones
         w, h, _ = patch_size_3d(self.camera, u, v, self.width_m, self.height_m)
         return w, h
+
+    def row_sizes(self, n_rows: int) -> tuple[np.ndarray, np.ndarray]:
+        """(w, h) px of a foot point on each image row 0 .. n_rows - 1 (read-only float64): the
+        size depends on the row only (for any finite u), so a table serves every integer row
+        with the values `size` gives there; computed once per (model, n_rows)."""
+        return _row_sizes(self, int(n_rows))
 
     def _size_scalar(self, u: float, v: float) -> tuple[float, float]:
         """`patch_size_3d` (and `ground_point`) for one foot point in plain float arithmetic,
@@ -149,6 +156,26 @@ class ShapeModel:
             return nan
         v_top = vc - b * f * (y * s - (hc - self.height_m) * c) / d_head
         return a * f * self.width_m / d_foot, v - v_top
+
+
+_AB_ADD = np.array([[0.5], [0.5], [1.5]])  # place_patch: rounding of a0, a1 and b0
+
+
+@functools.lru_cache(maxsize=8)
+def _row_table(shape: ShapeModel, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`row_sizes` with NaN as 0, and where they were finite (place_patch)."""
+    w, h = _row_sizes(shape, n_rows)
+    fin = np.isfinite(w) & np.isfinite(h)
+    return np.where(fin, w, 0.0), np.where(fin, h, 0.0), fin
+
+
+@functools.lru_cache(maxsize=8)
+def _row_sizes(shape: ShapeModel, n_rows: int) -> tuple[np.ndarray, np.ndarray]:
+    v = np.arange(n_rows, dtype=np.float64)
+    w, h = (np.array(np.broadcast_to(q, v.shape), np.float64)
+            for q in shape.size(np.full(n_rows, shape.camera[5]), v))
+    w.flags.writeable = h.flags.writeable = False
+    return w, h
 
 
 def patch_box(u: float, v: float, w: float, h: float) -> tuple[float, float, float, float]:
@@ -260,6 +287,52 @@ class SlotFilter:
 # placement (NumPy / OpenCV)
 
 
+_INT_MAX = {t: int(np.iinfo(t).max) for t in (np.uint8, np.uint16, np.uint32, np.int16, np.int32,
+                                              np.int64)}
+
+
+def related_mask(window: np.ndarray, related) -> np.ndarray:
+    """(h, w) bool: pixels of the labels `window` whose label is in `related` (labels outside
+    the window's dtype range match nothing); a few labels by equality, more by a lookup table."""
+    top = _INT_MAX.get(window.dtype.type, math.inf)
+    labs = [q for q in np.asarray(related, np.int64).ravel().tolist() if 0 <= q <= top]
+    if len(labs) <= 4:  # Python ints: comparing with an int64 scalar would cast the window
+        out = window == labs[0] if labs else np.zeros(window.shape, bool)
+        for lab in labs[1:]:
+            out |= window == lab
+        return out
+    lut = np.zeros(int(window.max(initial=0)) + 1, bool)  # label -> related (np.isin: 10x slower)
+    lut[[q for q in labs if q < lut.size]] = True
+    return lut[window]
+
+
+def lowest_rows(mask: np.ndarray) -> np.ndarray:
+    """Per column of a (h, w) 0/1 (or bool) image, the row of its lowest non-zero pixel (int64);
+    -1 where the column is empty."""
+    rows = mask.shape[0]
+    weight = np.arange(1, rows + 1, dtype=np.uint16 if rows < 65535 else np.int64)[:, None]
+    return np.multiply(mask, weight, dtype=weight.dtype).max(axis=0, initial=0).astype(
+        np.int64) - 1
+
+
+def range_max(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, fill) -> np.ndarray:
+    """max(x[lo[k]:hi[k]]) for every k (0 <= lo, hi <= len(x)); `fill` where the range is
+    empty. One `np.maximum.reduceat` over the interleaved bounds."""
+    lo, hi = np.asarray(lo, np.intp), np.asarray(hi, np.intp)
+    if lo.size == 0:
+        return np.zeros(0, x.dtype)
+    ext = np.empty(len(x) + 1, x.dtype)
+    ext[:-1], ext[-1] = x, fill
+    idx = np.empty(2 * lo.size, np.intp)
+    idx[0::2], idx[1::2] = lo, hi
+    got = np.maximum.reduceat(ext, idx)[::2]
+    return np.where(hi > lo, got, fill)
+
+
+def _clip_int(a: np.ndarray, hi: int) -> np.ndarray:
+    return np.minimum(np.maximum(a, 0), hi)  # np.clip's wrappers cost more than the work
+
+
 @dataclass(frozen=True)
 class Placement:
     u: float  # foot point, px
@@ -305,39 +378,34 @@ def place_patch(labels: np.ndarray, related: np.ndarray, claimed: np.ndarray | N
         if x1 <= x0 or yhi <= ylo:
             return None
     window = labels[ytop:yhi, x0:x1]
-    lut = np.zeros(int(window.max(initial=0)) + 1, bool)  # label -> related (np.isin is 10x slower)
-    rel = np.asarray(related, np.int64).ravel()
-    lut[rel[(rel >= 0) & (rel < lut.size)]] = True
-    crop = lut[window]
+    crop = related_mask(window, related)
     if claimed is not None:
         crop &= ~claimed[ytop:yhi, x0:x1]
     crop = crop.view(np.uint8)
-    if not crop.any():
-        return None
     ii = cv2.integral(crop)  # (rows + 1, cols + 1), int32
-    sub = crop[ylo - ytop:]
-    has = sub.any(axis=0)
-    bottom = np.where(has, sub.shape[0] - 1 - np.argmax(sub[::-1], axis=0), -1) + (ylo - ytop)
+    if ii[-1, -1] == 0:
+        return None
+    off = ylo - ytop
+    bottom = lowest_rows(crop[off:]) + off  # per column; off - 1 where none
     us = pred_u + np.arange(-r, r + 1, dtype=np.float64)
-    c0 = np.clip(np.floor(us - half + 0.5).astype(int) - x0, 0, x1 - x0)
-    c1 = np.clip(np.floor(us + half + 0.5).astype(int) - x0, 0, x1 - x0)
+    n_cols = x1 - x0
+    # each candidate's columns [c0, c1) = floor(us -/+ half + 0.5) - x0 (us - -half is us + half)
+    c0, c1 = _clip_int(np.floor(np.subtract(us, [[half], [-half]]) + 0.5).astype(np.intp) - x0,
+                       n_cols)
     # lowest related row under each candidate's columns: the max of the column bottoms over each
-    # candidate's column range [c0, c1), all candidates at once (-1 where the range is empty)
-    span = np.arange(max(1, int((c1 - c0).max(initial=0))))
-    cols = c0[:, None] + span[None, :]
-    inside = cols < c1[:, None]
-    vb = np.where(inside, bottom[np.minimum(cols, bottom.size - 1)], -1).max(axis=1)
-    ok = vb >= ylo - ytop
+    # candidate's column range (-1 where the range is empty)
+    vb = range_max(bottom, c0, c1, -1)
+    ok = vb >= off
     if not ok.any():
         return None
     us, vb = us[ok], vb[ok]
     v = vb + float(ytop)
-    w, h = shape.size(us, v)
-    fin = np.isfinite(w) & np.isfinite(h)
-    w, h = np.where(fin, w, 0.0), np.where(fin, h, 0.0)
-    a0 = np.clip(np.floor(us - 0.5 * w + 0.5).astype(int) - x0, 0, x1 - x0)
-    a1 = np.clip(np.floor(us + 0.5 * w + 0.5).astype(int) - x0, 0, x1 - x0)
-    b0 = np.clip(np.floor(v - h + 1.5).astype(int) - ytop, 0, crop.shape[0])
+    w, h, fin = (q[vb + ytop] for q in _row_table(shape, H))  # the size at the foot row
+    hw = 0.5 * w
+    # the patch's columns [a0, a1) and top row b0, in window coordinates, clipped to it
+    a0, a1, b0 = np.minimum(np.maximum(
+        np.floor(np.stack([us - hw, us + hw, v - h]) + _AB_ADD).astype(np.intp)
+        - np.array([[x0], [x0], [ytop]]), 0), np.array([[n_cols], [n_cols], [crop.shape[0]]]))
     b1 = vb + 1
     cov = ii[b1, a1] - ii[b0, a1] - ii[b1, a0] + ii[b0, a0]
     cov = np.where(fin & (a1 > a0) & (b1 > b0), cov, -1)

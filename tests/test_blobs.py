@@ -259,3 +259,39 @@ def test_moving_rectangle_end_to_end_and_crowd() -> None:
     # the lights go up: one blob over the whole frame, flagged, no crash
     blobs, _ = find_blobs(model.apply(np.full((60, 80), 250, np.uint8)))
     assert len(blobs) == 1 and blobs[0].area == 60 * 80 and is_crowd(blobs, (60, 80))
+
+
+def test_component_and_meeting_match_plain_references() -> None:
+    """`_component` (a flood fill) is the 8-connected component `connectedComponentsWithStats`
+    labels at the seed, also with mixed non-zero values; `meeting` is the float test of the
+    pedestrians level written out per blob (intersection > frac x box area or > half the
+    blob's box area)."""
+    import cv2
+
+    from rhythmjax.blobs import _component, box_table, meeting
+
+    rng = np.random.default_rng(8)
+    for _ in range(60):
+        crop = ((rng.random((30, 40)) < 0.45) * rng.choice([1, 3, 255], (30, 40))).astype(np.uint8)
+        _, cl, st, _ = cv2.connectedComponentsWithStats(crop, connectivity=8)
+        ys, xs = np.nonzero(crop)
+        k = int(rng.integers(len(ys)))
+        own, n = _component(crop, int(xs[k]), int(ys[k]))
+        lab = cl[ys[k], xs[k]]
+        np.testing.assert_array_equal(own, cl == lab)
+        assert n == st[lab, cv2.CC_STAT_AREA]
+    area = lambda a: float(max(0.0, a[2] - a[0]) * max(0.0, a[3] - a[1]))  # noqa: E731
+    for _ in range(200):
+        x, y = rng.integers(0, 80, (2, 8))
+        blobs = [Blob(box=(int(a), int(b), int(a + c), int(b + d)), area=1, perimeter=0.0,
+                      centroid=(0.0, 0.0), density=1.0, label=1)
+                 for a, b, c, d in zip(x, y, *rng.integers(0, 30, (2, 8)))]
+        u, v, w, h = rng.uniform(0, 100), rng.uniform(0, 100), *rng.uniform(0, 40, 2)
+        box, frac = (u - w / 2, v - h, u + w / 2, v), float(rng.choice([0.1, 0.2]))
+        want = set()
+        for j, b in enumerate(blobs):
+            ov = float(max(0.0, min(box[2], b.box[2]) - max(box[0], b.box[0]))
+                       * max(0.0, min(box[3], b.box[3]) - max(box[1], b.box[1])))
+            if ov > frac * area(box) or ov > 0.5 * area(b.box):
+                want.add(j)
+        assert meeting(box, box_table(blobs), frac) == want

@@ -349,3 +349,68 @@ def dataclasses_replace(opt, **kw):
     import dataclasses
 
     return dataclasses.replace(opt, **kw)
+
+
+def _place_by_loops(labels, related, claimed, shape, pu, pv, radius_px, v_max=None,
+                    band=0.35, min_cover=0.08):
+    """`pedestrians.place_patch` (no bbox) by plain loops over the candidates and pixels: the
+    foot row is the lowest related pixel in the patch columns, the count is summed directly,
+    patch and columns clipped to the search window."""
+    from rhythmjax.pedestrians import Placement
+
+    H, W = labels.shape
+    pix = np.isin(labels, related) & (True if claimed is None else ~claimed)
+    w0, h0 = shape.size(pu, pv)
+    if not (math.isfinite(w0) and math.isfinite(h0)) or w0 < 1 or h0 < 1:
+        return None
+    r = max(1, math.ceil(radius_px))
+    x0, x1 = max(0, math.floor(pu - r - w0 / 2 - 1)), min(W, math.ceil(pu + r + w0 / 2 + 2))
+    ylo = max(0, math.floor(pv - band * h0))
+    yhi = min(H, math.ceil(pv + band * h0 if v_max is None else v_max) + 1)
+    ytop = max(0, math.floor(pv - (1 + 2 * band) * h0))
+    col = lambda q: min(max(math.floor(q + 0.5), x0), x1)  # noqa: E731
+    best = None
+    for k in range(-r, r + 1):
+        u = pu + k
+        c0, c1 = col(u - 0.5 * w0), col(u + 0.5 * w0)
+        rows = [y for y in range(ylo, yhi) if c1 > c0 and pix[y, c0:c1].any()]
+        if not rows:
+            continue
+        v = float(rows[-1])
+        w, h = shape.size(u, v)
+        a0, a1, b0 = col(u - 0.5 * w), col(u + 0.5 * w), max(math.floor(v - h + 1.5), ytop)
+        cov = int(pix[b0:rows[-1] + 1, a0:a1].sum())
+        if a1 <= a0 or b0 > rows[-1] or cov < min_cover * w * h:
+            continue
+        key = cov - 1e-6 * abs(u - pu) / (r + 1)
+        if best is None or key > best[0]:
+            best = (key, Placement(u, v, w, h, cov))
+    return None if best is None else best[1]
+
+
+def test_place_patch_matches_a_loop_reference():
+    """`place_patch` (vectorised candidates, integral image, row-size table, label equality
+    masks) gives the loop reference's placement exactly on random blob images."""
+    from rhythmjax.blobs import find_blobs
+    from rhythmjax.pedestrians import ShapeModel, place_patch
+
+    rng = np.random.default_rng(17)
+    found = 0
+    for dyn in ("3d", "2d"):
+        shape = ShapeModel.from_config(config_from_dict(SMALL), dyn)
+        for _ in range(120):
+            mask = np.zeros((192, 256), np.uint8)
+            for _ in range(int(rng.integers(1, 6))):
+                x, y = int(rng.integers(0, 240)), int(rng.integers(30, 190))
+                mask[max(0, y - int(rng.integers(5, 70))):y, x:x + int(rng.integers(3, 40))] = 1
+            blobs, labels = find_blobs(mask, min_area=1)
+            rel = np.asarray([b.label for b in blobs if rng.random() < 0.6] or [1])
+            claimed = rng.random(labels.shape) < 0.1 if rng.random() < 0.4 else None
+            bu, bv = blobs[int(rel[0]) - 1].bottom_center  # near a related blob's feet
+            pu, pv = bu + rng.normal(0, 10), bv + rng.normal(0, 8)
+            kw = dict(radius_px=float(rng.uniform(0.5, 25)),
+                      v_max=None if rng.random() < 0.5 else float(rng.uniform(pv, pv + 60)))
+            want = _place_by_loops(labels, rel, claimed, shape, pu, pv, **kw)
+            assert place_patch(labels, rel, claimed, shape, pu, pv, **kw) == want
+            found += want is not None
+    assert found > 120

@@ -397,3 +397,30 @@ def test_online_verdict_windows_start_every_hop_samples():
             judged_at.append(len(p.rows))
     assert judged_at == [32, 48, 64]
     assert not p.decided and p.result == {"verdict": 2}
+
+
+def test_placement_helpers_match_plain_references():
+    """`related_mask` (np.isin), `lowest_rows`, `range_max` (NumPy loops) and `row_sizes`
+    (`size` at each row) give the same values exactly (integers; the same float64 operations)."""
+    from rhythmjax.pedestrians import lowest_rows, range_max, related_mask
+
+    rng = np.random.default_rng(5)
+    for dtype in (np.uint8, np.uint16, np.int32):
+        win = rng.integers(0, 9, (40, 30)).astype(dtype)
+        for rel in ([3], [0], [2, 5], [1, 2, 3, 4, 7, 8], [-1, 3, 70000], []):
+            want = np.isin(win.astype(np.int64), [q for q in rel if q >= 0])
+            np.testing.assert_array_equal(related_mask(win, np.asarray(rel, np.int64)), want)
+    for _ in range(50):
+        m = rng.random((int(rng.integers(1, 30)), int(rng.integers(1, 30)))) < rng.random()
+        want = [np.flatnonzero(c)[-1] if c.any() else -1 for c in m.T]
+        np.testing.assert_array_equal(lowest_rows(m.view(np.uint8)), want)
+        np.testing.assert_array_equal(lowest_rows(m), want)
+        x = rng.integers(-5, 100, int(rng.integers(1, 40)))
+        lo, hi = rng.integers(0, x.size + 1, (2, 60))
+        want = [x[a:b].max() if b > a else -7 for a, b in zip(lo, hi)]
+        np.testing.assert_array_equal(range_max(x, lo, hi, -7), want)
+    for dyn in ("3d", "2d"):
+        shape = ShapeModel.from_config(CFG, dyn)
+        rows = np.arange(192.0)
+        want = np.broadcast_arrays(*shape.size(rng.uniform(0, 256, rows.size), rows))
+        np.testing.assert_array_equal(np.stack(shape.row_sizes(192)), np.stack(want))
