@@ -156,7 +156,7 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     opt = options or CountOptions()
     if overlay is None and opt.online_verdicts:
         opt = dataclasses.replace(opt, online_verdicts=False)
-    level = PedestrianLevel(cfg, opt)
+    level = PedestrianLevel(cfg, opt, defer=overlay is None)  # no snapshot drawn: defer
     drive_frames(frames, level.update, overlay,
                  lambda frame, index: draw_count_frame(frame, level.snapshot(), index),
                  n_frames=n_frames, progress=progress, desc="count")

@@ -89,9 +89,12 @@ def _finite(uv) -> bool:
 
 
 class PedestrianLevel:
-    """Feed frames with `update(index, t, gray)`; `finish()` returns the `CountResult`."""
+    """Feed frames with `update(index, t, gray)`; `finish()` returns the `CountResult`. `defer`:
+    a frame's filter results reach its pedestrians (`_flush`) only in the next `update`, after
+    that frame's images and blobs levels, which so run while the jitted step computes; the same
+    results, but `snapshot` then lags a frame (count_frames defers without an overlay)."""
 
-    def __init__(self, cfg: Config, opt: CountOptions):
+    def __init__(self, cfg: Config, opt: CountOptions, defer: bool = False):
         self.cfg, self.opt = cfg, opt
         self.shape = ShapeModel.from_config(cfg, opt.dynamics, opt.height_m)
         self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
@@ -112,6 +115,7 @@ class PedestrianLevel:
         self.detections: list[tuple] = []
         self.image_shape: tuple[int, int] | None = None
         self._dv_frames = max(1, round(opt.dv_window_s * float(cfg.camera.fps)))
+        self.defer, self._pending = defer, None
 
     # ------------------------------------------------------------------------------------------
     def update(self, index: int, t: float, gray: np.ndarray | None) -> None:
@@ -142,6 +146,7 @@ class PedestrianLevel:
             else:
                 graph = blob_graph(self.prev_blobs, blobs)
                 self.detections += [(index, *b.box, b.area) for b in blobs]
+        self._flush()
         for p in self.peds:
             p.z = (math.nan, math.nan)  # no measurement unless placed below
         boxes = box_table(blobs)
@@ -158,11 +163,20 @@ class PedestrianLevel:
             for p in self._new_pedestrians(blobs, labels):
                 present[p.slot] = reset[p.slot] = True
                 z[p.slot] = p.z
-        host = self.filter.step(reset, z, present, dt)
+        self._pending = (self.filter.dispatch(reset, z, present, dt), index, t, dt, boxes, D)
+        if not self.defer:
+            self._flush()
+        self.prev_blobs = blobs
+
+    def _flush(self) -> None:
+        """The end of the pending frame: its filter results to each pedestrian, duplicates."""
+        if self._pending is None:
+            return
+        host, index, t, dt, boxes, D = self._pending
+        self._pending, host = None, np.asarray(host, np.float64)
         for p in list(self.peds):
             self._after(p, host[p.slot], index, t, dt, boxes, D)
         self._duplicates()
-        self.prev_blobs = blobs
 
     def _relate(self, graph, blobs, boxes) -> dict[int, set]:
         """Relations of frame i: through the blob graph, Hungarian on shared splits, then
@@ -420,6 +434,7 @@ class PedestrianLevel:
         """End every pedestrian; the `count.CountResult` of the tracks (stitched, judged)."""
         from .count import _result, stitch_level
 
+        self._flush()
         for p in list(self.peds):
             self._end(p)
         peds = stitch_level(self, sorted(self.finished, key=lambda q: q.track_id))

@@ -275,12 +275,17 @@ class SlotFilter:
              dt_next: float | None = None) -> np.ndarray:
         """Advance every slot by dt s (reset slots start afresh from their measurement z, NaN =
         none); returns the host array of `_advance` as float64 (S, 9)."""
+        return np.asarray(self.dispatch(reset, z, present, dt, dt_next), np.float64)
+
+    def dispatch(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
+                 dt_next: float | None = None) -> jax.Array:
+        """`step` without waiting: the host array (float32) as the jitted call returns it."""
         dt_next = self.dt_nominal if dt_next is None else dt_next
         self._carry, host = _advance_flat(
             self.dynamics, self._params_structure, self._carry_structure, self._params,
             self._carry, np.asarray(reset, bool), np.asarray(z, np.float32), np.float32(dt),
             np.float32(dt_next), np.asarray(present, bool))
-        return np.asarray(host, np.float64)
+        return host
 
 
 # ----------------------------------------------------------------------------------------------

@@ -414,3 +414,19 @@ def test_place_patch_matches_a_loop_reference():
             assert place_patch(labels, rel, claimed, shape, pu, pv, **kw) == want
             found += want is not None
     assert found > 120
+
+
+def test_deferred_filter_results_give_the_same_tracks():
+    """`PedestrianLevel(defer=True)` (count_frames without an overlay: a frame's filter results
+    taken up in the next update) gives the undeferred level's outputs exactly."""
+    from rhythmjax.pedestrian_level import PedestrianLevel
+
+    frames, out = _crossing_frames(60), []
+    for defer in (False, True):
+        level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False), defer)
+        for k, f in enumerate(frames):
+            level.update(k, k / 15.0, f)
+        out.append(level.finish())
+    assert out[0].counts == out[1].counts and len(out[0].mot["frame"]) > 40
+    for c in MOT_COLUMNS:
+        np.testing.assert_array_equal(out[0].mot[c], out[1].mot[c])
