@@ -153,22 +153,27 @@ def _score(x: np.ndarray, ip: np.ndarray, ic: np.ndarray, ap: np.ndarray, ac: np
     ep = np.rint(dp @ ip.T)  # (S, k) degree of each edge's prev end
     ec = np.rint(dc @ ic.T)
     valid = ~np.any((x > 0) & (ep >= 2) & (ec >= 2), axis=1)
+    return valid, _cost(x, dp, dc, ep, ec, ip, ic, ap, ac, lam)
+
+
+def _cost(x, dp, dc, ep, ec, ip, ic, ap, ac, lam) -> np.ndarray:
+    """`_score`'s cost from the degrees it computes (dp, dc per vertex, ep, ec per edge)."""
     sp = x @ (ip * (ic @ ac)[:, None])  # (S, n_p): summed area of each prev's children
     sc = x @ (ic * (ip @ ap)[:, None])
     cost = ((dp >= 2) * np.abs(ap - sp)).sum(1) + ((dc >= 2) * np.abs(ac - sc)).sum(1)
     pair = (x > 0) & (ep == 1) & (ec == 1)  # one-to-one edges
     cost += (pair * np.abs(ip @ ap - ic @ ac)).sum(1)
     cost += lam * (((dp == 0) * ap).sum(1) + ((dc == 0) * ac).sum(1))
-    return valid, cost
+    return cost
 
 
 def _solve_exact(x: np.ndarray, ip: np.ndarray, ic: np.ndarray, ap: np.ndarray, ac: np.ndarray,
                  lam: float) -> tuple[np.ndarray, float]:
-    ep = np.rint((x @ ip) @ ip.T)  # cheap validity first: score only the star forests
-    ec = np.rint((x @ ic) @ ic.T)
-    x = x[~np.any((x > 0) & (ep >= 2) & (ec >= 2), axis=1)]
-    valid, cost = _score(x, ip, ic, ap, ac, lam)
-    cost = np.where(valid, cost, np.inf)
+    dp, dc = x @ ip, x @ ic
+    ep, ec = np.rint(dp @ ip.T), np.rint(dc @ ic.T)
+    keep = ~np.any((x > 0) & (ep >= 2) & (ec >= 2), axis=1)  # score only the star forests
+    x = x[keep]
+    cost = _cost(x, dp[keep], dc[keep], ep[keep], ec[keep], ip, ic, ap, ac, lam)
     best = float(cost.min())  # finite: row 0 (no edge) is always valid
     ties = np.flatnonzero(cost <= best + 1e-9 * max(1.0, best))
     s = int(ties[np.argmax(x[ties].sum(1))])  # ties: the most edges, then the lowest index
