@@ -36,10 +36,8 @@ import numpy as np
 from rhythmjax import mem
 from rhythmjax.batch import padded_chunks
 from rhythmjax.camera import ground_width
-from rhythmjax.ekf import filter_track
-from rhythmjax.gates import PaperGates
 from rhythmjax.params import Config, Thresholds, WalkingModel, WidthModel
-from rhythmjax.rhythm import RhythmResult, classify_window, match, window_grid
+from rhythmjax.rhythm import RhythmResult, match, track_windows
 from rhythmjax.status import Reason, Verdict
 
 
@@ -65,27 +63,8 @@ class Features(eqx.Module):
 def _windows(cfg: Config, z, width, intensity, dt, present) -> tuple[RhythmResult, jax.Array]:
     """`rhythm.classify_track` up to its per-window results (axis J), unpicked, and the reason
     of the first window (too-short / no-measurements when it is incomplete)."""
-    n = cfg.thresholds.n
-    T = z.shape[0]
-    gates = PaperGates(cfg.width, cfg.thresholds)
-    out = filter_track(cfg.camera, cfg.noise, gates, z, width, dt, present).steps
-    idx = jnp.arange(T)
-    k0 = jnp.argmax(out.started)
-    n_tracked = jnp.sum(present & out.started)
-    t = jnp.cumsum(jnp.where(idx == 0, 0.0, dt))
-    xy = out.mean[:, jnp.array([0, 2])]
-    observed = jnp.where(out.valid[:, None], z, jnp.nan)
-    j, complete = window_grid(T, n, cfg.thresholds.hop_samples, n_tracked)
-    complete = out.started[k0] & complete
-
-    def one(start, usable):
-        window = lambda a: jax.lax.dynamic_slice_in_dim(a, jnp.clip(start, 0, T - n), n)
-        return classify_window(cfg, window(intensity), window(t), window(xy), usable,
-                               window(observed))
-
-    every = jax.vmap(one)(k0 + cfg.thresholds.hop_samples * j, complete)
-    short = jnp.where(jnp.any(out.available), Reason.TOO_SHORT, Reason.NO_MEASUREMENTS)
-    return every, jnp.where(complete[0], every.reason[0], short).astype(jnp.int32)
+    every, _, first_reason, _ = track_windows(cfg, z, width, intensity, dt, present)
+    return every, first_reason
 
 
 @eqx.filter_jit

@@ -217,22 +217,19 @@ def window_grid(T: int, n: int, hop: int, n_tracked) -> tuple[Array, Bool[Array,
     return j, n_tracked >= n + hop * j
 
 
-def classify_track(
+def track_windows(
     cfg: Config,
     z: Float[Array, "T 2"],
     width: Float[Array, " T"],
     intensity: Float[Array, " T"],
     dt: Float[Array, " T"],
     present: Bool[Array, " T"],
-) -> RhythmResult:
-    """Track one padded track with the paper's gates, then match its rhythm windows.
-
-    The windows are N frames long and start every `thresholds.hop_samples` frames from the
-    frame the track started (`window_grid`); as in the paper, matching goes on window after
-    window until one says Pedestrian, and then stops. The result is that window's, or the first
-    window's when none matched. T must be >= N (pad with present=False). Reasons:
-    `no-measurements` when no measurement is finite; `too-short` when fewer than N frames follow
-    the start (Sec. 5: never guess)."""
+) -> tuple[RhythmResult, Bool[Array, " J"], Int[Array, ""], Int[Array, ""]]:
+    """Track one padded track (T >= N frames) with the paper's gates and classify every rhythm
+    window (`window_grid`: N frames, one every `thresholds.hop_samples` from the frame the track
+    started). Returns the per-window results (axis J), which windows are complete, the reason of
+    the first window when it is not (`too-short`; `no-measurements` when no measurement is
+    finite) and the number of frames tracked."""
     thr = cfg.thresholds
     n = thr.n
     T = z.shape[0]
@@ -242,13 +239,12 @@ def classify_track(
     out = filter_track(cfg.camera, cfg.noise, gates, z, width, dt, present).steps
     idx = jnp.arange(T)
     k0 = jnp.argmax(out.started)
-    started = out.started[k0]
     n_tracked = jnp.sum(present & out.started)
     t = jnp.cumsum(jnp.where(idx == 0, 0.0, dt))
     xy = out.mean[:, jnp.array([0, 2])]
     observed = jnp.where(out.valid[:, None], z, jnp.nan)
     j, complete = window_grid(T, n, thr.hop_samples, n_tracked)
-    complete = started & complete
+    complete = out.started[k0] & complete
 
     def one_window(start, usable):
         window = lambda a: jax.lax.dynamic_slice_in_dim(a, jnp.clip(start, 0, T - n), n)
@@ -256,14 +252,32 @@ def classify_track(
                                window(observed))
 
     every = jax.vmap(one_window)(k0 + thr.hop_samples * j, complete)
+    short = jnp.where(jnp.any(out.available), Reason.TOO_SHORT, Reason.NO_MEASUREMENTS)
+    first_reason = jnp.where(complete[0], every.reason[0], short).astype(jnp.int32)
+    return every, complete, first_reason, n_tracked.astype(jnp.int32)
+
+
+def classify_track(
+    cfg: Config,
+    z: Float[Array, "T 2"],
+    width: Float[Array, " T"],
+    intensity: Float[Array, " T"],
+    dt: Float[Array, " T"],
+    present: Bool[Array, " T"],
+) -> RhythmResult:
+    """Track one padded track with the paper's gates, then match its rhythm windows
+    (`track_windows`): as in the paper, matching goes on window after window until one says
+    Pedestrian, and then stops. The result is that window's, or the first window's when none
+    matched. T must be >= N (pad with present=False). Reasons: `no-measurements` when no
+    measurement is finite; `too-short` when fewer than N frames follow the start (Sec. 5:
+    never guess)."""
+    every, complete, first_reason, n_tracked = track_windows(cfg, z, width, intensity, dt,
+                                                             present)
     matched = complete & (every.verdict == Verdict.PEDESTRIAN)
     pick = jnp.where(jnp.any(matched), jnp.argmax(matched), 0)
     res = jax.tree.map(lambda a: a[pick], every)
-    any_meas = jnp.any(out.available)
-    short_reason = jnp.where(any_meas, Reason.TOO_SHORT, Reason.NO_MEASUREMENTS)
-    reason = jnp.where(complete[0], res.reason, short_reason).astype(jnp.int32)
-    n_samples = n_tracked.astype(jnp.int32)
-    return eqx.tree_at(lambda r: (r.reason, r.n_samples), res, (reason, n_samples))
+    reason = jnp.where(complete[0], res.reason, first_reason).astype(jnp.int32)
+    return eqx.tree_at(lambda r: (r.reason, r.n_samples), res, (reason, n_tracked))
 
 
 @eqx.filter_jit
