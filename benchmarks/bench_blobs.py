@@ -22,8 +22,8 @@ from collections.abc import Callable
 import cv2
 import numpy as np
 
-from rhythmjax.blobgraph import blob_graph
-from rhythmjax.blobs import BackgroundModel, find_blobs
+from rhythmjax.vision.blobgraph import blob_graph
+from rhythmjax.vision.blobs import BackgroundModel, find_blobs
 
 
 W, H = 768, 576

@@ -31,9 +31,9 @@ WIDTH, HEIGHT, N_WALKERS = 768, 576, 6
 
 def make_scene(n_frames: int, seed: int = 7):
     """(config, frames (T, 576, 768) uint8, walkers visible per frame)."""
-    from rhythmjax.cli_video import SYNTHETIC_CONFIG
-    from rhythmjax.params import Camera, Config, config_from_dict
-    from rhythmjax.synth import SceneSpec, render_scene, walker
+    from rhythmjax.model.params import Camera, Config, config_from_dict
+    from rhythmjax.sim.presets import SYNTHETIC_CONFIG
+    from rhythmjax.sim.scene import SceneSpec, render_scene, walker
 
     base = config_from_dict(SYNTHETIC_CONFIG)
     c = base.camera

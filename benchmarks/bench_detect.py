@@ -1,4 +1,4 @@
-"""Frames/s of detection at 512x512: the plain OpenCV floor against rhythmjax.detect.
+"""Frames/s of detection at 512x512: the plain OpenCV floor against rhythmjax.vision.detect.
 
 floor: absdiff + Sobel d/dx + two thresholds + add + full-frame projections (cv2.reduce).
 detect: motion_image + per object detect_in_window (120 x 160 px window) + window_b_intensity;
@@ -15,8 +15,13 @@ import time
 import cv2
 import numpy as np
 
-from rhythmjax.detect import detect_in_window, motion_image, walker_width_px, window_b_intensity
-from rhythmjax.params import Camera, WidthModel
+from rhythmjax.model.params import Camera, WidthModel
+from rhythmjax.vision.detect import (
+    detect_in_window,
+    motion_image,
+    walker_width_px,
+    window_b_intensity,
+)
 
 
 S = 512

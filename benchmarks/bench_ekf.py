@@ -1,4 +1,4 @@
-"""Throughput of the batched EKF (`rhythmjax.ekf.filter_batch`, float32, jit + vmap) against
+"""Throughput of the batched EKF (`rhythmjax.model.ekf.filter_batch`, float32, jit + vmap) against
 filterpy's `ExtendedKalmanFilter` (one Python object per track) and dynamax's
 `extended_kalman_filter` (jit + vmap), on synthetic walkers of T = 64 steps.
 
@@ -40,8 +40,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from rhythmjax import ekf
-from rhythmjax.params import Camera, Noise
+from rhythmjax.model import ekf
+from rhythmjax.model.params import Camera, Noise
 
 
 T, FPS, Q_STD, R_STD = 64, 15.0, 0.4, 1.5

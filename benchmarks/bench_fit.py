@@ -18,7 +18,7 @@ import numpy as np
 from fit.camera import fit_camera
 from fit.noise import _spec, fit_noise, neg_loglik, simulate
 from fit.synthetic import footprints, random_camera
-from rhythmjax.params import Camera, Noise
+from rhythmjax.model.params import Camera, Noise
 
 
 def bench_camera(n: int = 10_000) -> None:

@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from rhythmjax import mem
+from rhythmjax.model import mem
 
 
 N, M, NF, K, DT = 64, 15, 512, 8, 1.0 / 15.0

@@ -21,7 +21,7 @@ import numpy as np
 
 
 def scenes(n_frames: int):
-    from rhythmjax.synth import SceneSpec, dog, render_scene, walker
+    from rhythmjax.sim.scene import SceneSpec, dog, render_scene, walker
 
     one = (walker(-3.4, 12.0, 0.0, pace_hz=1.9, step_length_m=0.62),)
     five = one + (walker(3.0, 7.0, 3.1, pace_hz=2.1, step_length_m=0.75),
@@ -47,7 +47,7 @@ def floor(frames: np.ndarray, thr: float = 15.0) -> None:
 
 
 def pipeline(cfg, frames: np.ndarray, fps: float) -> int:
-    from rhythmjax.tracker import OnlineTracker
+    from rhythmjax.track.tracker import OnlineTracker
 
     tr = OnlineTracker(cfg)
     for i, f in enumerate(frames):
@@ -78,7 +78,7 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     if a.xla_inline:
         os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " " + SINGLE_THREAD_XLA)
-    from rhythmjax.params import Config
+    from rhythmjax.model.params import Config
 
     cfg = Config()
     rows = []

@@ -80,10 +80,10 @@ def diagnose(scene, res, off: int = -1) -> dict:
 
 
 def main(argv=None) -> int:
-    from rhythmjax.cli_video import SYNTHETIC_CONFIG
     from rhythmjax.count import CountOptions, count_frames
-    from rhythmjax.params import config_from_dict
-    from rhythmjax.synth import render_scene
+    from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.presets import SYNTHETIC_CONFIG
+    from rhythmjax.sim.scene import render_scene
 
     p = argparse.ArgumentParser()
     p.add_argument("--seed", type=int, default=SEED)

@@ -18,7 +18,8 @@
 
 Hypothesis track -> truth object: the object whose box it overlaps with IoU >= 0.3 in most of
 its frames (synthetic), or a track box intersecting an anomaly box by >= 30 % of the smaller of
-the two in >= 50 % of its frames (UCSD). Scores: `rhythmjax.motscore.score_mot`, IoU >= 0.5.
+the two in >= 50 % of its frames (UCSD). Scores:
+`rhythmjax.evaluation.motscore.score_mot`, IoU >= 0.5.
 
     python benchmarks/eval_count.py [--quick] [--parts synthetic,pets,ucsd] [--median-init]
                                     [--seed S] [--json OUT.json]
@@ -37,8 +38,8 @@ import time
 
 import numpy as np
 
-from rhythmjax.motscore import iou_matrix, motmetrics_version, score_mot
-from rhythmjax.sort_baseline import ASSIGNMENT_SOLVER, blob_detections, sort_track
+from rhythmjax.evaluation.motscore import iou_matrix, motmetrics_version, score_mot
+from rhythmjax.evaluation.sort_baseline import ASSIGNMENT_SOLVER, blob_detections, sort_track
 
 
 SEED = 4_2024
@@ -53,8 +54,8 @@ SCORE_KEYS = ("mota", "idf1", "id_switches", "precision", "recall", "mostly_trac
 
 def _count_frames():
     try:
-        from rhythmjax.blobgraph import blob_graph  # noqa: F401  (count_frames needs it)
         from rhythmjax.count import count_frames
+        from rhythmjax.vision.blobgraph import blob_graph  # noqa: F401  (count_frames needs it)
     except ImportError as e:
         print(f"count_frames unavailable ({e}); SORT baseline only", file=sys.stderr)
         return None
@@ -99,7 +100,7 @@ def _sort_on(det, n_frames: int, truth, offset: int) -> dict:
 
 
 def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None):
-    from rhythmjax.synth import random_spec
+    from rhythmjax.sim.scene import random_spec
 
     rng = np.random.default_rng(seed)
     out = []
@@ -121,8 +122,8 @@ def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None):
 
 def truth_boxes(scene) -> tuple[dict[str, np.ndarray], dict[int, str]]:
     """MOT truth (frame 0-based, id = actor index + 1) and the kind of each id (module doc)."""
-    from rhythmjax.synth import project_3d
-    from rhythmjax.synth_actors import EXTENT
+    from rhythmjax.sim.actors import EXTENT
+    from rhythmjax.sim.scene import project_3d
 
     cam = scene.spec.camera
     rows, kinds = [], {}
@@ -173,9 +174,9 @@ def owner_of_tracks(truth, hyp, offset: int, min_iou: float = 0.3) -> dict[int, 
 
 def eval_synthetic(n_scenes: int, count_frames, log, median_init: bool = False,
                    seed: int = SEED) -> dict:
-    from rhythmjax.cli_video import SYNTHETIC_CONFIG
-    from rhythmjax.params import config_from_dict
-    from rhythmjax.synth import render_scene
+    from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.presets import SYNTHETIC_CONFIG
+    from rhythmjax.sim.scene import render_scene
 
     cfg = config_from_dict(SYNTHETIC_CONFIG)
     rows = []
@@ -243,15 +244,15 @@ def eval_synthetic(n_scenes: int, count_frames, log, median_init: bool = False,
 
 
 def _config(camera, range_m=(5.0, 50.0)):
-    from rhythmjax.params import Config, Thresholds
+    from rhythmjax.model.params import Config, Thresholds
 
     return Config(camera=camera, thresholds=Thresholds(range_min=range_m[0],
                                                        range_max=range_m[1]))
 
 
 def eval_pets(count_frames, max_frames: int | None, log, median_init: bool = False) -> dict:
-    from rhythmjax import datasets
-    from rhythmjax.video import VideoSource
+    from rhythmjax.evaluation import datasets
+    from rhythmjax.vision.video import VideoSource
 
     if datasets.pets_root() is None:
         return {"skipped": "PETS folder absent"}
@@ -309,14 +310,14 @@ def anomaly_tracks(mot, boxes, offset: int) -> list[int]:
 
 
 def eval_ucsd(count_frames, clips, log, median_init: bool = False) -> dict:
-    from rhythmjax import datasets
-    from rhythmjax.video import VideoSource
+    from rhythmjax.evaluation import datasets
+    from rhythmjax.vision.video import VideoSource
 
     if datasets.ucsd_root() is None:
         return {"skipped": "UCSD folder absent"}
     if count_frames is None:
         return {"skipped": "count_frames unavailable"}
-    from rhythmjax.params import config_from_dict
+    from rhythmjax.model.params import config_from_dict
 
     cfg = _config(config_from_dict({"camera": UCSD_CAMERA}).camera)
     out: dict = {"fps_assumed": UCSD_FPS, "camera_guess": UCSD_CAMERA, "clips": []}
@@ -417,7 +418,7 @@ def main(argv=None) -> int:
     if "pets" in parts:
         out["pets"] = eval_pets(count_frames, 200 if a.quick else None, log, a.median_init)
     if "ucsd" in parts:
-        from rhythmjax.datasets import UCSD_CLIPS
+        from rhythmjax.evaluation.datasets import UCSD_CLIPS
 
         out["ucsd"] = eval_ucsd(count_frames, UCSD_CLIPS[:1] if a.quick else UCSD_CLIPS, log,
                                a.median_init)

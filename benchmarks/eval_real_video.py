@@ -35,8 +35,8 @@ import time
 
 import numpy as np
 
-from rhythmjax import datasets
-from rhythmjax.params import Camera, Config, Noise, Thresholds, WidthModel
+from rhythmjax.evaluation import datasets
+from rhythmjax.model.params import Camera, Config, Noise, Thresholds, WidthModel
 
 
 GATE_PX = 12.0  # PETS: a track's foot point and a box bottom centre this close (or 0.5 W) match
@@ -76,13 +76,16 @@ MAX_OBJECTS = 24  # object slots (TrackerOptions default 8): up to ~20 people in
 
 
 def track(cfg, path, fps, overlay=None, max_objects=MAX_OBJECTS):
-    from rhythmjax.cli_video import overlay_writer, track_frames
-    from rhythmjax.tracker import TrackerOptions
-    from rhythmjax.video import open_video
+    from rhythmjax.cli.common import overlay_writer
+    from rhythmjax.cli.overlay import draw_frame
+    from rhythmjax.track import track_frames
+    from rhythmjax.track.tracker import TrackerOptions
+    from rhythmjax.vision.video import open_video
 
     src = open_video(str(path), fps=fps)
     with overlay_writer(overlay, fps, (src.width, src.height)) as w:
-        tracks, verdicts, _, _ = track_frames(cfg, src, overlay=w, progress=False,
+        draw = None if w is None else (lambda f, i, snap: w.write(draw_frame(f, snap, i)))
+        tracks, verdicts, _, _ = track_frames(cfg, src, on_frame=draw, progress=False,
                                               options=TrackerOptions(max_objects=max_objects))
     return tracks, verdicts
 
@@ -191,7 +194,7 @@ def run_pets(n: int, overlay_dir=None) -> dict:
 
 def run_casia(overlay_dir=None) -> dict:
     """Every clip of casia_b_090/: tracks, the longest track's frames, its verdict and pace."""
-    from rhythmjax.params import config_from_dict
+    from rhythmjax.model.params import config_from_dict
 
     cfg = config_from_dict(CASIA_CONFIG)
     out = {}

@@ -21,9 +21,9 @@ import time
 
 import numpy as np
 
-from rhythmjax.cli_video import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
-from rhythmjax.evaluate import summarise
-from rhythmjax.params import Config, config_from_dict, config_to_dict
+from rhythmjax.model.params import Config, config_from_dict, config_to_dict
+from rhythmjax.sim.evaluate import summarise
+from rhythmjax.sim.presets import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
 
 
 SEED = 20240603
@@ -33,7 +33,7 @@ RECOMMENDED = SYNTHETIC_CONFIG  # the demo's config (and its tracker options, SY
 
 def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, camera=None):
     """The fixed evaluation scenes: (scene_seed, SceneSpec) pairs."""
-    from rhythmjax.synth import random_spec
+    from rhythmjax.sim.scene import random_spec
 
     out = []
     for i in range(n_scenes):
@@ -48,9 +48,9 @@ def run_scene(cfg, seed, spec, options=None):
     """Render, track and score one scene; returns (score dict with each object's verdict from
     the windows that looked at it, tracks, verdicts, scene, score dict with each object's
     verdict from the track assigned to it); see `evaluate.score`."""
-    from rhythmjax.cli_video import track_frames
-    from rhythmjax.evaluate import deciding_windows, score
-    from rhythmjax.synth import render_scene
+    from rhythmjax.sim.evaluate import deciding_windows, score
+    from rhythmjax.sim.scene import render_scene
+    from rhythmjax.track import track_frames
 
     scene = render_scene(seed, spec)
     frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))

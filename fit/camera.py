@@ -22,7 +22,7 @@ ill-determined, with the singular direction named. Any member of that family pro
 back-projects identically.
 
 Extensions (issue 5, real footprints): "roll" (deg; the image of (3) rotated about (Uc, Vc),
-see `rhythmjax.camera`), and with ``world=True`` a planar rigid transform from the data's
+see `rhythmjax.model.camera`), and with ``world=True`` a planar rigid transform from the data's
 world frame (m) to the ground frame of (3) (camera foot at the origin, y ahead),
 
     x = cos(yaw) X - sin(yaw) s Y + tx,    y = sin(yaw) X + cos(yaw) s Y + ty,
@@ -47,8 +47,8 @@ import numpy as np
 import optimistix as optx
 
 from fit.homography import dlt_homography as dlt_homography, pose_from_homography
-from rhythmjax.camera import project
-from rhythmjax.params import Camera
+from rhythmjax.model.camera import project
+from rhythmjax.model.params import Camera
 
 
 NAMES = ("af", "bf", "h", "theta", "uc", "vc", "roll", "tx", "ty", "yaw")

@@ -120,7 +120,7 @@ def _walking(args, cfg):
 
 def main(argv: list[str] | None = None) -> int:
     from rhythmjax.io import BadInput, dumps_json, read_config, write_config
-    from rhythmjax.params import Config
+    from rhythmjax.model.params import Config
 
     args = _parser().parse_args(argv)
     try:

@@ -1,7 +1,7 @@
 """Process and measurement noise Q, R by maximum innovation likelihood of the EKF (4)-(9).
 
 The loss is the negative total innovation log-likelihood sum_k log N(nu_k; 0, S_k) of every used
-measurement of a batch of padded tracks, filtered by `rhythmjax.ekf.filter_batch` with
+measurement of a batch of padded tracks, filtered by `rhythmjax.model.ekf.filter_batch` with
 `FromAnnotations` validity (one filter, two uses: STYLE R5, R10). The parameters are `Noise`'s
 unconstrained leaves (log q, log-Cholesky factor of R, log initial speed spread: STYLE R3), so
 BFGS moves freely. Uncertainties: the inverse Hessian of the loss in the unconstrained
@@ -20,9 +20,9 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from rhythmjax.camera import project
-from rhythmjax.ekf import FromAnnotations, filter_batch
-from rhythmjax.params import Camera, Noise
+from rhythmjax.model.camera import project
+from rhythmjax.model.ekf import FromAnnotations, filter_batch
+from rhythmjax.model.params import Camera, Noise
 
 
 LEAVES = ("log_q", "log_r_diag", "r_offdiag", "log_init_speed_std")

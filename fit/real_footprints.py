@@ -23,8 +23,8 @@ import cv2
 import numpy as np
 
 from fit.camera import CameraFit, fit_camera
-from rhythmjax import datasets as D
-from rhythmjax.params import Camera
+from rhythmjax.evaluation import datasets as D
+from rhythmjax.model.params import Camera
 
 
 def eth_pairs(name: str):

@@ -13,8 +13,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from rhythmjax.camera import ground_from_image, project
-from rhythmjax.params import Camera
+from rhythmjax.model.camera import ground_from_image, project
+from rhythmjax.model.params import Camera
 
 
 def random_camera(rng: np.random.Generator, f: float = 0.008) -> Camera:

@@ -4,7 +4,7 @@ Label handling: a track labelled ``pedestrian`` is a positive; every other label
 car, other) is the negative class; unlabelled tracks ("") are left out.
 
 1. Features, once: the batched EKF with the paper's gates (10)-(11) and the rhythm windows of
-   `rhythmjax.rhythm`, keeping every window's spectral peaks and ground speed (`features`).
+   `rhythmjax.model.rhythm`, keeping every window's spectral peaks and ground speed (`features`).
    Which window decides a track depends on the thresholds (matching stops at the first window
    that says Pedestrian), so all windows are kept; at the config's thresholds `decide`
    reproduces `rhythm.classify_batch` exactly (tested).
@@ -33,12 +33,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from rhythmjax import mem
-from rhythmjax.batch import padded_chunks
-from rhythmjax.camera import ground_width
-from rhythmjax.params import Config, Thresholds, WalkingModel, WidthModel
-from rhythmjax.rhythm import RhythmResult, match, track_windows
-from rhythmjax.status import Reason, Verdict
+from rhythmjax.model import mem
+from rhythmjax.model.batch import padded_chunks
+from rhythmjax.model.camera import ground_width
+from rhythmjax.model.params import Config, Thresholds, WalkingModel, WidthModel
+from rhythmjax.model.rhythm import RhythmResult, match, track_windows
+from rhythmjax.model.status import Reason, Verdict
 
 
 POSITIVE = "pedestrian"
@@ -354,9 +354,9 @@ def _edge_notes(axes: dict, ba: np.ndarray, idx: tuple) -> list[str]:
 
 
 def make_labelled(**kw):
-    """`rhythmjax.simtracks.make_tracks(**kw)` with its projections jitted: it calls them op by
+    """`rhythmjax.sim.tracks.make_tracks(**kw)` with its projections jitted: it calls them op by
     op per track, which dominates its run time; the numbers agree to float rounding."""
-    import rhythmjax.simtracks as st
+    import rhythmjax.sim.tracks as st
 
     saved = st.project, st.image_width
     st.project, st.image_width = jax.jit(saved[0]), jax.jit(saved[1])

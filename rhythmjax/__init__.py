@@ -1,12 +1,24 @@
 """rhythmjax: pedestrians told apart from other moving objects by the rhythm of walking.
 
-The numeric core (camera, EKF, gates, MEM spectrum, rhythm matching) is pure JAX and imports no
-OpenCV; video and detection live in `rhythmjax.video` and `rhythmjax.detect`.
+Subpackages along the data flow, each importing only those below it:
+
+- `rhythmjax.model`: pure JAX, no I/O: parameters, camera (3), EKF (4)-(9), gates (10) (11)
+  (14), MEM spectrum, rhythm (12)-(15), batch classification of stored tracks.
+- `rhythmjax.io`: tracks / footprints / verdicts / config / MOT files, atomic writes, errors.
+- `rhythmjax.vision`: pixels (NumPy/OpenCV): video I/O, frame-difference detection, window B,
+  background model, blobs, blob graph.
+- `rhythmjax.track`: the rhythm paper's online tracker (Fig. 3 state machine per object).
+- `rhythmjax.count`: the tracking paper's pedestrians level, stitching and counting.
+- `rhythmjax.sim`: synthetic scenes and tracks with truth, scoring against it, presets.
+- `rhythmjax.cli`: the command line, overlays and figures (nothing else imports it).
+
+`rhythmjax.evaluation` (MOT scoring, the SORT baseline, real-data loaders) serves benchmarks,
+tests and studies; the library never imports it.
 """
 
 from importlib.metadata import PackageNotFoundError, version as _version
 
-from .params import (
+from .model.params import (
     Camera as Camera,
     Config as Config,
     ConfigError as ConfigError,
@@ -15,7 +27,7 @@ from .params import (
     WalkingModel as WalkingModel,
     WidthModel as WidthModel,
 )
-from .status import Reason as Reason, TrackState as TrackState, Verdict as Verdict
+from .model.status import Reason as Reason, TrackState as TrackState, Verdict as Verdict
 
 
 try:

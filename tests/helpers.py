@@ -43,7 +43,7 @@ class CamRef:
 
 
 def cam_ref_of(camera) -> CamRef:
-    """The float64 values of a `rhythmjax.params.Camera` (attribute reads only)."""
+    """The float64 values of a `rhythmjax.model.params.Camera` (attribute reads only)."""
     return CamRef(*(float(np.asarray(getattr(camera, k))) for k in
                     ("f", "h", "theta", "a", "b", "uc", "vc")))
 
@@ -178,7 +178,7 @@ def _sym(P):
 def ekf_reference(cam: CamRef, q_std, R, init_speed_std, z, width=None, dt=None, present=None,
                   gate=None) -> dict[str, np.ndarray]:
     """The EKF (4)-(9) of one track as a float64 loop; returns per-step arrays named like
-    `rhythmjax.ekf.StepOutput` (mean, cov, pred_mean, innovation, nis, loglik, available, valid,
+    `model.ekf.StepOutput` (mean, cov, pred_mean, innovation, nis, loglik, available, valid,
     started). dt[k] is the interval before step k; `gate` None means every measurement is used."""
     z = np.asarray(z, np.float64)
     T = len(z)

@@ -1,4 +1,4 @@
-"""Float64 NumPy references for `rhythmjax.mem`, written from the textbook (Marple 1987, ch. 8;
+"""Float64 NumPy references for `model.mem`, written from the textbook (Marple 1987, ch. 8;
 Kaveh & Lippert 1983 for the tapers); shares no code with the library."""
 
 import numpy as np

@@ -9,8 +9,8 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 
-from rhythmjax.blobgraph import BlobGraph, blob_graph, candidate_edges, graph_cost
-from rhythmjax.blobs import Blob
+from rhythmjax.vision.blobgraph import BlobGraph, blob_graph, candidate_edges, graph_cost
+from rhythmjax.vision.blobs import Blob
 
 
 def mk(x0: int, y0: int, x1: int, y1: int, area: int | None = None) -> Blob:

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from rhythmjax.blobs import BackgroundModel, Blob, find_blobs, foreground_fraction, is_crowd
+from rhythmjax.vision.blobs import BackgroundModel, Blob, find_blobs, foreground_fraction, is_crowd
 
 
 def _ref_step(bg: np.ndarray, img: np.ndarray, alpha: float, beta: float, t: float
@@ -167,7 +167,7 @@ def test_empty_mask_and_many_regions(max_crops: int, monkeypatch: pytest.MonkeyP
     assert labels.dtype == np.uint16 and len(blobs) == 1 and blobs[0].area == 9
     assert np.count_nonzero(labels) == 9
     # more blobs than uint16 labels can hold (the limit lowered: 65536 blobs are slow in tests)
-    monkeypatch.setattr("rhythmjax.blobs.MAX_U16_LABELS", 500)
+    monkeypatch.setattr("rhythmjax.vision.blobs.MAX_U16_LABELS", 500)
     blobs, labels = find_blobs(m, min_area=1, max_crops=max_crops)
     assert labels.dtype == np.int32 and len(blobs) == 900 - 3 == labels.max()
     assert [b.label for b in blobs] == list(range(1, 898))
@@ -268,7 +268,7 @@ def test_component_and_meeting_match_plain_references() -> None:
     blob's box area)."""
     import cv2
 
-    from rhythmjax.blobs import _component, box_table, meeting
+    from rhythmjax.vision.blobs import _component, box_table, meeting
 
     rng = np.random.default_rng(8)
     for _ in range(60):

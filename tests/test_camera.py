@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax.camera import (
+from rhythmjax.model.camera import (
     depth,
     ground_from_image,
     ground_width,
@@ -22,7 +22,7 @@ from rhythmjax.camera import (
     measure_jacobian,
     project,
 )
-from rhythmjax.params import Camera
+from rhythmjax.model.params import Camera
 
 from .helpers import CamRef, horizon_ref, jac_fd, measure_ref, project_paper_ref, project_ref
 

@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from rhythmjax.cli import main
+from rhythmjax.cli.main import main
 from rhythmjax.io import read_table
 
 

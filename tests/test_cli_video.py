@@ -10,9 +10,9 @@ import cv2
 import numpy as np
 import pytest
 
-from rhythmjax import synth
-from rhythmjax.cli import main
-from rhythmjax.params import Config
+from rhythmjax.cli.main import main
+from rhythmjax.model.params import Config
+from rhythmjax.sim import scene as synth
 
 
 @pytest.fixture(scope="module")

@@ -10,12 +10,12 @@ import cv2
 import numpy as np
 import pytest
 
-from rhythmjax.cli import main
+from rhythmjax.cli.main import main
 from rhythmjax.count import CountOptions, count_frames
 from rhythmjax.io import BadInput, read_table
-from rhythmjax.mot import MOT_COLUMNS, read_mot, write_mot
-from rhythmjax.params import config_from_dict
-from rhythmjax.synth import SceneSpec, render_scene, walker
+from rhythmjax.io.mot import MOT_COLUMNS, read_mot, write_mot
+from rhythmjax.model.params import config_from_dict
+from rhythmjax.sim.scene import SceneSpec, render_scene, walker
 
 from .test_pedestrians import SMALL
 
@@ -233,12 +233,12 @@ def test_count_rule_removes_non_pedestrians_and_too_fast_unclassified():
 
 def test_too_fast_is_the_walking_models_top_speed():
     from rhythmjax.count import track_speed, walking_top_speed
-    from rhythmjax.pedestrian_level import _Ped
+    from rhythmjax.count.pedestrian_level import Pedestrian
 
     # (14): pace within 3 sigma of 2.05 +- 0.183 Hz, stride within 3 sigma of 0.72 +- 0.09 m
     assert walking_top_speed(CFG) == pytest.approx((2.05 + 3 * 0.183) * (0.72 + 3 * 0.09),
                                                    rel=1e-5)
-    p = _Ped(slot=0, born=0)
+    p = Pedestrian(slot=0, born=0)
     # rows: (index, t, u, v, W, I, x, y, state): 1.5 s at (1.2, -1.6) m/s = 2 m/s, measured
     p.rows = [(k, k / 15, 100.0, 100.0, 20.0, 1.0, 1.2 * k / 15, 8 - 1.6 * k / 15, 2)
               for k in range(23)]
@@ -297,9 +297,9 @@ def test_stitch_links_a_track_that_continues_another():
 
 
 def test_stitch_predicts_on_the_ground_plane_with_the_ekf_state():
-    from rhythmjax.camera_np import project_3d
     from rhythmjax.count import stitch_pieces
-    from rhythmjax.pedestrians import ShapeModel
+    from rhythmjax.count.patches import ShapeModel
+    from rhythmjax.model.camera_np import project_3d
 
     shape = ShapeModel.from_config(CFG, "3d")
     cam = shape.camera
@@ -315,7 +315,7 @@ def test_stitch_predicts_on_the_ground_plane_with_the_ekf_state():
     assert stitch_pieces([a, b], camera=cam, **STITCH) == [1, -1]
     # the prediction runs on the ground plane: exact for a constant ground velocity, where a
     # straight line in the image (no EKF state) misses as the walker recedes
-    from rhythmjax.count import _predict
+    from rhythmjax.count.stitch import _predict
 
     np.testing.assert_allclose(_predict(a, 1.0, cam), uv(0.5, 7.4), atol=1e-6)
     flat = dataclasses_replace(a, end_ground=None)
@@ -356,7 +356,7 @@ def _place_by_loops(labels, related, claimed, shape, pu, pv, radius_px, v_max=No
     """`pedestrians.place_patch` (no bbox) by plain loops over the candidates and pixels: the
     foot row is the lowest related pixel in the patch columns, the count is summed directly,
     patch and columns clipped to the search window."""
-    from rhythmjax.pedestrians import Placement
+    from rhythmjax.count.patches import Placement
 
     H, W = labels.shape
     pix = np.isin(labels, related) & (True if claimed is None else ~claimed)
@@ -391,8 +391,8 @@ def _place_by_loops(labels, related, claimed, shape, pu, pv, radius_px, v_max=No
 def test_place_patch_matches_a_loop_reference():
     """`place_patch` (vectorised candidates, integral image, row-size table, label equality
     masks) gives the loop reference's placement exactly on random blob images."""
-    from rhythmjax.blobs import find_blobs
-    from rhythmjax.pedestrians import ShapeModel, place_patch
+    from rhythmjax.count.patches import ShapeModel, place_patch
+    from rhythmjax.vision.blobs import find_blobs
 
     rng = np.random.default_rng(17)
     found = 0
@@ -419,14 +419,15 @@ def test_place_patch_matches_a_loop_reference():
 def test_deferred_filter_results_give_the_same_tracks():
     """`PedestrianLevel(defer=True)` (count_frames without an overlay: a frame's filter results
     taken up in the next update) gives the undeferred level's outputs exactly."""
-    from rhythmjax.pedestrian_level import PedestrianLevel
+    from rhythmjax.count.counting import finish_count
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
 
     frames, out = _crossing_frames(60), []
     for defer in (False, True):
         level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False), defer)
         for k, f in enumerate(frames):
             level.update(k, k / 15.0, f)
-        out.append(level.finish())
+        out.append(finish_count(level))
     assert out[0].counts == out[1].counts and len(out[0].mot["frame"]) > 40
     for c in MOT_COLUMNS:
         np.testing.assert_array_equal(out[0].mot[c], out[1].mot[c])

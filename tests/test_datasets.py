@@ -1,4 +1,4 @@
-"""rhythmjax.datasets against the figures in each folder's SOURCE.md (skipped without the data)."""
+"""evaluation.datasets against the figures in each folder's SOURCE.md (skipped without the data)."""
 
 import math
 
@@ -7,9 +7,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax import datasets as D
-from rhythmjax.camera import ground_from_image, project
-from rhythmjax.io_tables import BadInput
+from rhythmjax.evaluation import datasets as D
+from rhythmjax.io.tables import BadInput
+from rhythmjax.model.camera import ground_from_image, project
 
 
 pytestmark = pytest.mark.data

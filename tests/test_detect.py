@@ -11,8 +11,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax.camera import project
-from rhythmjax.detect import (
+from rhythmjax.model.camera import project
+from rhythmjax.model.params import Camera, WidthModel
+from rhythmjax.vision.detect import (
     Detection,
     block_any,
     box_overlap,
@@ -28,7 +29,6 @@ from rhythmjax.detect import (
     window_b_intensity,
     window_b_rect,
 )
-from rhythmjax.params import Camera, WidthModel
 
 
 S = 256
@@ -199,7 +199,7 @@ def test_global_change_and_duplicates():
 def test_casia_smoke():
     if not os.path.isfile(CASIA):
         pytest.skip("CASIA-B clip not present")
-    from rhythmjax.video import open_video
+    from rhythmjax.vision.video import open_video
 
     src = open_video(CASIA)
     assert src.fps == 25.0 and (src.width, src.height) == (320, 240)
@@ -275,7 +275,7 @@ def test_block_any_matches_a_numpy_loop(s):
 def test_motion_image_changed_counts_the_thresholded_difference():
     """M and D equal `motion_image`'s and n equals a NumPy count of D > threshold, exactly, on
     random frames (including thresholds at the grey levels present)."""
-    from rhythmjax.detect import motion_image_changed
+    from rhythmjax.vision.detect import motion_image_changed
 
     rng = np.random.default_rng(5)
     for thr in (0, 7, 15, 60):
@@ -292,7 +292,7 @@ def test_motion_image_changed_counts_the_thresholded_difference():
 def test_motion_outside_counts_motion_pixels_outside_the_boxes():
     """Against a NumPy mask loop: boxes overlapping each other, the border and the frame's
     outside (negative corners, past the edge), and none."""
-    from rhythmjax.detect import motion_outside
+    from rhythmjax.vision.detect import motion_outside
 
     rng = np.random.default_rng(6)
     m = (rng.random((40, 60)) < 0.3).astype(np.uint8) * rng.integers(1, 3, (40, 60)).astype(

@@ -14,9 +14,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax import ekf
-from rhythmjax.camera import measure, measure_jacobian
-from rhythmjax.params import Camera, Noise
+from rhythmjax.model import ekf
+from rhythmjax.model.camera import measure, measure_jacobian
+from rhythmjax.model.params import Camera, Noise
 
 from .helpers import (
     CamRef,

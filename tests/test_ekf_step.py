@@ -6,10 +6,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax import ekf
-from rhythmjax.camera import image_width, project
-from rhythmjax.gates import PaperGates, outlier_distance2, outlier_distance2_of_update
-from rhythmjax.params import Config
+from rhythmjax.model import ekf
+from rhythmjax.model.camera import image_width, project
+from rhythmjax.model.gates import PaperGates, outlier_distance2, outlier_distance2_of_update
+from rhythmjax.model.params import Config
 
 
 def _track(seed, n=90):

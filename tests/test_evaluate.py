@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from rhythmjax.evaluate import match_tracks, score, window_objects
+from rhythmjax.sim.evaluate import match_tracks, score, window_objects
 
 
 N = 100

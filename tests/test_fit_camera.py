@@ -11,7 +11,7 @@ import pytest
 
 from fit.camera import NAMES, fit_camera, reprojection_rms, residuals
 from fit.synthetic import footprints, random_camera, se_over_spread, truth
-from rhythmjax.params import Camera
+from rhythmjax.model.params import Camera
 
 
 FIT4 = ("af", "bf", "h", "theta")
@@ -228,7 +228,7 @@ def test_unidentifiable_and_bound_fits_are_flagged():
 
 @pytest.mark.data
 def test_pets_fit_lands_near_tsai():
-    from rhythmjax import datasets as D
+    from rhythmjax.evaluation import datasets as D
 
     if D.pets_root() is None:
         pytest.skip("PETS 2009 data absent")

@@ -1,4 +1,4 @@
-"""`rhythmjax-fit` in-process on files written by rhythmjax.simtracks (issue 5)."""
+"""`rhythmjax-fit` in-process on files written by rhythmjax.sim.tracks (issue 5)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import pytest
 
 from fit.cli import main
 from rhythmjax.io import read_config, write_config, write_table
-from rhythmjax.params import Camera, Config
-from rhythmjax.simtracks import make_tracks
+from rhythmjax.model.params import Camera, Config
+from rhythmjax.sim.tracks import make_tracks
 
 
 COLS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "label", "x", "y")
@@ -86,7 +86,7 @@ def test_noise_fit(files, capsys):
     # 40 tracks x 60 steps of the model (1)-(3) with q (0.3, 0.5) m/s/sqrt(s), r (1.5, 2.5) px,
     # written as a tracks file; from Table 1's start the fit lands within 25 % of each value.
     from fit.noise import simulate
-    from rhythmjax.params import Noise
+    from rhythmjax.model.params import Noise
 
     true = Noise(q_std=(0.3, 0.5), r_std=(1.5, 2.5), init_speed_std=1.0)
     z, _, _, _ = simulate(CAM, true, np.random.default_rng(4), 40, 60)

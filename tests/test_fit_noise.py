@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fit.noise import _spec, fit_noise, neg_loglik, simulate
-from rhythmjax.params import Camera, Noise
+from rhythmjax.model.params import Camera, Noise
 
 
 TRUE = {"q_x": 0.3, "q_y": 0.5, "r_u": 1.5, "r_v": 2.5}

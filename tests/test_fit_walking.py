@@ -1,6 +1,6 @@
 """fit.walking: walking/width models and thresholds from labelled synthetic tracks (issue 5).
 
-One population of 250 labelled tracks (`rhythmjax.simtracks`, walkers with pace
+One population of 250 labelled tracks (`rhythmjax.sim.tracks`, walkers with pace
 N(2.05, 0.183) Hz and stride N(0.72, 0.09) m) is classified once; every test reuses its features
 and compiled functions (module-scoped fixture).
 """
@@ -28,11 +28,11 @@ from fit.walking import (
     split,
     with_thresholds,
 )
-from rhythmjax import mem
 from rhythmjax.io import read_config, write_config, write_table
-from rhythmjax.params import Config
-from rhythmjax.rhythm import classify_batch, match
-from rhythmjax.status import Verdict
+from rhythmjax.model import mem
+from rhythmjax.model.params import Config
+from rhythmjax.model.rhythm import classify_batch, match
+from rhythmjax.model.status import Verdict
 
 
 COLS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "label", "x", "y")

@@ -12,8 +12,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax import ekf
-from rhythmjax.gates import (
+from rhythmjax.model import ekf
+from rhythmjax.model.gates import (
     PaperGates,
     in_range,
     outlier_distance2,
@@ -22,7 +22,7 @@ from rhythmjax.gates import (
     width_distance2,
     width_ok,
 )
-from rhythmjax.params import Camera, Noise, Thresholds, WalkingModel, WidthModel
+from rhythmjax.model.params import Camera, Noise, Thresholds, WalkingModel, WidthModel
 
 from .helpers import (
     CamRef,

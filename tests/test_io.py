@@ -15,19 +15,20 @@ import numpy as np
 import pyarrow.csv as pacsv
 import pytest
 
-from rhythmjax import atomic, io_tables
 from rhythmjax.io import (
     BadInput,
+    atomic,
     atomic_path,
     atomic_write,
     check_writable,
     dumps_json,
     read_config,
     read_table,
+    tables as io_tables,
     write_config,
     write_table,
 )
-from rhythmjax.params import Config, config_from_dict, config_to_dict
+from rhythmjax.model.params import Config, config_from_dict, config_to_dict
 
 
 ROOT = str(Path(__file__).resolve().parents[1])
@@ -228,7 +229,7 @@ def test_sigkill_mid_write_leaves_old_file(tmp_path):
     (tmp_path / "verdicts.csv").write_bytes(b"old")
     child = run_child("""
         import sys, time
-        from rhythmjax.io_tables import atomic_write
+        from rhythmjax.io.tables import atomic_write
         with atomic_write("verdicts.csv") as f:
             f.write(b"half"); f.flush()
             print("writing", flush=True)

@@ -12,8 +12,8 @@ import pytest
 from hypothesis import assume, given, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from rhythmjax import mem
-from rhythmjax.params import Thresholds
+from rhythmjax.model import mem
+from rhythmjax.model.params import Thresholds
 
 from .helpers_mem import burg_reference, psd_reference, simulate_ar, stable_ar
 

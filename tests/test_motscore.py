@@ -1,4 +1,4 @@
-"""rhythmjax.motscore against hand-computed CLEAR-MOT / IDF1 cases and an independent NumPy
+"""evaluation.motscore against hand-computed CLEAR-MOT / IDF1 cases and an independent NumPy
 brute-force implementation of the same definitions on random small sequences."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pytest
 
 pytest.importorskip("motmetrics")
 
-from rhythmjax.motscore import _quiet_motmetrics, iou_matrix, score_mot  # noqa: E402
+from rhythmjax.evaluation.motscore import _quiet_motmetrics, iou_matrix, score_mot  # noqa: E402
 
 
 def table(rows):

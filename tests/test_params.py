@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax.params import Config, ConfigError, Noise, config_from_dict, config_to_dict
+from rhythmjax.model.params import Config, ConfigError, Noise, config_from_dict, config_to_dict
 
 
 def test_table1_defaults():

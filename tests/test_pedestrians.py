@@ -1,4 +1,4 @@
-"""The pedestrians level (rhythmjax.pedestrians, count.PedestrianLevel): patch size, dynamics
+"""The pedestrians level (rhythmjax.count.patches, count.PedestrianLevel): patch size, dynamics
 against independent filters, placement, and two constructed scenes (crossing, group split)."""
 
 from __future__ import annotations
@@ -10,10 +10,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax import ekf
 from rhythmjax.count import CountOptions, count_frames
-from rhythmjax.params import config_from_dict
-from rhythmjax.pedestrians import (
+from rhythmjax.count.patches import (
     ShapeModel,
     SlotFilter,
     image_noise,
@@ -21,7 +19,9 @@ from rhythmjax.pedestrians import (
     patch_size_3d,
     place_patch,
 )
-from rhythmjax.synth import SceneSpec, project_3d, render_scene, walker
+from rhythmjax.model import ekf
+from rhythmjax.model.params import config_from_dict
+from rhythmjax.sim.scene import SceneSpec, project_3d, render_scene, walker
 
 
 # a small camera: 256x192, 3 m high, 25 deg down, a f = b f = 200 px/m; people 3-15 m away
@@ -236,11 +236,11 @@ def test_new_pedestrians_start_only_in_the_detection_range():
 
 
 def test_a_track_whose_ground_velocity_jumps_ends_before_the_jump():
-    from rhythmjax.pedestrian_level import PedestrianLevel, _Ped
+    from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
 
     level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False))
     k = round(0.5 * 15)  # dv_window_s = 0.5 s at 15 fps
-    p = _Ped(slot=0, born=0)
+    p = Pedestrian(slot=0, born=0)
     # 2 s walking at 1.4 m/s, then the velocity swings by 3 m/s within 0.3 s (the patch slid
     # down a merged blob onto a nearer person)
     p.ground = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)]
@@ -267,12 +267,12 @@ def test_a_swap_between_crossing_walkers_ends_the_track():
     same 1.4 m/s: |dv| = 1.4 x sqrt(2) = 1.98 m/s; a walker speeding up from 1.0 to 1.4 m/s
     over the window, or turning by 45 degrees (|dv| = 2 x 1.4 x sin(22.5 deg) = 1.07 m/s),
     is not lost."""
-    from rhythmjax.pedestrian_level import PedestrianLevel, _Ped
+    from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
 
     level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False))
     assert level.opt.max_dv_mps == 1.5
     k = round(0.5 * 15)
-    p = _Ped(slot=0, born=0)
+    p = Pedestrian(slot=0, born=0)
     walk = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)]
     p.ground = walk + [(3.0, 8.0 + 0.1 * i, 0.0, 1.4) for i in range(1, k + 1)]
     assert level._velocity_jump(p) == k
@@ -302,7 +302,7 @@ def test_scalar_patch_size_is_the_array_one_exactly():
 def test_placement_cut_to_the_related_blobs_box_is_the_same():
     """place_patch with `bbox` (the related blobs' box) gives the placement of the full search
     window on random blob images, claimed pixels and predictions."""
-    from rhythmjax.blobs import find_blobs
+    from rhythmjax.vision.blobs import find_blobs
 
     shape = ShapeModel.from_config(CFG, "3d")
     rng = np.random.default_rng(11)
@@ -337,8 +337,8 @@ def _lifted_scene(level, span_frac: float):
     """Labels (one blob, label 1): a near walker's patch standing on (80, 170) and, right of
     the 1.8 W its pedestrian explains, a farther walker's columns standing on (u2, 110), spanning
     `span_frac` of its patch height up from its feet; the near pedestrian already placed."""
-    from rhythmjax.blobs import Blob
-    from rhythmjax.pedestrian_level import _Ped
+    from rhythmjax.count.pedestrian_level import Pedestrian
+    from rhythmjax.vision.blobs import Blob
 
     w, h = level.shape.size(80.0, 170.0)
     w2, h2 = level.shape.size(130.0, 110.0)
@@ -349,7 +349,7 @@ def _lifted_scene(level, span_frac: float):
     ys, xs = np.nonzero(lab)
     blob = Blob((int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1),
                 int(ys.size), 0.0, (float(xs.mean()), float(ys.mean())), 0.5, 1)
-    p = _Ped(slot=0, born=0)
+    p = Pedestrian(slot=0, born=0)
     p.z = (80.0, 170.0)
     level.peds = [p]
     return [blob], lab, u2, h, h2
@@ -363,7 +363,7 @@ def _lifted_scene(level, span_frac: float):
 ])
 def test_a_walker_merged_above_a_nearer_one_starts_a_pedestrian(span_frac, lifted_height,
                                                                  starts):
-    from rhythmjax.pedestrian_level import PedestrianLevel
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
 
     level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False,
                                               new_lifted_height=lifted_height))
@@ -383,11 +383,11 @@ def test_online_verdict_windows_start_every_hop_samples():
     """The pedestrians level's online verdict (drawn on the overlay) judges the same windows as
     `rhythm.classify_track`: N = 32 rows, one starting every hop = 16 rows; a constant signal
     (no peak, never Pedestrian) is judged at 32, 48 and 64 rows, and not in between."""
-    from rhythmjax.pedestrian_level import PedestrianLevel, _Ped
+    from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
 
     cfg = config_from_dict({"thresholds": {"n_samples": 32}})
     level = PedestrianLevel(cfg, CountOptions(classify=False))
-    p = _Ped(slot=0, born=0)
+    p = Pedestrian(slot=0, born=0)
     judged_at = []
     for k in range(70):  # (index, t, u, v, width, intensity, x, y, state)
         p.rows.append((k, k / 15.0, 100.0, 200.0, 30.0, 5.0, 0.1 * k, 10.0, 2))
@@ -402,7 +402,7 @@ def test_online_verdict_windows_start_every_hop_samples():
 def test_placement_helpers_match_plain_references():
     """`related_mask` (np.isin), `lowest_rows`, `range_max` (NumPy loops) and `row_sizes`
     (`size` at each row) give the same values exactly (integers; the same float64 operations)."""
-    from rhythmjax.pedestrians import lowest_rows, range_max, related_mask
+    from rhythmjax.count.patches import lowest_rows, range_max, related_mask
 
     rng = np.random.default_rng(5)
     for dtype in (np.uint8, np.uint16, np.int32):

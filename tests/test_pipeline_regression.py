@@ -17,11 +17,11 @@ import math
 import os
 from pathlib import Path
 
-from rhythmjax.cli_video import SYNTHETIC_CONFIG, SYNTHETIC_OPTIONS, synthetic_options
-from rhythmjax.evaluate import deciding_windows, score, summarise
-from rhythmjax.params import config_from_dict
-from rhythmjax.synth import random_spec, render_scene
-from rhythmjax.tracker import OnlineTracker
+from rhythmjax.model.params import config_from_dict
+from rhythmjax.sim.evaluate import deciding_windows, score, summarise
+from rhythmjax.sim.presets import SYNTHETIC_CONFIG, SYNTHETIC_OPTIONS, synthetic_options
+from rhythmjax.sim.scene import random_spec, render_scene
+from rhythmjax.track.tracker import OnlineTracker
 
 
 BASELINE = Path(__file__).with_name("pipeline_baseline.json")

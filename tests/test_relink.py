@@ -1,4 +1,4 @@
-"""Re-acquisition of timed-out tracks (rhythmjax.relink and the tracker's use of it): the pieces
+"""Re-acquisition of timed-out tracks (track.relink and the tracker's use of it): the pieces
 by hand, and a walker hidden for 1.5 s that keeps its id."""
 
 import dataclasses
@@ -7,11 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from rhythmjax import relink, synth
-from rhythmjax.camera_np import camera_tuple, project_3d
-from rhythmjax.params import Config
-from rhythmjax.status import TrackState
-from rhythmjax.tracker import OnlineTracker, TrackerOptions
+from rhythmjax.model.camera_np import camera_tuple, project_3d
+from rhythmjax.model.params import Config
+from rhythmjax.model.status import TrackState
+from rhythmjax.sim import scene as synth
+from rhythmjax.track import relink
+from rhythmjax.track.tracker import OnlineTracker, TrackerOptions
 
 
 CFG = Config()

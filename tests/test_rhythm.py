@@ -8,10 +8,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax import mem
-from rhythmjax.camera import project
-from rhythmjax.params import Config, Thresholds, WalkingModel
-from rhythmjax.rhythm import (
+from rhythmjax.model import mem
+from rhythmjax.model.camera import project
+from rhythmjax.model.params import Config, Thresholds, WalkingModel
+from rhythmjax.model.rhythm import (
     classify_batch,
     classify_track,
     fill_gaps,
@@ -20,7 +20,7 @@ from rhythmjax.rhythm import (
     window_grid,
     window_speed,
 )
-from rhythmjax.status import Reason, Verdict
+from rhythmjax.model.status import Reason, Verdict
 
 
 WALK, THR = WalkingModel(), Thresholds(harmonic_ratio=0.0)  # the paper's (13)-(15) exactly
@@ -216,7 +216,7 @@ def test_window_speed_gradient_in_camera_height_matches_finite_differences():
 
 
 def _walker(n=100, pace=2.0, stride=0.7, fps=15.0, intensity=None, seed=0):
-    from rhythmjax.camera import image_width, project
+    from rhythmjax.model.camera import image_width, project
 
     cfg = Config()
     rng = np.random.default_rng(seed)

@@ -1,4 +1,4 @@
-"""rhythmjax.sort_baseline: the Kalman steps against plain float64 loops, the exact assignment
+"""evaluation.sort_baseline: the Kalman steps against plain float64 loops, the exact assignment
 against brute force, and track bookkeeping (short misses, new ids, min_hits) on constructed
 detections."""
 
@@ -9,7 +9,7 @@ import itertools
 import numpy as np
 import pytest
 
-from rhythmjax import sort_baseline as sb
+from rhythmjax.evaluation import sort_baseline as sb
 
 
 def matmul(a, b):

@@ -8,10 +8,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax import synth, synth_actors as sa
-from rhythmjax.camera import project
-from rhythmjax.detect import frame_difference, walker_width_px, window_b_intensity
-from rhythmjax.params import Camera, WidthModel
+from rhythmjax.model.camera import project
+from rhythmjax.model.params import Camera, WidthModel
+from rhythmjax.sim import actors as sa, scene as synth
+from rhythmjax.vision.detect import frame_difference, walker_width_px, window_b_intensity
 
 
 CAM = Camera()

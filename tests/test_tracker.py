@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from rhythmjax import synth
-from rhythmjax.params import Config, config_from_dict
-from rhythmjax.status import TrackState
-from rhythmjax.tracker import OnlineTracker
+from rhythmjax.model.params import Config, config_from_dict
+from rhythmjax.model.status import TrackState
+from rhythmjax.sim import scene as synth
+from rhythmjax.track.tracker import OnlineTracker
 
 
 CFG = Config()
@@ -95,9 +95,9 @@ def test_predict_timeout_ends_track():
 def test_classify_reproduces_tracker_verdicts(tmp_path):
     """Tracks written by the tracker, read back and batch-classified (`rhythmjax classify`),
     give the tracker's own verdicts, pace and stride."""
-    from rhythmjax.batch import classify_tracks
-    from rhythmjax.cli_video import TRACK_ORDER
+    from rhythmjax.cli.common import TRACK_ORDER
     from rhythmjax.io import read_tracks, to_batch, write_table
+    from rhythmjax.model.batch import classify_tracks
 
     scene = _walker_scene(n_frames=120)
     tr = _run(CFG, scene.frames)
@@ -125,8 +125,8 @@ def test_rhythm_window_restarts_after_missing_run():
     """A window of N rows more than a quarter of whose intensities are missing (a blob shared
     with another track) is not classified: the next window starts after its last missing row,
     and is classified once N rows follow it."""
-    from rhythmjax.status import TrackState
-    from rhythmjax.tracker import _Object
+    from rhythmjax.model.status import TrackState
+    from rhythmjax.track.tracker import _Object
 
     cfg = config_from_dict({"thresholds": {"n_samples": 32}})
     tr = OnlineTracker(cfg)
@@ -156,9 +156,9 @@ def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
     `sample_estimate=False` keeps the measured one."""
     import jax.numpy as jnp
 
-    from rhythmjax import detect
-    from rhythmjax.camera import project
-    from rhythmjax.tracker import TrackerOptions
+    from rhythmjax.model.camera import project
+    from rhythmjax.track.tracker import TrackerOptions
+    from rhythmjax.vision import detect
 
     at, real = [], detect.window_b_intensity
     monkeypatch.setattr(detect, "window_b_intensity",
@@ -188,7 +188,7 @@ def test_body_parts_measured_together():
     the body's parts within body_widths W joined the measured width is the body's (median ratio
     to the true width ~0.9), not a part's (0.78 with body_widths=0, which also broke the walker
     into more tracks). The high-foot drop is off here: it also removes a part's measurement."""
-    from rhythmjax.tracker import TrackerOptions
+    from rhythmjax.track.tracker import TrackerOptions
 
     scene = _walker_scene(y=8.0)
     truth = scene.truth[0]
@@ -211,8 +211,8 @@ def test_foot_point_far_above_the_prediction_is_dropped(walker_scene, monkeypatc
     predicted one is no measurement (u, v NaN, the slot predicts without running down its
     time-out), for at most high_foot_frames frames in a row; the rule by hand: frames 30-31 and
     40-42 dropped, 43-45 (the 4th-6th high frames in a row) kept, everything else as measured."""
-    from rhythmjax import detect
-    from rhythmjax.tracker import TrackerOptions
+    from rhythmjax.track.tracker import TrackerOptions
+    from rhythmjax.vision import detect
 
     opt = TrackerOptions(high_foot_widths=0.25)  # the synthetic scenes' setting (off by default)
     assert opt.high_foot_frames == 3
@@ -244,7 +244,7 @@ def test_velocity_jump_ends_the_track():
     (vx, vy) = (1.0, 0.0) m/s, then a 31st at (1.0, 1.9): |dv| against row 16 (15 back) is
     1.9 > 1.8, the track is 31 > 2k = 30 rows old, so its last 15 rows go and it ends with 16;
     at (1.0, 1.7) (|dv| 1.7) or with the rule off (0) it goes on with 31."""
-    from rhythmjax.tracker import TrackerOptions, _Object
+    from rhythmjax.track.tracker import TrackerOptions, _Object
 
     def run(vy, max_dv):
         tr = OnlineTracker(CFG, TrackerOptions(max_dv_mps=max_dv, dv_window_s=1.0))

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from rhythmjax.io import BadInput
-from rhythmjax.video import open_video, open_writer, to_gray_u8
+from rhythmjax.vision.video import open_video, open_writer, to_gray_u8
 
 
 H, W = 48, 64

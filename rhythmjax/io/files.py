@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from .io_tables import (
+from ..model.params import Config, ConfigError, config_from_dict, config_to_dict
+from .tables import (
     BadInput as BadInput,
     PathLike,
     Table as Table,
@@ -28,7 +29,6 @@ from .io_tables import (
     read_table as read_table,
     write_table as write_table,
 )
-from .params import Config, ConfigError, config_from_dict, config_to_dict
 
 
 TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity")

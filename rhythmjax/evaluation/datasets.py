@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import BadInput
-from .params import Camera
+from ..io.errors import BadInput
+from ..model.params import Camera
 
 
 DATA_ROOT: Path = Path(os.environ.get("RHYTHMJAX_DATA")

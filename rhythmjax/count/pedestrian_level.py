@@ -36,7 +36,7 @@ Per frame (`PedestrianLevel.update`):
    one: the younger ends. Relations for the next frame: the blobs the placed patch overlaps.
 Every frame each pedestrian samples the rhythm signal I(k) in window B at its foot point
 (`detect.window_b_intensity` on the frame difference, W = its patch width) and keeps its ground
-state (`_Ped.ground`: x, y, vx, vy; the EKF's for "3d") for stitching. A pedestrian that ends
+state (`Pedestrian.ground`: x, y, vx, vy; the EKF's for "3d") for stitching. A pedestrian that ends
 loses its trailing predicted frames; `finish` hands the ended tracks to `count`, which stitches
 fragments of one walker, judges and counts them.
 """
@@ -49,19 +49,19 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .blobs import box_table, meeting
-from .detect import window_b_intensity
-from .params import Config
-from .pedestrians import ShapeModel, SlotFilter, ground_point, patch_box, place_patch
-from .status import TrackState
+from ..model.params import Config
+from ..model.status import TrackState
+from ..vision.blobs import box_table, meeting
+from ..vision.detect import window_b_intensity
+from .patches import ShapeModel, SlotFilter, ground_point, patch_box, place_patch
 
 
 if TYPE_CHECKING:
-    from .count import CountOptions
+    from .options import CountOptions
 
 
 @dataclass
-class _Ped:
+class Pedestrian:
     slot: int
     born: int  # frame index
     track_id: int = 0  # 0 while tentative
@@ -100,8 +100,8 @@ class PedestrianLevel:
         self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
         self.coast_s = float(cfg.thresholds.predict_timeout) if opt.coast_s is None else \
             float(opt.coast_s)
-        self.peds: list[_Ped] = []
-        self.finished: list[_Ped] = []
+        self.peds: list[Pedestrian] = []
+        self.finished: list[Pedestrian] = []
         self.bg = None
         self.prev = None
         self.prev_blobs: list = []
@@ -119,9 +119,9 @@ class PedestrianLevel:
 
     # ------------------------------------------------------------------------------------------
     def update(self, index: int, t: float, gray: np.ndarray | None) -> None:
-        from .blobgraph import blob_graph
-        from .blobs import BackgroundModel, find_blobs, is_crowd
-        from .detect import frame_difference
+        from ..vision.blobgraph import blob_graph
+        from ..vision.blobs import BackgroundModel, find_blobs, is_crowd
+        from ..vision.detect import frame_difference
 
         self.n_frames += 1
         opt = self.opt
@@ -185,7 +185,7 @@ class PedestrianLevel:
 
         rel: dict[int, set] = {id(p): set() for p in self.peds}
         if graph is not None:
-            by_parent: dict[int, list[_Ped]] = {}
+            by_parent: dict[int, list[Pedestrian]] = {}
             for p in self.peds:
                 for i in p.blobs:
                     by_parent.setdefault(i, []).append(p)
@@ -207,7 +207,7 @@ class PedestrianLevel:
             rel[id(p)].update(meeting(self._box(p.next_uv), boxes, 0.2))
         return rel
 
-    def _dist(self, p: _Ped, b) -> float:
+    def _dist(self, p: Pedestrian, b) -> float:
         if not _finite(p.next_uv):
             return 1e6
         bu, bv = b.bottom_center
@@ -258,7 +258,7 @@ class PedestrianLevel:
                     claimed = np.zeros(labels.shape, bool)
                 claimed[max(0, y0):max(0, y1), max(0, x0):max(0, x1)] = True
 
-    def _new_pedestrians(self, blobs, labels) -> list[_Ped]:
+    def _new_pedestrians(self, blobs, labels) -> list[Pedestrian]:
         """Runs of blob columns no patch covers, wide and full enough for a pedestrian: one new
         pedestrian per patch width of the run, side by side (groups)."""
         opt = self.opt
@@ -268,7 +268,7 @@ class PedestrianLevel:
             half = 0.5 * opt.walker_widths * (b[2] - b[0])
             cover.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3]))
         free_slots = sorted(set(range(self.filter.slots)) - {p.slot for p in self.peds})
-        new: list[_Ped] = []
+        new: list[Pedestrian] = []
         for b in blobs:
             x0, y0, x1, y1 = b.box
             free = np.ones(x1 - x0, bool)  # columns no patch covers
@@ -306,7 +306,7 @@ class PedestrianLevel:
                         return new
                     z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1])) if r.size else None
                     if z is not None and self._in_range(z):
-                        p = _Ped(slot=free_slots.pop(0), born=self.n_frames)
+                        p = Pedestrian(slot=free_slots.pop(0), born=self.n_frames)
                         p.z = z
                         new.append(p)
         self.peds += new
@@ -321,7 +321,7 @@ class PedestrianLevel:
         thr = self.cfg.thresholds
         return bool(ok) and float(thr.range_min) <= float(y) <= float(thr.range_max)
 
-    def _after(self, p: _Ped, host, index, t, dt, boxes, D) -> None:
+    def _after(self, p: Pedestrian, host, index, t, dt, boxes, D) -> None:
         if host[0] < 0.5:  # the first measurement had no ground point (above the horizon)
             self.peds.remove(p)
             return
@@ -363,7 +363,7 @@ class PedestrianLevel:
         if p.coast > self.coast_s or outside or jump:
             self._end(p)
 
-    def _velocity_jump(self, p: _Ped) -> int:
+    def _velocity_jump(self, p: Pedestrian) -> int:
         """"3d": frames to drop when the EKF ground velocity changed by more than
         `max_dv_mps` over the last `dv_window_s` s (faster than a walker or a cyclist turns or
         brakes: the patch slid onto another object or down a merged blob), else 0. Only once
@@ -387,19 +387,19 @@ class PedestrianLevel:
             if p.close >= self.opt.duplicate_frames:
                 self._end(p)
 
-    def _match(self, p: _Ped) -> None:
+    def _match(self, p: Pedestrian) -> None:
         """Online: (13)-(15) on each completed window of N frames, one every
         `thresholds.hop_samples` (`rhythm.window_grid`'s windows), until Pedestrian."""
         import jax.numpy as jnp
 
-        from .status import Verdict
-        from .tracker import _classify
+        from ..model.rhythm import classify_window_jit
+        from ..model.status import Verdict
 
         n, k = self.cfg.thresholds.n, self.cfg.thresholds.hop_samples * p.windows_done
         if p.decided or len(p.rows) < k + n:
             return
         rows = np.asarray([r[1:8] for r in p.rows[k:k + n]], np.float64)
-        res = _classify(self.cfg, jnp.asarray(rows[:, 4], jnp.float32),
+        res = classify_window_jit(self.cfg, jnp.asarray(rows[:, 4], jnp.float32),
                         jnp.asarray(rows[:, 0] - rows[0, 0], jnp.float32),
                         jnp.asarray(rows[:, 5:7], jnp.float32), jnp.asarray(True))
         p.windows_done += 1
@@ -407,7 +407,7 @@ class PedestrianLevel:
         if p.result is None or p.decided:
             p.result = {"verdict": int(res.verdict)}
 
-    def _end(self, p: _Ped) -> None:
+    def _end(self, p: Pedestrian) -> None:
         if p in self.peds:
             self.peds.remove(p)
         if p.track_id == 0:
@@ -418,7 +418,7 @@ class PedestrianLevel:
 
     def snapshot(self) -> list[dict]:
         """Pedestrians now, for drawing: id (0 tentative), box, measured, verdict label."""
-        from .status import VERDICT_LABELS
+        from ..model.status import VERDICT_LABELS
 
         out = []
         for p in self.peds:
@@ -430,12 +430,10 @@ class PedestrianLevel:
                         "verdict": verdict})
         return out
 
-    def finish(self):
-        """End every pedestrian; the `count.CountResult` of the tracks (stitched, judged)."""
-        from .count import _result, stitch_level
-
+    def end_all(self) -> list[Pedestrian]:
+        """End every pedestrian; the ended tracks in id order (`counting.finish_count` stitches
+        and judges them)."""
         self._flush()
         for p in list(self.peds):
             self._end(p)
-        peds = stitch_level(self, sorted(self.finished, key=lambda q: q.track_id))
-        return _result(self, [p for p in peds if len(p.rows) >= self.opt.min_track_frames])
+        return sorted(self.finished, key=lambda q: q.track_id)

@@ -18,8 +18,8 @@ import math
 
 import numpy as np
 
-from .camera_np import project_3d
-from .status import TrackState
+from ..model.camera_np import project_3d
+from ..model.status import TrackState
 
 
 def last_observed(rows: list[tuple], vel: list) -> tuple[float, float, float, float, float] | None:

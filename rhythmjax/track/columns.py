@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
+from ..model.status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
 
 
 TRACK_COLUMNS = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",

@@ -38,11 +38,20 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .camera import measure
-from .camera_np import camera_tuple
-from .ekf import Carry, FromAnnotations, Gaussian, empty_carry, inverse_2x2, predict, select, step
-from .flat_tree import join as _join, split as _split
-from .params import Camera, Config, Noise
+from ..model.camera import measure
+from ..model.camera_np import camera_tuple
+from ..model.ekf import (
+    Carry,
+    FromAnnotations,
+    Gaussian,
+    empty_carry,
+    inverse_2x2,
+    predict,
+    select,
+    step,
+)
+from ..model.flat_tree import join as _join, split as _split
+from ..model.params import Camera, Config, Noise
 
 
 DYNAMICS = ("2d", "3d-shape", "3d")

@@ -209,6 +209,10 @@ def classify_window(
     )
 
 
+
+# One compiled program per window shape, shared by the online trackers (track, count).
+classify_window_jit = eqx.filter_jit(classify_window)
+
 def window_grid(T: int, n: int, hop: int, n_tracked) -> tuple[Array, Bool[Array, " J"]]:
     """Rhythm windows of a padded track of T frames: the window indices j (window j starts
     j * hop frames after the track's first, N long; as many as fit in T) and which of them lie

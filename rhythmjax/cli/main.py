@@ -1,4 +1,5 @@
-"""`rhythmjax` command line: config, simulate, classify (and the video verbs where installed).
+"""`rhythmjax` command line: config, simulate, classify here; demo, track, run (`cli.video`) and
+count (`cli.count`) registered explicitly.
 
 Exit codes: 0 success, 2 bad input (one line naming the file and the row, column, key or track),
 1 internal or I/O failure, 130 interrupted. `--debug` shows tracebacks.
@@ -7,64 +8,37 @@ Exit codes: 0 success, 2 bad input (one line naming the file and the row, column
 from __future__ import annotations
 
 import argparse
-import importlib
-import importlib.util
 import os
 import sys
-from collections.abc import Callable
 
 import numpy as np
 
-
-EPILOG = """\
-exit codes: 0 success, 1 internal or I/O error, 2 bad input (the message names the file
-and the line, column, key or track), 130 interrupted.
-formats: tracks are .csv or .parquet with columns track_id, frame, t, u, v, width_px,
-intensity (optional label, x, y); configs are JSON (see `rhythmjax config`)."""
-
-
-class _Formatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
-    pass
-
-
-def _common(p: argparse.ArgumentParser, *, config=True) -> None:
-    if config:
-        p.add_argument("--config", "-c", metavar="C", help="config JSON (default: the paper's "
-                       "Table 1 values; omitted keys take defaults)")
-    p.add_argument("--json", action="store_true", help="print a machine-readable summary on "
-                   "stdout")
-    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or notes")
-    p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
-
-
-def _load_config(path):
-    from .io import read_config
-    from .params import Config
-
-    return Config() if path is None else read_config(path)
-
-
-def _say(args, msg: str) -> None:
-    if not args.quiet:
-        print(msg, file=sys.stderr)
-
-
-def _emit_json(obj) -> None:
-    from .io import dumps_json
-
-    print(dumps_json(obj))
+from .. import __version__
+from ..io import (
+    BadInput,
+    check_writable,
+    dumps_json,
+    read_tracks,
+    to_batch,
+    write_config,
+    write_table,
+)
+from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
+from ..model.params import ConfigError, config_to_dict
+from ..sim.tracks import make_tracks
+from .common import EPILOG, Formatter, add_common, emit_json, load_config, print_verdicts, say
+from .count import register as register_count
+from .video import register as register_video
 
 
 # ----------------------------------------------------------------------------------------------
 def cmd_config(args) -> int:
     """Print the full config (defaults, or the given file merged over them)."""
-    from .io import dumps_json, write_config
-    from .params import config_to_dict
 
-    cfg = _load_config(args.config)
+    cfg = load_config(args.config)
     if args.output:
         write_config(args.output, cfg)
-        _say(args, f"wrote {args.output}")
+        say(args, f"wrote {args.output}")
     else:
         print(dumps_json(config_to_dict(cfg), indent=2))
     return 0
@@ -72,11 +46,9 @@ def cmd_config(args) -> int:
 
 def cmd_simulate(args) -> int:
     """Write a synthetic tracks file with known labels (see `rhythmjax.simtracks`)."""
-    from .io import check_writable, write_table
-    from .simtracks import make_tracks
 
     check_writable(args.output)
-    cfg = _load_config(args.config)
+    cfg = load_config(args.config)
     cols, truth = make_tracks(n_walkers=args.walkers, n_bicycles=args.bicycles,
                               n_dogs=args.dogs, n_cars=args.cars, n_short=args.short,
                               seed=args.seed, camera=cfg.camera)
@@ -86,20 +58,18 @@ def cmd_simulate(args) -> int:
                "labels": {k: sum(t.label == k for t in truth) for k in sorted({t.label for t in
                                                                                 truth})}}
     if args.json:
-        _emit_json(summary)
+        emit_json(summary)
     else:
-        _say(args, f"wrote {args.output}: {summary['n_tracks']} tracks, {summary['n_rows']} rows")
+        say(args, f"wrote {args.output}: {summary['n_tracks']} tracks, {summary['n_rows']} rows")
     return 0
 
 
 def cmd_classify(args) -> int:
     """Batch-classify stored tracks: EKF with the paper's gates, MEM spectrum, (13)-(15)."""
-    from .batch import VERDICT_COLUMNS, classify_tracks, summarise
-    from .io import check_writable, read_tracks, to_batch, write_table
 
     if args.output:
         check_writable(args.output)
-    cfg = _load_config(args.config)
+    cfg = load_config(args.config)
     tracks = read_tracks(args.tracks, fps=cfg.camera.fps)
     n = cfg.thresholds.n
     batch = to_batch(tracks, max_gap_frames=max(1, round(float(cfg.thresholds.predict_timeout)
@@ -116,48 +86,37 @@ def cmd_classify(args) -> int:
     summary = {"input": args.tracks, "output": args.output, **summarise(verdicts, labels),
                "notes": list(tracks.notes)}
     if args.json:
-        _emit_json(summary)
+        emit_json(summary)
     else:
         if not args.output:
-            _print_verdicts(verdicts)
+            print_verdicts(verdicts)
         v = summary["verdicts"]
-        _say(args, f"{summary['n_tracks']} tracks: {v['pedestrian']} pedestrian, "
+        say(args, f"{summary['n_tracks']} tracks: {v['pedestrian']} pedestrian, "
              f"{v['non-pedestrian']} non-pedestrian, {v['unclassified']} unclassified"
              + (f"; wrote {args.output}" if args.output else ""))
         for note in tracks.notes:
-            _say(args, f"note: {note}")
+            say(args, f"note: {note}")
     return 0
-
-
-def _print_verdicts(v: dict) -> None:
-    print(f"{'track_id':>10} {'verdict':>15} {'reason':>16} {'pace_hz':>8} {'stride_m':>8} "
-          f"{'ratio':>6} {'speed':>6}")
-    for i in range(len(v["track_id"])):
-        f = lambda x: "" if not np.isfinite(x) else f"{x:.3f}"
-        print(f"{v['track_id'][i]!s:>10} {v['verdict'][i]:>15} {v['reason'][i]:>16} "
-              f"{f(v['pace_hz'][i]):>8} {f(v['stride_m'][i]):>8} {f(v['ratio'][i]):>6} "
-              f"{f(v['speed_mps'][i]):>6}")
 
 
 # ----------------------------------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
 
     parser = argparse.ArgumentParser(
-        prog="rhythmjax", formatter_class=_Formatter, epilog=EPILOG,
+        prog="rhythmjax", formatter_class=Formatter, epilog=EPILOG,
         description="Tell walking people apart from other moving objects in fixed-camera video "
                     "by the rhythm of their gait (Yasutomi & Mori), with a JAX EKF and MEM.")
     parser.add_argument("--version", action="version", version=f"rhythmjax {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
-    p = sub.add_parser("config", formatter_class=_Formatter, help="print the full default "
+    p = sub.add_parser("config", formatter_class=Formatter, help="print the full default "
                        "config, or merge a config over the defaults",
                        description=cmd_config.__doc__)
     p.add_argument("-o", "--output", metavar="C2", help="write the merged config here instead")
-    _common(p)
+    add_common(p)
     p.set_defaults(func=cmd_config)
 
-    p = sub.add_parser("simulate", formatter_class=_Formatter, help="write a synthetic "
+    p = sub.add_parser("simulate", formatter_class=Formatter, help="write a synthetic "
                        "labelled tracks file", description=cmd_simulate.__doc__)
     p.add_argument("-o", "--output", required=True, metavar="TRACKS",
                    help="output tracks file (.csv or .parquet)")
@@ -167,27 +126,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dogs", type=int, default=5)
     p.add_argument("--cars", type=int, default=3)
     p.add_argument("--short", type=int, default=2, help="walkers tracked < N frames")
-    _common(p)
+    add_common(p)
     p.set_defaults(func=cmd_simulate)
 
-    p = sub.add_parser("classify", formatter_class=_Formatter, help="batch-classify stored "
+    p = sub.add_parser("classify", formatter_class=Formatter, help="batch-classify stored "
                        "tracks", description=cmd_classify.__doc__, epilog=EPILOG)
     p.add_argument("tracks", metavar="TRACKS", help="tracks file (.csv or .parquet)")
     p.add_argument("-o", "--output", metavar="VERDICTS", help="verdicts file (.csv or "
                    ".parquet); printed as a table when omitted")
     p.add_argument("--chunk", type=int, default=256, help="tracks per jitted chunk")
-    _common(p)
+    add_common(p)
     p.set_defaults(func=cmd_classify)
 
-    for register in _extra_commands():
-        register(sub, _Formatter, _common)
+    register_video(sub, Formatter)
+    register_count(sub, Formatter)
     return parser
-
-
-def _extra_commands() -> list[Callable]:
-    """Verbs from other modules (video, counting) register themselves here when present."""
-    names = [f"rhythmjax.{m}" for m in ("cli_video", "cli_count")]
-    return [importlib.import_module(n).register for n in names if importlib.util.find_spec(n)]
 
 
 def _enable_compilation_cache() -> None:
@@ -203,8 +156,6 @@ def _enable_compilation_cache() -> None:
 
 
 def main(argv=None) -> int:
-    from .io import BadInput
-    from .params import ConfigError
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from .camera import image_width, project
-from .params import Camera
+from ..model.camera import image_width, project
+from ..model.params import Camera
 
 
 KINDS = ("pedestrian", "bicycle", "dog", "car")

@@ -9,10 +9,10 @@ import cv2
 import jax.numpy as jnp
 import numpy as np
 
-from . import mem
-from .io import atomic_path
-from .params import Config
-from .rhythm import N_FREQS, fill_gaps, normalise_window
+from ..io.files import atomic_path
+from ..model import mem
+from ..model.params import Config
+from ..model.rhythm import N_FREQS, fill_gaps, normalise_window
 
 
 _COLOURS = {"pedestrian": (60, 200, 60), "non-pedestrian": (40, 40, 230),
@@ -85,7 +85,7 @@ def spectrum_figure(path, cfg: Config, tracks: dict, verdicts: dict, objs, *,
 
 
 def _label(o) -> str:
-    from .status import REASON_LABELS, VERDICT_LABELS
+    from ..model.status import REASON_LABELS, VERDICT_LABELS
 
     r = o.result
     pace = float(r["pace_hz"])

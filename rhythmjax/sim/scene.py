@@ -27,14 +27,14 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from . import synth_actors as sa
-from .camera_np import (
+from ..model.camera_np import (
     camera_tuple,
     depth_3d as depth_3d,
     ground_of_pixels as _ground_of_pixels,
     project_3d as project_3d,
 )
-from .params import Camera
+from ..model.params import Camera
+from . import actors as sa
 
 
 KINDS = ("pedestrian", "bicycle", "dog")

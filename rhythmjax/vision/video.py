@@ -21,8 +21,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from .atomic import atomic_path
-from .errors import BadInput, PathLike
+from ..io.atomic import atomic_path
+from ..io.errors import BadInput, PathLike
 
 
 FRAME_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")

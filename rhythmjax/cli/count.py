@@ -1,5 +1,5 @@
 """The `count` verb: track every pedestrian of a video (Masoud & Papanikolopoulos) and count only
-those the rhythm classifier judges walking (registered by `rhythmjax.cli`)."""
+those the rhythm classifier judges walking (registered by `cli.main`)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,21 @@ import json
 import os
 import sys
 
-from .cli_video import TRACK_ORDER, VERDICT_ORDER, _open_source, overlay_writer
+from ..count.counting import count_frames
+from ..count.options import CountOptions
+from ..io import atomic_write, check_writable, dumps_json, make_output_dir, write_table
+from ..io.mot import write_mot
+from ..model.params import ConfigError
+from .common import (
+    TRACK_ORDER,
+    VERDICT_ORDER,
+    add_common,
+    load_config,
+    open_source,
+    overlay_writer,
+    say,
+)
+from .overlay import draw_count_frame
 
 
 def cmd_count(args) -> int:
@@ -34,21 +48,17 @@ def cmd_count(args) -> int:
     Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
     (dense crowd, camera jump) is not used for detection (pedestrians predict) and the summary
     says how many there were."""
-    from .cli import _load_config, _say
-    from .count import CountOptions, count_frames
-    from .io import atomic_write, check_writable, dumps_json, make_output_dir, write_table
-    from .mot import write_mot
-    from .params import ConfigError
-
     if args.min_frames < 1:
         raise ConfigError("--min-frames", f"must be >= 1, got {args.min_frames}")
     make_output_dir(args.output)
     check_writable(os.path.join(args.output, "counts.json"))
-    cfg = _load_config(args.config)
+    cfg = load_config(args.config)
     opt = CountOptions(dynamics=args.dynamics, min_track_frames=args.min_frames)
-    with _open_source(args, cfg) as src, overlay_writer(
+    with open_source(args, cfg) as src, overlay_writer(
             args.overlay, src.fps, (src.width, src.height)) as overlay:
-        res = count_frames(cfg, src, options=opt, n_frames=src.n_frames, overlay=overlay,
+        draw = None if overlay is None else \
+            (lambda frame, index, snapshot: overlay.write(draw_count_frame(frame, snapshot, index)))
+        res = count_frames(cfg, src, options=opt, n_frames=src.n_frames, on_frame=draw,
                            progress=not (args.quiet or args.json))
         notes = list(src.notes) + res.summary.get("notes", [])
         summary = {"video": args.video, "output": args.output, "counts": res.counts,
@@ -69,11 +79,15 @@ def cmd_count(args) -> int:
           f"({c['pedestrians']} judged pedestrian, {c['unclassified']} unclassified); wrote "
           f"{args.output}/", file=sys.stderr)
     for note in notes:
-        _say(args, f"note: {note}")
+        say(args, f"note: {note}")
     return 0
 
 
-def register(sub, formatter, common) -> None:
+def register(sub, formatter=None) -> None:
+    """Add the count verb to the subparsers `sub`."""
+    from .common import Formatter
+
+    formatter = formatter or Formatter
     p = sub.add_parser("count", formatter_class=formatter, help="track every pedestrian of a "
                        "video and count the walkers", description=cmd_count.__doc__)
     p.add_argument("video", metavar="VIDEO", help="video file, or a folder of numbered frames")
@@ -87,5 +101,5 @@ def register(sub, formatter, common) -> None:
                    "shape + image constant velocity; 2d = fixed size + image constant velocity")
     p.add_argument("--min-frames", type=int, default=10, help="tracks shorter than this many "
                    "frames are dropped from the outputs and counts")
-    common(p)
+    add_common(p)
     p.set_defaults(func=cmd_count)

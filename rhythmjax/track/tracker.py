@@ -20,22 +20,22 @@ import functools
 import math
 from dataclasses import dataclass, field
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import detect, relink
-from .camera import image_width, measure
-from .camera_np import camera_tuple
-from .ekf import Carry, empty_carry, predict, step
-from .flat_tree import join as _join, split as _split
-from .gates import PaperGates
-from .params import Config
-from .rhythm import MAX_MISSING_FRACTION, classify_window
-from .status import VERDICT_LABELS, TrackState, Verdict
-from .tracker_columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
-from .tracker_options import TrackerOptions
+from ..model.camera import image_width, measure
+from ..model.camera_np import camera_tuple
+from ..model.ekf import Carry, empty_carry, predict, step
+from ..model.flat_tree import join as _join, split as _split
+from ..model.gates import PaperGates
+from ..model.params import Config
+from ..model.rhythm import MAX_MISSING_FRACTION, classify_window_jit
+from ..model.status import VERDICT_LABELS, TrackState, Verdict
+from ..vision import detect
+from . import relink
+from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
+from .options import TrackerOptions
 
 
 @dataclass
@@ -86,9 +86,6 @@ def _advance_flat(cfg_structure, carry_structure, cfg_leaves, carry_leaves, fram
                                                                    carry_structure),
                            reset, z, width, dt, present)
     return _split(carry)[0], host
-
-
-_classify = eqx.filter_jit(classify_window)
 
 
 class OnlineTracker:
@@ -344,7 +341,7 @@ class OnlineTracker:
             obj.win_start = k + int(missing[-1]) + 1  # restart after it
             return
         obj.win_start = k + self.cfg.thresholds.hop_samples
-        res = _classify(self.cfg, jnp.asarray(intensity, jnp.float32),
+        res = classify_window_jit(self.cfg, jnp.asarray(intensity, jnp.float32),
                         jnp.asarray(t - t[0], jnp.float32), jnp.asarray(xy, jnp.float32),
                         jnp.asarray(True), jnp.asarray(observed, jnp.float32))
         obj.windows_done += 1

@@ -33,8 +33,8 @@ import cv2
 import jax
 import numpy as np
 
-from .camera import ground_from_image, image_width
-from .params import Camera, WidthModel
+from ..model.camera import ground_from_image, image_width
+from ..model.params import Camera, WidthModel
 
 
 Box = tuple[int, int, int, int]  # x0, y0, width, height in px (OpenCV's convention)

@@ -248,7 +248,7 @@ def blob_detections(frames: Iterable[tuple[int, float, np.ndarray | None]], *,
     yielded by `video.VideoSource` (index, t, gray uint8 or None = skipped): columns frame (the
     given index), bb_left, bb_top, bb_width, bb_height, area. The first decodable frame only
     initialises the background (no detections)."""
-    from .blobs import BackgroundModel, find_blobs
+    from ..vision.blobs import BackgroundModel, find_blobs
 
     model = None
     rows: list[tuple[int, int, int, int, int, int]] = []

@@ -1,0 +1,117 @@
+"""Helpers shared by the verbs of the command line: options every verb takes, the config,
+messages, JSON, the verdicts table, the video source and the overlay writer."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+
+import numpy as np
+
+from ..io import BadInput, dumps_json, read_config
+from ..model.params import Config, ConfigError
+
+
+__all__ = ["EPILOG", "TRACK_ORDER", "VERDICT_ORDER", "Formatter", "add_common",
+           "check_config_fits_image", "emit_json", "load_config", "open_source",
+           "overlay_writer", "print_verdicts", "say"]
+
+EPILOG = """\
+exit codes: 0 success, 1 internal or I/O error, 2 bad input (the message names the file
+and the line, column, key or track), 130 interrupted.
+formats: tracks are .csv or .parquet with columns track_id, frame, t, u, v, width_px,
+intensity (optional label, x, y); configs are JSON (see `rhythmjax config`)."""
+
+TRACK_ORDER = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",
+               "state"]
+VERDICT_ORDER = ["track_id", "verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps",
+                 "n_samples"]
+
+
+class Formatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
+    """Help text as written, with the defaults shown."""
+
+
+def add_common(p: argparse.ArgumentParser, *, config: bool = True) -> None:
+    """--config (unless `config` is False), --json, --quiet, --debug."""
+    if config:
+        p.add_argument("--config", "-c", metavar="C", help="config JSON (default: the paper's "
+                       "Table 1 values; omitted keys take defaults)")
+    p.add_argument("--json", action="store_true", help="print a machine-readable summary on "
+                   "stdout")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or notes")
+    p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+
+
+def load_config(path) -> Config:
+    """The config at `path` merged over the defaults; the defaults for None."""
+    return Config() if path is None else read_config(path)
+
+
+def say(args, msg: str) -> None:
+    """A note on stderr unless --quiet."""
+    if not args.quiet:
+        print(msg, file=sys.stderr)
+
+
+def emit_json(obj) -> None:
+    """One JSON document on stdout (NaN as null)."""
+    print(dumps_json(obj))
+
+
+def print_verdicts(v: dict) -> None:
+    """The verdicts as an aligned table on stdout."""
+    print(f"{'track_id':>10} {'verdict':>15} {'reason':>16} {'pace_hz':>8} {'stride_m':>8} "
+          f"{'ratio':>6} {'speed':>6}")
+    for i in range(len(v["track_id"])):
+        f = lambda x: "" if not np.isfinite(x) else f"{x:.3f}"
+        print(f"{v['track_id'][i]!s:>10} {v['verdict'][i]:>15} {v['reason'][i]:>16} "
+              f"{f(v['pace_hz'][i]):>8} {f(v['stride_m'][i]):>8} {f(v['ratio'][i]):>6} "
+              f"{f(v['speed_mps'][i]):>6}")
+
+
+def check_config_fits_image(cfg: Config, width: int, height: int) -> None:
+    """Some of the detection range must be visible: its rows (near end low in the image, far end
+    higher up) must overlap the image, else every detection is refused and nothing is tracked."""
+    import jax.numpy as jnp
+
+    from ..model.camera import project
+
+    thr = cfg.thresholds
+    vs = [float(project(cfg.camera, jnp.float32(0.0), jnp.float32(float(y)))[1])
+          for y in (thr.range_min, thr.range_max)]
+    if not (vs[1] < height and vs[0] >= 0):
+        raise ConfigError("camera", f"the detection range {float(thr.range_min):g}-"
+                          f"{float(thr.range_max):g} m projects to rows {vs[0]:.0f}-{vs[1]:.0f}, "
+                          f"outside the {width}x{height} image; check h_m, theta_deg, vc_px")
+
+
+@contextlib.contextmanager
+def overlay_writer(path, fps, size):
+    """The annotated-video writer, opened before any work (a bad path fails fast), committed
+    (renamed into place) when the block succeeds and removed when it fails; None for no path."""
+    if path is None:
+        yield None
+        return
+    from ..vision.video import open_writer
+
+    writer = open_writer(path, fps, size)
+    try:
+        yield writer
+    except BaseException:
+        writer.abort()
+        raise
+    writer.close()
+
+
+def open_source(args, cfg: Config):
+    """The video (file or frame folder) of `args.video` at `args.fps` (None: the file's),
+    checked against the config's detection range."""
+    from ..vision.video import open_video
+
+    src = open_video(args.video, fps=args.fps)
+    if not np.isfinite(src.fps):
+        raise BadInput(args.video, "no frame rate; give --fps")
+    check_config_fits_image(cfg, src.width, src.height)
+    return src

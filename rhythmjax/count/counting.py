@@ -1,0 +1,228 @@
+"""Counting pedestrians: the three levels of Masoud & Papanikolopoulos over a video
+(`pedestrian_level.PedestrianLevel`), fragments of one walker stitched into one track, then the
+rhythm classifier on every track, which removes what does not walk from the count (issue 4).
+
+Stitching (`stitch_pieces`): a walker hidden behind another or behind a bicycle for longer than
+its coasting time, or lost by its patch at a crossing (a track whose ground velocity jumps ends
+there: `PedestrianLevel._velocity_jump`), comes back as a new track. At the end of the video
+every track's end (its last measured frame: the EKF ground state (x, y, vx, vy) for the "3d"
+dynamics, a line fit over its last `stitch_fit_s` s of measured foot points otherwise) is
+compared with every later track's start (a line fit over its first `stitch_fit_s` s of
+measured foot points): B continues A when B starts after A's last measured frame, within
+`stitch_max_gap_s` s, and the two meet halfway: A predicted on for half the gap (on the ground
+plane with its EKF state for "3d", projected through the camera; in the image otherwise) and B
+taken back for half the gap at its own velocity lie within `stitch_gate_w` W across and
+`stitch_gate_h` H up or down (growing by `stitch_gate_per_s` per second of gap; W, H: B's
+patch), with image velocities within `stitch_max_dv_w` W/s. The gate is in the image, in units
+of the patch, because the foot row's pixel noise is what limits both: a ground gate in metres
+is far too tight near the camera or far too loose 20 m away. Pairs are taken cheapest first,
+each track with at most one predecessor and one successor; a chain of pieces becomes one track
+(the gap frames stay without rows) and is judged as one, which also lets the rhythm classifier
+see N samples of a walker it saw only in pieces before.
+
+The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestrian it tracked,
+and its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged
+non-pedestrian - unclassified tracks too fast to walk. A track the classifier cannot judge
+(unclassified: shorter than N samples, or an unusable rhythm window) is a pedestrian of the
+paper's method and is counted, unless its ground speed (`track_speed`) exceeds the fastest the
+walking model's test (14) accepts for any rhythm (`walking_top_speed`: pace and stride both at
++k_sigma3, 2.57 m/s with Table 1): any window of it would be judged non-pedestrian, so it is
+not counted (`too_fast`: short bicycle tracks). A track judged pedestrian is counted; a
+non-pedestrian verdict removes one. Tracks shorter than `min_track_frames` frames (after
+stitching) are dropped from every output and count first. `CountResult.counts` holds the six
+numbers (tracks, pedestrians, non_pedestrians, unclassified, too_fast, walkers), the verdicts
+say per track `too_fast` and `counted`, and `COUNT_RULE` says the rule in words (written to
+counts.json).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..model.params import Config
+from ..vision.frames import drive_frames
+from .options import CountOptions
+from .pedestrian_level import Pedestrian, PedestrianLevel
+from .stitch import stitch_level
+
+
+__all__ = ["COUNT_RULE", "CountResult", "build_result", "count_frames", "finish_count",
+           "count_walkers", "counted", "track_speed", "walker_ids", "walking_top_speed"]
+
+COUNT_RULE = ("walkers = tracks - non_pedestrians - too_fast: every confirmed track is a "
+              "pedestrian of the paper's method; the rhythm classifier removes the tracks it "
+              "judges non-pedestrian (bicycles); an unclassified track (too short to judge) is "
+              "counted unless it moves faster than the walking model (14) can accept for any "
+              "rhythm (too_fast)")
+
+
+# ----------------------------------------------------------------------------------------------
+# the pedestrians level over frames
+
+
+@dataclass
+class CountResult:
+    """MOT rows (frame 1-based, id, box px, conf, ground x, y m, z), the tracks format, the
+    verdicts, the counts and the per-frame blob boxes; see `count_frames`."""
+
+    mot: dict[str, np.ndarray]
+    tracks: dict[str, np.ndarray]
+    verdicts: dict[str, np.ndarray]
+    counts: dict[str, int]
+    detections: dict[str, np.ndarray]
+    summary: dict[str, Any] = field(default_factory=dict)
+
+
+MOT_COLUMNS = ("frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf", "x", "y", "z")
+DETECTION_COLUMNS = ("frame", "bb_left", "bb_top", "bb_width", "bb_height", "area")
+
+
+def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
+                 n_frames: int | None = None, on_frame=None, progress: bool = False
+                 ) -> CountResult:
+    """Track and count the pedestrians of `frames`, items (index, t s, gray uint8 or None) as
+    `vision.video.VideoSource` yields them (None: an undecodable frame, every pedestrian
+    predicts). `on_frame(gray, index, snapshot)`, when given, is called after every decoded
+    frame with `PedestrianLevel.snapshot()` (the command line draws its overlay there).
+
+    mot: one row per track and frame from its first to its last measured frame, the box of the
+    patch at the filter's estimated foot point; conf 1 measured, 0.5 predicted; x, y the ground
+    estimate (m; the EKF state for "3d", the inverse perspective of the estimated foot point
+    otherwise) and z = 0 (on the ground plane); x = y = z = -1 (the MOT convention for "no world
+    position") where the foot point has no ground point. counts (`count_walkers`): tracks,
+    pedestrians, non_pedestrians, unclassified (shorter than N or unusable), too_fast and
+    walkers = tracks - non_pedestrians - too_fast (`COUNT_RULE`: unclassified tracks count
+    unless too fast to walk)."""
+    opt = options or CountOptions()
+    if on_frame is None and opt.online_verdicts:
+        opt = dataclasses.replace(opt, online_verdicts=False)
+    level = PedestrianLevel(cfg, opt, defer=on_frame is None)  # no snapshot drawn: defer
+    draw = None if on_frame is None else \
+        (lambda frame, index: on_frame(frame, index, level.snapshot()))
+    drive_frames(frames, level.update, draw, n_frames=n_frames, progress=progress,
+                 desc="count")
+    return finish_count(level)
+
+
+def finish_count(level: PedestrianLevel) -> CountResult:
+    """End every pedestrian of `level`; the `CountResult` of its tracks, stitched, those shorter
+    than `min_track_frames` dropped, judged."""
+    peds = stitch_level(level, level.end_all())
+    return build_result(level, [p for p in peds if len(p.rows) >= level.opt.min_track_frames])
+
+
+def walking_top_speed(cfg: Config) -> float:
+    """The fastest ground speed (m/s) the walking model's test (14) accepts for any rhythm:
+    speed = pace x stride with both within k_sigma3 of the model, so at most
+    (pace_mean + k_sigma3 pace_std) x (stride_mean + k_sigma3 stride_std) (2.57 m/s with the
+    paper's Table 1). A window moving faster is judged non-pedestrian whatever its spectrum."""
+    w, k = cfg.walking, float(cfg.thresholds.k_sigma3)
+    return (float(w.pace_mean) + k * float(w.pace_std)) * \
+        (float(w.stride_mean) + k * float(w.stride_std))
+
+
+def track_speed(p: Pedestrian) -> float:
+    """Least-squares ground speed (m/s) over a track's measured rows (its ground x, y: the EKF
+    state for "3d"); NaN with fewer than 2 or a span under 0.5 s."""
+    from ..model.status import TrackState
+
+    r = np.asarray([(q[1], q[6], q[7]) for q in p.rows if q[8] == int(TrackState.OBSERVE)],
+                   np.float64).reshape(-1, 3)
+    r = r[np.all(np.isfinite(r), axis=1)]
+    if len(r) < 2 or np.ptp(r[:, 0]) < 0.5:
+        return math.nan
+    tc = r[:, 0] - r[:, 0].mean()
+    v = tc @ (r[:, 1:] - r[:, 1:].mean(axis=0)) / float(tc @ tc)
+    return float(np.hypot(*v))
+
+
+def count_walkers(verdicts, too_fast=None) -> dict[str, int]:
+    """The counts of a verdict list (labels as `status.Verdict`; `too_fast`: per track, faster
+    than `walking_top_speed`, default none): tracks, pedestrians, non_pedestrians, unclassified,
+    too_fast (unclassified and too fast) and walkers = tracks - non_pedestrians - too_fast
+    (`COUNT_RULE`)."""
+    v = [str(x) for x in verdicts]
+    fast = [False] * len(v) if too_fast is None else [bool(f) for f in too_fast]
+    n, non = len(v), v.count("non-pedestrian")
+    tf = sum(f and w == "unclassified" for w, f in zip(v, fast))
+    return {"tracks": n, "pedestrians": v.count("pedestrian"), "non_pedestrians": non,
+            "unclassified": v.count("unclassified"), "too_fast": tf, "walkers": n - non - tf}
+
+
+def counted(verdicts: dict) -> np.ndarray:
+    """Per track, whether `COUNT_RULE` counts it as a walker: not judged non-pedestrian, and
+    not unclassified and too fast (verdicts["too_fast"], when present)."""
+    v = np.asarray([str(x) for x in verdicts["verdict"]], dtype=object)
+    fast = np.asarray(verdicts.get("too_fast", np.zeros(len(v), bool)), bool)
+    return (v != "non-pedestrian") & ~((v == "unclassified") & fast)
+
+
+def walker_ids(verdicts: dict) -> list[int]:
+    """Track ids counted as walkers (`counted`)."""
+    return [int(i) for i, c in zip(verdicts["track_id"], counted(verdicts)) if c]
+
+
+def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
+    """Outputs of the kept tracks, ids renumbered 1.. in order of appearance."""
+    from ..io.files import Tracks, to_batch
+    from ..model.batch import classify_tracks
+    from ..model.status import TrackState
+    from ..track.columns import TRACK_COLUMNS
+
+    cfg = level.cfg
+    for k, p in enumerate(peds, 1):
+        p.track_id = k
+    rows = [(p.track_id, *r) for p in peds for r in p.rows]
+    tracks = {c: np.asarray([r[i] for r in rows], np.int64 if i < 2 else np.float64)
+              for i, c in enumerate(TRACK_COLUMNS[:-1])}
+    tracks["state"] = np.asarray([TrackState(r[-1]).name.lower() for r in rows], dtype=object)
+    n = cfg.thresholds.n
+    if peds and level.opt.classify:
+        tr = Tracks(path="<count>", track_id=tracks["track_id"].astype(str).astype(object),
+                    frame=tracks["frame"], t=tracks["t"], u=tracks["u"], v=tracks["v"],
+                    width_px=tracks["width_px"], intensity=tracks["intensity"],
+                    line=np.arange(len(tracks["frame"])), fps=cfg.camera.fps)
+        gap = max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
+        verdicts = classify_tracks(cfg, to_batch(tr, max_gap_frames=gap, min_len=n),
+                                   progress=False)
+        verdicts = {k: verdicts[k] for k in ("track_id", "verdict", "reason", "pace_hz",
+                                              "stride_m", "ratio", "speed_mps", "n_samples")}
+        verdicts["track_id"] = verdicts["track_id"].astype(np.int64)
+    else:
+        B, nan = len(peds), np.full(len(peds), np.nan)
+        verdicts = {"track_id": np.arange(1, B + 1, dtype=np.int64),
+                    "verdict": np.full(B, "unclassified", dtype=object),
+                    "reason": np.full(B, "not-judged", dtype=object), "pace_hz": nan,
+                    "stride_m": nan, "ratio": nan, "speed_mps": nan,
+                    "n_samples": np.asarray([len(p.rows) for p in peds], np.int64)}
+    rows = [(b[0] + 1, p.track_id, *b[1:6], *(b[6:8] if b[8] else (-1.0, -1.0)),
+             0.0 if b[8] else -1.0) for p in peds for b in p.boxes]
+    mot = {c: np.asarray([r[i] for r in rows], np.int64 if i < 2 else np.float64)
+           for i, c in enumerate(MOT_COLUMNS)}
+    det = {c: np.asarray([r[i] for r in level.detections], np.int64)
+           for i, c in enumerate(("frame", "x0", "y0", "x1", "y1", "area"))}
+    detections = {"frame": det["frame"] + 1, "bb_left": det["x0"], "bb_top": det["y0"],
+                  "bb_width": det["x1"] - det["x0"], "bb_height": det["y1"] - det["y0"],
+                  "area": det["area"]}
+    top = walking_top_speed(cfg)
+    verdicts["too_fast"] = np.asarray([track_speed(p) > top for p in peds], bool)
+    verdicts["counted"] = counted(verdicts)
+    counts = count_walkers(verdicts["verdict"], verdicts["too_fast"])
+    summary = {"n_frames": level.n_frames, "dynamics": level.opt.dynamics,
+               "count_rule": COUNT_RULE, "stitched": level.stitched,
+               "crowd_frames": len(level.crowd_frames),
+               "missing_frames": len(level.missing_frames), "notes": []}
+    if level.crowd_frames:
+        summary["notes"].append(
+            f"{len(level.crowd_frames)} frame(s) had one blob covering >= "
+            f"{level.opt.crowd_fraction:.0%} of the image (dense crowd or camera jump): no "
+            f"detection there, pedestrians predicted (first: frame {level.crowd_frames[0]})")
+    if level.full_frames:
+        summary["notes"].append(f"all {level.filter.slots} pedestrian slots were in use in "
+                                f"{len(set(level.full_frames))} frame(s); raise max_pedestrians")
+    return CountResult(mot, tracks, verdicts, counts, detections, summary)
