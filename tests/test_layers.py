@@ -52,6 +52,28 @@ def imports_of(path: pathlib.Path) -> list[tuple[str, list[str], int]]:
     return out
 
 
+def private_attribute_uses(path: pathlib.Path) -> list[tuple[str, int]]:
+    """`module._name` where `module` is a project module bound by an import in this file."""
+    tree = ast.parse(path.read_text(), str(path))
+    by_line: dict[int, list[str]] = {}
+    for mod, _, line in imports_of(path):
+        by_line.setdefault(line, []).append(mod)
+    aliases = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            for mod in by_line.get(node.lineno, []):
+                for a in node.names:
+                    if mod.endswith("." + a.name) and mod.split(".")[0] in ("rhythmjax", "fit"):
+                        aliases.add(a.asname or a.name)
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.split(".")[0] in ("rhythmjax", "fit") and a.asname:
+                    aliases.add(a.asname)
+    return [(f"{n.value.id}.{n.attr}", n.lineno) for n in ast.walk(tree)
+            if isinstance(n, ast.Attribute) and isinstance(n.value, ast.Name)
+            and n.value.id in aliases and n.attr.startswith("_") and not n.attr.endswith("__")]
+
+
 def sources(package: str) -> list[pathlib.Path]:
     return sorted((ROOT / package).rglob("*.py"))
 
@@ -101,6 +123,7 @@ def test_no_private_names_across_modules():
                 priv = [n for n in names if n.startswith("_") and n != "__version__"]
                 if priv or mod.rpartition(".")[2].startswith("_") and not mod.endswith("__"):
                     bad.append(f"{path}:{line}: from {mod} import {', '.join(priv)}")
+            bad += [f"{path}:{line}: uses {name}" for name, line in private_attribute_uses(path)]
     assert not bad, "\n".join(bad)
 
 
