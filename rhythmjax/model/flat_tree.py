@@ -4,6 +4,8 @@ static argument."""
 
 from __future__ import annotations
 
+import weakref
+
 import equinox as eqx
 import jax
 
@@ -12,10 +14,11 @@ class _Structure:
     """The hashable rest of a pytree, its hash computed once: jit hashes static arguments on
     every call, and hashing an equinox Module walks its fields in Python."""
 
-    __slots__ = ("value", "_hash")
+    __slots__ = ("value", "_hash", "__weakref__")
 
-    def __init__(self, value):
-        self.value, self._hash = value, hash(value)
+    def __init__(self, value, value_hash: int | None = None):
+        self.value = value
+        self._hash = hash(value) if value_hash is None else value_hash
 
     def __hash__(self):
         return self._hash
@@ -25,7 +28,10 @@ class _Structure:
                                                   or self.value == other.value)
 
 
-_INTERNED: dict[_Structure, _Structure] = {}
+# Interned structures, held weakly: an entry lives as long as something holds its structure (a
+# tracker, or jit's own bounded cache of static arguments), so the table never outgrows them.
+# The key is an equal copy, not the structure itself (a key is held strongly).
+_INTERNED: weakref.WeakValueDictionary[_Structure, _Structure] = weakref.WeakValueDictionary()
 
 
 def split(tree):
@@ -36,7 +42,15 @@ def split(tree):
     dyn, static = eqx.partition(tree, eqx.is_array)
     leaves, treedef = jax.tree.flatten(dyn)
     structure = _Structure((treedef, static))
-    return tuple(leaves), _INTERNED.setdefault(structure, structure)
+    interned = _INTERNED.get(structure)
+    if interned is None:
+        _INTERNED[_Structure(structure.value, structure._hash)] = interned = structure
+    return tuple(leaves), interned
+
+
+def interned_count() -> int:
+    """How many distinct structures are interned now (for tests and diagnostics)."""
+    return len(_INTERNED)
 
 
 def join(leaves, structure):
