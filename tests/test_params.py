@@ -5,7 +5,15 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rhythmjax.model.params import Config, ConfigError, Noise, config_from_dict, config_to_dict
+from rhythmjax.model.params import (
+    Config,
+    ConfigError,
+    Noise,
+    WidthModel,
+    config_from_dict,
+    config_to_dict,
+    host_float,
+)
 
 
 def test_table1_defaults():
@@ -78,6 +86,10 @@ def test_params_are_pytrees_with_array_leaves():
         ({"thresholds": {"window_hop_samples": 16.5}}, r"window_hop_samples: expected an integer"),
         ({"thresholds": {"harmonic_max_ratio": -0.1}}, r"harmonic_max_ratio: must be >= 0"),
         ({"walking": {"pace_mean_hz": "2"}}, r"expected a number"),
+        ({"width": {"height_m": 0.0}}, r"width\.height_m: must be > 0"),
+        ({"width": {"height_m": "1.7"}}, r"width\.height_m: expected a number"),
+        ({"width": {"heigth_m": 1.7}},
+         r"width\.heigth_m: unknown key \(did you mean 'height_m'\?\)"),
         ({"walking": {"pace_std_hz": math.inf}}, r"must be finite"),
         ([1, 2], r"top level"),
     ],
@@ -106,3 +118,34 @@ def test_roll_key_round_trips_and_defaults_to_the_paper():
     assert config_to_dict(cfg)["camera"]["roll_deg"] == pytest.approx(-3.09, rel=1e-6)
     with pytest.raises(ConfigError, match=r"camera\.roll_deg: must be < 45"):
         config_from_dict({"camera": {"roll_deg": 60.0}})
+
+
+def test_pedestrian_height_in_the_width_section():
+    """The pedestrian's height (1.7 m) sits beside its width model: printed by config_to_dict
+    (so by `rhythmjax config`) after mean_m and std_m, read back, and a config written before
+    the key existed (no height_m) loads with the default."""
+    d = config_to_dict(Config())
+    assert list(d["width"]) == ["mean_m", "std_m", "height_m"]
+    assert d["width"]["height_m"] == pytest.approx(1.7, rel=1e-7)
+    old = config_from_dict({"width": {"mean_m": 0.45, "std_m": 0.2}})
+    assert host_float(old.width.height) == 1.7 and host_float(old.width.mean) == 0.45
+    cfg = config_from_dict({"width": {"height_m": 1.8}})
+    assert config_to_dict(cfg)["width"]["height_m"] == pytest.approx(1.8, rel=1e-7)
+    assert config_to_dict(config_from_dict(config_to_dict(cfg))) == config_to_dict(cfg)
+    assert float(cfg.width.mean) == 0.5  # the other width keys keep their defaults
+
+
+def test_height_per_width_is_the_literal_ratio():
+    """Host code took 1.7 / 0.5 as literals; reading them from the float32 config must give the
+    same float (by hand: 3.4; 1.8 / 0.45 = 4.0), where float() of the float32 values gives
+    1.7000000476837158 / 0.5 = 3.4000000953674316."""
+    assert Config().width.height_per_width() == 1.7 / 0.5 == 3.4
+    assert float(Config().width.height) / 0.5 != 3.4  # what the helper avoids
+    assert WidthModel(mean=0.45, height=1.8).height_per_width() == 1.8 / 0.45
+    # any decimal with up to 6 significant digits survives float32 and comes back exactly
+    rng = np.random.default_rng(0)
+    for x in np.round(rng.uniform(0.01, 99.0, 500), 4):
+        x = float(f"{x:.6g}")
+        assert host_float(np.float32(x)) == x
+        assert host_float(jnp.asarray(x, jnp.float32)) == x
+    assert host_float(np.float64(0.1 + 0.2)) == 0.1 + 0.2  # float64 values unchanged

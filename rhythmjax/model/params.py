@@ -130,10 +130,28 @@ class Noise(eqx.Module):
 
 @final
 class WidthModel(eqx.Module):
-    """Pedestrian ground width ~ N(mean, std^2) in m, used by the width gate (10)."""
+    """Pedestrian body size in m: ground width ~ N(mean, std^2), used by the width gate (10),
+    and height (an average pedestrian's, 1.7 m: the detection window and body box of the
+    online tracker, count's patches of Masoud & Papanikolopoulos (width `mean`, this height),
+    the overlay's boxes)."""
 
     mean: Float[Array, ""] = eqx.field(converter=_f32, default=0.5)
     std: Float[Array, ""] = eqx.field(converter=_f32, default=0.12)
+    height: Float[Array, ""] = eqx.field(converter=_f32, default=1.7)
+
+    def height_per_width(self) -> float:
+        """Height over mean width (3.4 by default) as a host float: a walker W px wide at its
+        foot point is this many W tall. Each float32 value is read as the shortest decimal
+        that stands for it (1.7, not 1.7000000476837158), so host arithmetic gives what the
+        literals 1.7 / 0.5 gave."""
+        return host_float(self.height) / host_float(self.mean)
+
+
+def host_float(x) -> float:
+    """A scalar parameter as a host float: the shortest decimal that its dtype round-trips
+    (float32 1.7 -> 1.7, where float() gives 1.7000000476837158), so host code that took a
+    literal gives the same figures when it reads the config instead."""
+    return float(str(np.asarray(x)[()]))
 
 
 @final
@@ -201,7 +219,7 @@ def _s(x) -> float:
 _CAMERA_KEYS = ("f_m", "h_m", "theta_deg", "a_px_per_m", "b_px_per_m", "uc_px", "vc_px",
                 "roll_deg", "fps", "image_width_px", "image_height_px")
 _NOISE_KEYS = ("q_std_mps_per_sqrt_s", "r_std_px", "r_corr", "init_speed_std_mps")
-_WIDTH_KEYS = ("mean_m", "std_m")
+_WIDTH_KEYS = ("mean_m", "std_m", "height_m")
 _WALKING_KEYS = ("pace_mean_hz", "pace_std_hz", "stride_mean_m", "stride_std_m")
 _THRESHOLD_KEYS = ("p_thr", "r_thr", "k_sigma1", "k_sigma2", "k_sigma3", "n_samples", "ar_order",
                    "range_min_m", "range_max_m", "predict_timeout_s", "window_hop_samples",
@@ -227,7 +245,7 @@ def config_to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
             "r_corr": _s(n.r_corr()),
             "init_speed_std_mps": _s(n.init_speed_std()),
         },
-        "width": {"mean_m": _s(w.mean), "std_m": _s(w.std)},
+        "width": {"mean_m": _s(w.mean), "std_m": _s(w.std), "height_m": _s(w.height)},
         "walking": {"pace_mean_hz": _s(k.pace_mean), "pace_std_hz": _s(k.pace_std),
                     "stride_mean_m": _s(k.stride_mean), "stride_std_m": _s(k.stride_std)},
         "thresholds": {
@@ -303,7 +321,8 @@ def config_from_dict(d: Any) -> Config:
         init_speed_std=_num("noise", "init_speed_std_mps", n["init_speed_std_mps"], lo=0.0),
     )
     width = WidthModel(mean=_num("width", "mean_m", w["mean_m"], lo=0.0),
-                       std=_num("width", "std_m", w["std_m"], lo=0.0))
+                       std=_num("width", "std_m", w["std_m"], lo=0.0),
+                       height=_num("width", "height_m", w["height_m"], lo=0.0))
     walking = WalkingModel(
         pace_mean=_num("walking", "pace_mean_hz", k["pace_mean_hz"], lo=0.0),
         pace_std=_num("walking", "pace_std_hz", k["pace_std_hz"], lo=0.0),
