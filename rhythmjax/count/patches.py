@@ -38,8 +38,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..model.camera import measure
-from ..model.camera_np import camera_tuple
+from ..model.camera import Terms, measure, upright_size_with
+from ..model.camera_np import (
+    SCALAR,
+    HostCamera,
+    camera_tuple,
+    ground_of_pixels,
+    host_terms,
+    project_3d,
+    upright_size,
+)
 from ..model.ekf import (
     Carry,
     FromAnnotations,
@@ -60,55 +68,35 @@ _SCALARS = (float, int, np.float64)  # ShapeModel.size: types taken as scalars w
 
 
 # ----------------------------------------------------------------------------------------------
-# shape (NumPy float64)
+# shape (host float64: the camera's one set of formulas, `camera.*_with`)
 
 
 def ground_point(camera: Camera | tuple, u, v):
-    """Inverse of (3) in NumPy float64: ground (x, y) m of the foot point (u, v) px, and `ok`
-    (below the horizon, in front of the camera); x = y = 0 where not ok."""
-    f, h, th, a, b, uc, vc = camera_tuple(camera)
-    u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
-    s, c = math.sin(th), math.cos(th)
-    dv = vc - v
-    den = b * f * s - dv * c
-    ok = den > 1e-6 * b * f
-    y = (dv * (f + h * s) + b * f * h * c) / np.where(ok, den, 1.0)
-    d = f + y * c + h * s
-    ok = ok & (d > 1e-3) & np.isfinite(u) & np.isfinite(v)
-    x = (u - uc) * np.where(ok, d, 1.0) / (a * f)
-    return np.where(ok, x, 0.0), np.where(ok, y, 0.0), ok
+    """Inverse of (3) with roll in NumPy float64: ground (x, y) m of the foot point (u, v) px,
+    and `ok` (below the horizon, in front of the camera); x = y = 0 where not ok."""
+    return ground_of_pixels(camera, u, v)
 
 
 def patch_size_3d(camera: Camera | tuple, u, v, width_m: float,
                   height_m: float = PEDESTRIAN_HEIGHT_M):
     """3-D shape: (w, h) px of an average pedestrian standing at the foot point (u, v) px, and
-    `ok`; NaN where the foot point has no ground point or the head is behind the camera."""
-    f, hc, th, a, b, uc, vc = camera_tuple(camera)
-    _, y, ok = ground_point(camera, u, v)
-    s, c = math.sin(th), math.cos(th)
-    d_foot = f + y * c + hc * s
-    d_head = f + y * c + (hc - height_m) * s
-    ok = ok & (d_head > 1e-3)
-    v_top = vc - b * f * (y * s - (hc - height_m) * c) / np.where(ok, d_head, 1.0)
-    w = a * f * width_m / np.where(ok, d_foot, 1.0)
-    h = np.asarray(v, np.float64) - v_top
-    nan = np.where(ok, 1.0, np.nan)
-    return w * nan, h * nan, ok
+    `ok`; NaN where the foot point has no ground point or the head is behind the camera. w is
+    the width at the feet along the rows, h = v - the head's row (`camera.upright_size_with`)."""
+    return upright_size(camera, u, v, width_m, height_m)
 
 
 def middle_foot_point(cfg: Config) -> tuple[float, float]:
     """Foot point (u, v) px of x = 0, y = middle of the detection range: the 2-D shape's place."""
-    f, h, th, a, b, uc, vc = camera_tuple(cfg.camera)
     y = 0.5 * (float(cfg.thresholds.range_min) + float(cfg.thresholds.range_max))
-    s, c = math.sin(th), math.cos(th)
-    return uc, vc - b * f * (y * s - h * c) / (f + y * c + h * s)
+    u, v = project_3d(cfg.camera, 0.0, y, 0.0)
+    return float(u), float(v)
 
 
 @dataclass(frozen=True)
 class ShapeModel:
     """Patch size as a function of the foot point: 3-D (per place) or 2-D (fixed)."""
 
-    camera: tuple[float, ...]  # (f, h, theta, a, b, uc, vc), host floats (`camera_tuple`)
+    camera: HostCamera  # host floats, roll included (`camera_tuple`)
     width_m: float
     height_m: float
     fixed: tuple[float, float] | None = None  # (w, h) px for the 2-D shape
@@ -136,35 +124,33 @@ class ShapeModel:
         return w, h
 
     def row_sizes(self, n_rows: int) -> tuple[np.ndarray, np.ndarray]:
-        """(w, h) px of a foot point on each image row 0 .. n_rows - 1 (read-only float64): the
-        size depends on the row only (for any finite u), so a table serves every integer row
-        with the values `size` gives there; computed once per (model, n_rows)."""
+        """(w, h) px of a foot point at u = Uc on each image row 0 .. n_rows - 1 (read-only
+        float64). Without roll the size depends on the row only (for any finite u), so the
+        table serves every integer row; with roll it also depends on u (`foot_sizes`)."""
         return _row_sizes(self, int(n_rows))
 
+    def foot_sizes(self, u, rows, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(w, h, finite) at the foot points (u, rows) px, rows integers in [0, n_rows); NaN as
+        0: from the row table where the size depends on the row only (roll 0, or the 2-D
+        shape), else computed at each foot point (`size`)."""
+        if self.fixed is not None or self.camera.roll == 0.0:
+            return tuple(q[rows] for q in _row_table(self, int(n_rows)))
+        w, h = self.size(np.asarray(u, np.float64), np.asarray(rows, np.float64))
+        fin = np.isfinite(w) & np.isfinite(h)
+        return np.where(fin, w, 0.0), np.where(fin, h, 0.0), fin
+
     def _size_scalar(self, u: float, v: float) -> tuple[float, float]:
-        """`patch_size_3d` (and `ground_point`) for one foot point in plain float arithmetic,
-        operation for operation, so it gives the same float64 values (called several times per
-        pedestrian and frame, where NumPy's overhead on 0-d arrays dominated)."""
+        """`patch_size_3d` for one foot point: the same formulas on Python floats
+        (`camera_np.SCALAR`), so the same float64 values without NumPy's per-call cost (called
+        several times per pedestrian and frame)."""
         if self.fixed is not None:
             return self.fixed
-        nan = (math.nan, math.nan)
-        f, hc, th, a, b, uc, vc = self.camera
-        if not (math.isfinite(u) and math.isfinite(v)):
-            return nan
-        s, c = math.sin(th), math.cos(th)
-        dv = vc - v
-        den = b * f * s - dv * c
-        if not den > 1e-6 * b * f:
-            return nan
-        y = (dv * (f + hc * s) + b * f * hc * c) / den
-        if not f + y * c + hc * s > 1e-3:
-            return nan
-        d_foot = f + y * c + hc * s
-        d_head = f + y * c + (hc - self.height_m) * s
-        if not d_head > 1e-3:
-            return nan
-        v_top = vc - b * f * (y * s - (hc - self.height_m) * c) / d_head
-        return a * f * self.width_m / d_foot, v - v_top
+        w, h, _ = upright_size_with(SCALAR, self._terms, u, v, self.width_m, self.height_m)
+        return w, h
+
+    @functools.cached_property
+    def _terms(self) -> Terms:
+        return host_terms(self.camera)  # the camera's constants, once per model
 
 
 _AB_ADD = np.array([[0.5], [0.5], [1.5]])  # place_patch: rounding of a0, a1 and b0
@@ -172,7 +158,7 @@ _AB_ADD = np.array([[0.5], [0.5], [1.5]])  # place_patch: rounding of a0, a1 and
 
 @functools.lru_cache(maxsize=8)
 def _row_table(shape: ShapeModel, n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`row_sizes` with NaN as 0, and where they were finite (place_patch)."""
+    """`row_sizes` with NaN as 0, and where they were finite (`foot_sizes`)."""
     w, h = _row_sizes(shape, n_rows)
     fin = np.isfinite(w) & np.isfinite(h)
     return np.where(fin, w, 0.0), np.where(fin, h, 0.0), fin
@@ -182,7 +168,7 @@ def _row_table(shape: ShapeModel, n_rows: int) -> tuple[np.ndarray, np.ndarray, 
 def _row_sizes(shape: ShapeModel, n_rows: int) -> tuple[np.ndarray, np.ndarray]:
     v = np.arange(n_rows, dtype=np.float64)
     w, h = (np.array(np.broadcast_to(q, v.shape), np.float64)
-            for q in shape.size(np.full(n_rows, shape.camera[5]), v))
+            for q in shape.size(np.full(n_rows, shape.camera.uc), v))
     w.flags.writeable = h.flags.writeable = False
     return w, h
 
@@ -414,7 +400,7 @@ def place_patch(labels: np.ndarray, related: np.ndarray, claimed: np.ndarray | N
         return None
     us, vb = us[ok], vb[ok]
     v = vb + float(ytop)
-    w, h, fin = (q[vb + ytop] for q in _row_table(shape, H))  # the size at the foot row
+    w, h, fin = shape.foot_sizes(us, vb + ytop, H)  # the size at the foot point
     hw = 0.5 * w
     # the patch's columns [a0, a1) and top row b0, in window coordinates, clipped to it
     a0, a1, b0 = np.minimum(np.maximum(

@@ -1,55 +1,102 @@
-"""The camera of (3) in NumPy float64 for points above the ground (synthetic rendering): a point
-z m above the ground is seen as a ground point by a camera h - z high. z = 0 is (3) exactly, with
-roll = 0 (the renderer draws for the paper's camera)."""
+"""The camera of (3) for host code (rendering, patch sizes, stitching, relinking): a thin float64
+NumPy front on the one set of formulas in `camera` (`project_with`, `ground_with`, ...), roll
+included. The camera's constants are Python floats (`host_terms`); arrays are NumPy float64.
+`SCALAR` is an array namespace for plain Python floats, for callers that evaluate one point at a
+time (NumPy's per-call cost on 0-d arrays would dominate there); it gives the same float64
+values as the NumPy front."""
 
 from __future__ import annotations
 
+import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
+from .camera import (
+    Terms,
+    depth_with,
+    ground_with,
+    image_width_with,
+    project_with,
+    upright_size_with,
+)
 from .params import Camera
 
 
-def camera_tuple(camera: Camera | tuple) -> tuple[float, ...]:
-    """(f, h, theta, a, b, uc, vc) as Python floats (m, m, rad, px/m, px/m, px, px); a tuple
-    passes through unchanged. The roll extension is not carried: these NumPy mirrors of (3)
-    serve the renderer and the pedestrian patches, both for the paper's roll-free camera."""
-    if isinstance(camera, tuple):
+class HostCamera(NamedTuple):
+    """A camera's parameters as Python floats: f, h (m), theta (rad), a, b (px/m), uc, vc (px),
+    roll (rad). A tuple, so hashable (a cache key) and unpackable."""
+
+    f: float
+    h: float
+    theta: float
+    a: float
+    b: float
+    uc: float
+    vc: float
+    roll: float = 0.0
+
+
+def camera_tuple(camera: Camera | tuple) -> HostCamera:
+    """`HostCamera` of a `Camera` (its float32 values exactly, as float64); a tuple passes
+    through (a 7-tuple without the roll, the older form, is read as roll = 0)."""
+    if isinstance(camera, HostCamera):
         return camera
-    return tuple(float(np.asarray(getattr(camera, k))) for k in ("f", "h", "theta", "a", "b",
-                                                                     "uc", "vc"))
+    if isinstance(camera, tuple):
+        return HostCamera(*camera)
+    return HostCamera(*(float(np.asarray(getattr(camera, k))) for k in HostCamera._fields))
+
+
+@functools.lru_cache(maxsize=64)
+def _terms_of(host: HostCamera) -> Terms:
+    return Terms(host.f, host.h, host.a, host.b, host.uc, host.vc, math.sin(host.theta),
+                 math.cos(host.theta), math.sin(host.roll), math.cos(host.roll))
+
+
+def host_terms(camera: Camera | tuple) -> Terms:
+    """`camera.Terms` as Python floats (sines and cosines by `math`; cached per camera)."""
+    return _terms_of(camera_tuple(camera))
+
+
+class SCALAR:
+    """The array namespace of plain Python floats and bools (`where`, `isfinite`)."""
+
+    @staticmethod
+    def where(cond, a, b):
+        return a if cond else b
+
+    isfinite = staticmethod(math.isfinite)
+
+
+def _f64(q) -> np.ndarray:
+    return np.asarray(q, np.float64)
 
 
 def depth_3d(camera: Camera | tuple, y, z):
     """Denominator of (3) for a point at height z (m): f + y cos(theta) + (h - z) sin(theta)."""
-    f, h, th = camera_tuple(camera)[:3]
-    return f + np.asarray(y, np.float64) * math.cos(th) + (h - np.asarray(z, np.float64)) * \
-        math.sin(th)
+    return depth_with(host_terms(camera), _f64(y), _f64(z))
 
 
 def project_3d(camera: Camera | tuple, x, y, z):
-    """(u, v) px of the point (x, y) m on the ground plane and z m above it: equation (3) with the
-    camera height h replaced by h - z (the camera at height h looks down by theta; a point z
-    above the ground is seen as a ground point by a camera h - z high). z = 0 is (3) exactly.
-    NumPy float64; no check for points behind the camera (see `depth_3d`)."""
-    f, h, th, a, b, uc, vc = camera_tuple(camera)
-    x, y, z = (np.asarray(q, np.float64) for q in (x, y, z))
-    s, c = math.sin(th), math.cos(th)
-    d = f + y * c + (h - z) * s
-    return uc + a * f * x / d, vc - b * f * (y * s - (h - z) * c) / d
+    """(u, v) px of the point (x, y) m on the ground plane and z m above it: equation (3) with
+    roll, the camera height h replaced by h - z (`camera.project_with`). z = 0 is (3) exactly.
+    Behind the camera (depth <= 1 mm, see `depth_3d`) the values are finite and meaningless."""
+    return project_with(np, host_terms(camera), _f64(x), _f64(y), _f64(z))
 
 
-def ground_of_pixels(camera: Camera, u, v):
-    """Inverse perspective (NumPy): ground (x, y) of pixels (u, v) and a below-horizon mask."""
-    f, h, th, a, b, uc, vc = camera_tuple(camera)
-    s, c = math.sin(th), math.cos(th)
-    dv = vc - v
-    den = b * f * s - dv * c
-    ok = den > 1e-6 * b * f
-    den = np.where(ok, den, 1.0)
-    y = (dv * (f + h * s) + b * f * h * c) / den
-    d = f + y * c + h * s
-    ok &= d > 1e-3
-    x = (u - uc) * np.where(ok, d, 1.0) / (a * f)
-    return np.where(ok, x, 0.0), np.where(ok, y, 0.0), ok
+def ground_of_pixels(camera: Camera | tuple, u, v):
+    """Inverse perspective: ground (x, y) m of image points (u, v) px and `ok` (below the
+    horizon, in front of the camera, finite); x = y = 0 where not ok (`camera.ground_with`)."""
+    return ground_with(np, host_terms(camera), _f64(u), _f64(v))
+
+
+def image_width_of(camera: Camera | tuple, width_m, y):
+    """Image width (px, along the rows) of a lateral ground width (m) at distance y (m)."""
+    return image_width_with(np, host_terms(camera), _f64(width_m), _f64(y))
+
+
+def upright_size(camera: Camera | tuple, u, v, width_m: float, height_m: float):
+    """(w, h, ok) px of an upright width_m x height_m m box standing at the foot point (u, v) px
+    (`camera.upright_size_with`); NaN where not ok."""
+    return upright_size_with(np, host_terms(camera), _f64(u), _f64(v), width_m, height_m)

@@ -278,8 +278,7 @@ def render_scene(key_or_seed, spec: SceneSpec) -> Scene:
     bg = render_background(cam, r_tex, ground_mean=spec.ground_mean,
                            ground_contrast=spec.ground_contrast, sky=spec.sky)
     T, H, W = spec.n_frames, cam.image_height, cam.image_width
-    f, h, th, a_, b_, uc, vc = camera_tuple(cam)
-    afs = a_ * f
+    afs = camera_tuple(cam).a * camera_tuple(cam).f  # px per m at depth 1 m
     jitter = (r_jit.standard_normal((T, 2)) * spec.jitter_px if spec.jitter_px > 0
               else np.zeros((T, 2)))
     lut_p, lut_n = _noise_luts(spec.noise_std) if spec.noise_std > 0 else (None, None)
@@ -403,12 +402,12 @@ def _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion, r
     """Up to 300 random straight paths for one actor: the first whose image box clashes with no
     placed actor's, else the least clashing one in view; None when none stays in view."""
     fps, W, H = float(camera.fps), camera.image_width, camera.image_height
-    afs = camera_tuple(camera)[3] * camera_tuple(camera)[0]
+    afs = camera_tuple(camera).a * camera_tuple(camera).f
     best = None
     for _ in range(300):
         head = float(rng.uniform(-math.pi, math.pi))
         ym = float(rng.uniform(*range_m))
-        half = 0.8 * (W / 2) * ym * math.cos(camera_tuple(camera)[2]) / afs
+        half = 0.8 * (W / 2) * ym * math.cos(camera_tuple(camera).theta) / afs
         xm = float(rng.uniform(-half, half))
         tau = (k - start - life / 2) / fps
         x = xm + speed * tau * math.cos(head)
