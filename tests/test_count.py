@@ -16,6 +16,7 @@ from rhythmjax.io import BadInput, read_table
 from rhythmjax.io.mot import MOT_COLUMNS, read_mot, write_mot
 from rhythmjax.model.params import config_from_dict
 from rhythmjax.sim.scene import SceneSpec, render_scene, walker
+from rhythmjax.track.rows import TrackRow
 
 from .test_pedestrians import SMALL
 
@@ -240,9 +241,9 @@ def test_too_fast_is_the_walking_models_top_speed():
                                                    rel=1e-5)
     p = Pedestrian(slot=0, born=0)
     # rows: (index, t, u, v, W, I, x, y, state): 1.5 s at (1.2, -1.6) m/s = 2 m/s, measured
-    p.rows = [(k, k / 15, 100.0, 100.0, 20.0, 1.0, 1.2 * k / 15, 8 - 1.6 * k / 15, 2)
+    p.rows = [TrackRow(k, k / 15, 100.0, 100.0, 20.0, 1.0, 1.2 * k / 15, 8 - 1.6 * k / 15, 2)
               for k in range(23)]
-    p.rows[5] = p.rows[5][:8] + (3,)  # a predicted row is left out
+    p.rows[5] = p.rows[5]._replace(state=3)  # a predicted row is left out
     assert track_speed(p) == pytest.approx(2.0, rel=1e-6)
     p.rows = p.rows[:5]  # under 0.5 s: unknown
     assert math.isnan(track_speed(p))

@@ -22,6 +22,7 @@ from rhythmjax.count.patches import (
 from rhythmjax.model import ekf
 from rhythmjax.model.params import config_from_dict
 from rhythmjax.sim.scene import SceneSpec, project_3d, render_scene, walker
+from rhythmjax.track.rows import TrackRow
 
 
 # a small camera: 256x192, 3 m high, 25 deg down, a f = b f = 200 px/m; people 3-15 m away
@@ -102,8 +103,10 @@ def slot_runs():
             if present[k]:
                 zz[1] = z[k]
             pres = np.array([False, True, False, False])
-            rows.append(sf.step(np.array([False, k == 0, False, False]), zz, pres, 1 / 15)[1])
-        out[dyn] = np.asarray(rows)
+            got = sf.step(np.array([False, k == 0, False, False]), zz, pres, 1 / 15)
+            rows.append(np.concatenate([[got.started[1]], got.est_uv[1], got.next_uv[1],
+                                        got.ground[1], got.velocity[1]]))
+        out[dyn] = np.asarray(rows)  # (started, est u, v, next u, v, ground x, y, vx, vy)
     return z, present, out
 
 
@@ -235,6 +238,13 @@ def test_new_pedestrians_start_only_in_the_detection_range():
     assert count_frames(CFG, items(), options=FAST).counts["tracks"] == 1
 
 
+def _g(ground: list[tuple]) -> list:
+    """`Pedestrian.ground` records (x, y m, vx, vy m/s) of plain tuples."""
+    from rhythmjax.count.rows import GroundRow
+
+    return [GroundRow(*g) for g in ground]
+
+
 def test_a_track_whose_ground_velocity_jumps_ends_before_the_jump():
     from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
 
@@ -243,20 +253,20 @@ def test_a_track_whose_ground_velocity_jumps_ends_before_the_jump():
     p = Pedestrian(slot=0, born=0)
     # 2 s walking at 1.4 m/s, then the velocity swings by 3 m/s within 0.3 s (the patch slid
     # down a merged blob onto a nearer person)
-    p.ground = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)]
+    p.ground = _g([(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)])
     assert level._velocity_jump(p) == 0
-    p.ground += [(3.0, 8.0 - 0.2 * i, 1.4, -1.0 * i) for i in range(1, 5)]
+    p.ground += _g([(3.0, 8.0 - 0.2 * i, 1.4, -1.0 * i) for i in range(1, 5)])
     assert level._velocity_jump(p) == k
     # a cyclist at a steady 6 m/s is not lost; nor is a track younger than 2 windows (its
     # filter starts at rest)
-    p.ground = [(0.4 * i, 8.0, 6.0, 0.0) for i in range(40)]
+    p.ground = _g([(0.4 * i, 8.0, 6.0, 0.0) for i in range(40)])
     assert level._velocity_jump(p) == 0
-    p.ground = [(0.0, 8.0, 0.0, 0.0)] * 3 + [(0.1, 8.0, 4.0, 0.0)] * 5
+    p.ground = _g([(0.0, 8.0, 0.0, 0.0)] * 3 + [(0.1, 8.0, 4.0, 0.0)] * 5)
     assert level._velocity_jump(p) == 0
     # the 2-D dynamics have no ground velocity: never
     level2 = PedestrianLevel(CFG, CountOptions(dynamics="2d", classify=False,
                                                online_verdicts=False))
-    p.ground = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)] + [(3.0, 8.0, 1.4, -4.0)] * 4
+    p.ground = _g([(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)] + [(3.0, 8.0, 1.4, -4.0)] * 4)
     assert level2._velocity_jump(p) == 0
     assert level._velocity_jump(p) == k
 
@@ -273,13 +283,13 @@ def test_a_swap_between_crossing_walkers_ends_the_track():
     assert level.opt.max_dv_mps == 1.5
     k = round(0.5 * 15)
     p = Pedestrian(slot=0, born=0)
-    walk = [(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)]
-    p.ground = walk + [(3.0, 8.0 + 0.1 * i, 0.0, 1.4) for i in range(1, k + 1)]
+    walk = _g([(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)])
+    p.ground = walk + _g([(3.0, 8.0 + 0.1 * i, 0.0, 1.4) for i in range(1, k + 1)])
     assert level._velocity_jump(p) == k
-    p.ground = walk + [(3.0 + 0.1 * i, 8.0 + 0.1 * i, 1.4 * math.cos(math.pi / 4),
-                        1.4 * math.sin(math.pi / 4)) for i in range(1, k + 1)]
+    p.ground = walk + _g([(3.0 + 0.1 * i, 8.0 + 0.1 * i, 1.4 * math.cos(math.pi / 4),
+                           1.4 * math.sin(math.pi / 4)) for i in range(1, k + 1)])
     assert level._velocity_jump(p) == 0
-    p.ground = [(0.1 * i, 8.0, 1.0 + 0.4 * min(1.0, i / 30), 0.0) for i in range(40)]
+    p.ground = _g([(0.1 * i, 8.0, 1.0 + 0.4 * min(1.0, i / 30), 0.0) for i in range(40)])
     assert level._velocity_jump(p) == 0
 
 
@@ -390,13 +400,14 @@ def test_online_verdict_windows_start_every_hop_samples():
     p = Pedestrian(slot=0, born=0)
     judged_at = []
     for k in range(70):  # (index, t, u, v, width, intensity, x, y, state)
-        p.rows.append((k, k / 15.0, 100.0, 200.0, 30.0, 5.0, 0.1 * k, 10.0, 2))
+        p.rows.append(TrackRow(k, k / 15.0, 100.0, 200.0, 30.0, 5.0, 0.1 * k, 10.0, 2))
         before = p.windows_done
         level._match(p)
         if p.windows_done > before:
             judged_at.append(len(p.rows))
     assert judged_at == [32, 48, 64]
-    assert not p.decided and p.result == {"verdict": 2}
+    assert not p.decided and int(p.result["verdict"]) == 2 and p.result["window"] == (0, 32)
+    assert p.win_start == 48  # windows (0, 32), (16, 48), (32, 64) judged; the first kept
 
 
 def test_placement_helpers_match_plain_references():

@@ -12,6 +12,7 @@ from rhythmjax.model.params import Config
 from rhythmjax.model.status import TrackState
 from rhythmjax.sim import scene as synth
 from rhythmjax.track import relink
+from rhythmjax.track.rows import TrackRow, Velocity
 from rhythmjax.track.tracker import OnlineTracker, TrackerOptions
 
 
@@ -19,14 +20,14 @@ CFG = Config()
 OBS, PRED = int(TrackState.OBSERVE), int(TrackState.PREDICT)
 
 
-def _row(i, t, x, y, state):  # (index, t, u, v, width, intensity, x, y, state)
-    return (i, t, 100.0, 200.0, 30.0, 5.0, x, y, state)
+def _row(i, t, x, y, state):
+    return TrackRow(i, t, 100.0, 200.0, 30.0, 5.0, x, y, state)
 
 
 def test_last_observed_skips_the_predicted_tail():
     rows = [_row(0, 0.0, 1.0, 10.0, OBS), _row(1, 0.1, 1.1, 10.2, OBS),
             _row(2, 0.2, 1.2, 10.4, PRED), _row(3, 0.3, 1.3, 10.6, PRED)]
-    vel = [(0.0, 0.0), (1.0, 2.0), (1.0, 2.0), (1.0, 2.0)]
+    vel = [Velocity(0.0, 0.0)] + [Velocity(1.0, 2.0)] * 3
     assert relink.last_observed(rows, vel) == (0.1, 1.1, 10.2, 1.0, 2.0)
     assert relink.last_observed(rows[2:], vel[2:]) is None
 
@@ -35,12 +36,12 @@ def test_gap_rows_interpolate_time_and_ground_position():
     """Frames 11 and 12 between a row at frame 10 (t 1.0 s, x 2 m, y 10 m) and frame 13
     (t 1.2 s, x 2.3, y 10.6): thirds of the way."""
     rows = relink.gap_rows(_row(10, 1.0, 2.0, 10.0, PRED), 13, 1.2, (2.3, 10.6))
-    assert [r[0] for r in rows] == [11, 12]
-    assert [r[1] for r in rows] == pytest.approx([1.0 + 0.2 / 3, 1.0 + 0.4 / 3], abs=1e-12)
-    assert [r[6] for r in rows] == pytest.approx([2.1, 2.2], abs=1e-12)
-    assert [r[7] for r in rows] == pytest.approx([10.2, 10.4], abs=1e-12)
-    assert all(math.isnan(q) for r in rows for q in r[2:6])
-    assert all(r[8] == int(TrackState.NONE) for r in rows)
+    assert [r.frame for r in rows] == [11, 12]
+    assert [r.t for r in rows] == pytest.approx([1.0 + 0.2 / 3, 1.0 + 0.4 / 3], abs=1e-12)
+    assert [r.x_est for r in rows] == pytest.approx([2.1, 2.2], abs=1e-12)
+    assert [r.y_est for r in rows] == pytest.approx([10.2, 10.4], abs=1e-12)
+    assert all(math.isnan(q) for r in rows for q in (r.u, r.v, r.width_px, r.intensity))
+    assert all(r.state == int(TrackState.NONE) for r in rows)
     assert relink.gap_rows(_row(10, 1.0, 2.0, 10.0, PRED), 11, 1.1, (2.0, 10.0)) == []
 
 

@@ -84,9 +84,9 @@ def test_predict_timeout_ends_track():
     tr = _run(CFG, scene.frames)
     assert len(tr.finished) == 1  # ended by the time-out, not by finish()
     rows = tr.finished[0].rows
-    last = rows[-1][0]
+    last = rows[-1].frame
     assert 40 + 14 <= last <= 40 + 18
-    assert all(r[-1] == int(tr.finished[0].state) for r in rows[-10:])  # predicting at the end
+    assert all(r.state == int(tr.finished[0].state) for r in rows[-10:])  # predicting at the end
     tracks, _, _ = tr.finish()
     tail = tracks["state"][tracks["frame"] > 42]
     assert len(tail) and np.all(tail == "predict")
@@ -126,18 +126,19 @@ def test_rhythm_window_restarts_after_missing_run():
     with another track) is not classified: the next window starts after its last missing row,
     and is classified once N rows follow it."""
     from rhythmjax.model.status import TrackState
+    from rhythmjax.track.rows import TrackRow
+    from rhythmjax.track.toolkit import match_window
     from rhythmjax.track.tracker import _Object
 
     cfg = config_from_dict({"thresholds": {"n_samples": 32}})
-    tr = OnlineTracker(cfg)
     obj = _Object(track_id=1, state=TrackState.OBSERVE)
     t = np.arange(80) / 15.0
     rng = np.random.default_rng(0)
     inten = 100 + 30 * np.sin(2 * np.pi * 2.0 * t) + rng.normal(0, 1, 80)
     inten[5:15] = np.nan  # 10 of the first 32 missing (> 8)
     for k in range(80):
-        obj.rows.append((k, t[k], 1.0, 1.0, 10.0, inten[k], 1.3 * t[k], 10.0, 1))
-        tr._match(obj)
+        obj.rows.append(TrackRow(k, t[k], 1.0, 1.0, 10.0, inten[k], 1.3 * t[k], 10.0, 1))
+        match_window(cfg, obj)
         if k < 46:  # rows 15..46 make the first complete window after the missing run
             assert obj.result is None, k
         if k == 31:
@@ -231,11 +232,11 @@ def test_foot_point_far_above_the_prediction_is_dropped(walker_scene, monkeypatc
         frame[0] = i
         tr.update(i, i / 15.0, f)
     tracks, _, objs = tr.finish()
-    assert len(objs) == 1 and objs[0].rows[0][0] < 20
-    rows = {int(r[0]): r for r in objs[0].rows}
-    assert all(not math.isfinite(rows[k][3]) for k in (30, 31, 40, 41, 42))
-    assert all(math.isfinite(rows[k][3]) for k in (29, 32, 39, 43, 44, 45, 46))
-    assert rows[42][8] == TrackState.PREDICT and rows[32][8] == TrackState.OBSERVE
+    assert len(objs) == 1 and objs[0].rows[0].frame < 20
+    rows = {int(r.frame): r for r in objs[0].rows}
+    assert all(not math.isfinite(rows[k].v) for k in (30, 31, 40, 41, 42))
+    assert all(math.isfinite(rows[k].v) for k in (29, 32, 39, 43, 44, 45, 46))
+    assert rows[42].state == TrackState.PREDICT and rows[32].state == TrackState.OBSERVE
     assert objs[0].predict_time == 0.0
 
 
@@ -244,14 +245,15 @@ def test_velocity_jump_ends_the_track():
     (vx, vy) = (1.0, 0.0) m/s, then a 31st at (1.0, 1.9): |dv| against row 16 (15 back) is
     1.9 > 1.8, the track is 31 > 2k = 30 rows old, so its last 15 rows go and it ends with 16;
     at (1.0, 1.7) (|dv| 1.7) or with the rule off (0) it goes on with 31."""
+    from rhythmjax.track.rows import TrackRow, Velocity
     from rhythmjax.track.tracker import TrackerOptions, _Object
 
     def run(vy, max_dv):
         tr = OnlineTracker(CFG, TrackerOptions(max_dv_mps=max_dv, dv_window_s=1.0))
         obj = _Object(track_id=1, state=TrackState.OBSERVE)
         for i in range(30):
-            obj.rows.append((i, i / 15.0, 100.0, 300.0, 30.0, 1.0, 0.0, 10.0, 1))
-            obj.vel.append((1.0, 0.0))
+            obj.rows.append(TrackRow(i, i / 15.0, 100.0, 300.0, 30.0, 1.0, 0.0, 10.0, 1))
+            obj.vel.append(Velocity(1.0, 0.0))
         tr._slots[0] = obj
         tr._after_step(0, obj, 30, 2.0, 1 / 15.0, np.array([100.0, 300.0]), 30.0, True, True,
                        np.array([0.0, 1.0, 10.0, vy]), np.array([100.0, 300.0]), 30.0, None,
@@ -260,7 +262,7 @@ def test_velocity_jump_ends_the_track():
 
     tr, obj = run(1.9, 1.8)
     assert tr._slots[0] is None and tr.finished == [obj] and len(obj.rows) == 16
-    assert [r[0] for r in obj.rows] == list(range(16))
+    assert [r.frame for r in obj.rows] == list(range(16))
     for vy, max_dv in ((1.7, 1.8), (1.9, 0.0)):
         tr, obj = run(vy, max_dv)
         assert tr._slots[0] is obj and len(obj.rows) == 31

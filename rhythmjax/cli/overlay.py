@@ -64,8 +64,8 @@ def spectrum_figure(path, cfg: Config, tracks: dict, verdicts: dict, objs, *,
     hi = float(walk.pace_mean + thr.k_sigma3 * walk.pace_std)
     for ax, o in zip(axes.ravel(), chosen):
         a, b = o.result["window"]
-        rows_ = np.asarray([r[1:8] for r in o.rows[a:b]], np.float64)
-        t, inten = rows_[:, 0], rows_[:, 4]
+        t = np.asarray([r.t for r in o.rows[a:b]], np.float64)
+        inten = np.asarray([r.intensity for r in o.rows[a:b]], np.float64)
         dt = float(np.median(np.diff(t)))
         x, _ = normalise_window(fill_gaps(jnp.asarray(inten, jnp.float32),
                                           jnp.isfinite(jnp.asarray(inten))))

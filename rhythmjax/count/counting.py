@@ -4,7 +4,7 @@ rhythm classifier on every track, which removes what does not walk from the coun
 
 Stitching (`stitch_pieces`): a walker hidden behind another or behind a bicycle for longer than
 its coasting time, or lost by its patch at a crossing (a track whose ground velocity jumps ends
-there: `PedestrianLevel._velocity_jump`), comes back as a new track. At the end of the video
+there: `track.toolkit.velocity_jump`), comes back as a new track. At the end of the video
 every track's end (its last measured frame: the EKF ground state (x, y, vx, vy) for the "3d"
 dynamics, a line fit over its last `stitch_fit_s` s of measured foot points otherwise) is
 compared with every later track's start (a line fit over its first `stitch_fit_s` s of
@@ -45,9 +45,11 @@ from typing import Any
 import numpy as np
 
 from ..model.params import Config
+from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
 from .options import CountOptions
 from .pedestrian_level import Pedestrian, PedestrianLevel
+from .rows import BlobRow, BoxRow
 from .stitch import stitch_level
 
 
@@ -131,8 +133,8 @@ def track_speed(p: Pedestrian) -> float:
     state for "3d"); NaN with fewer than 2 or a span under 0.5 s."""
     from ..model.status import TrackState
 
-    r = np.asarray([(q[1], q[6], q[7]) for q in p.rows if q[8] == int(TrackState.OBSERVE)],
-                   np.float64).reshape(-1, 3)
+    r = np.asarray([(q.t, q.x_est, q.y_est) for q in p.rows
+                    if q.state == int(TrackState.OBSERVE)], np.float64).reshape(-1, 3)
     r = r[np.all(np.isfinite(r), axis=1)]
     if len(r) < 2 or np.ptp(r[:, 0]) < 0.5:
         return math.nan
@@ -171,16 +173,11 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
     """Outputs of the kept tracks, ids renumbered 1.. in order of appearance."""
     from ..io.files import Tracks, to_batch
     from ..model.batch import classify_tracks
-    from ..model.status import TrackState
-    from ..track.columns import TRACK_COLUMNS
 
     cfg = level.cfg
     for k, p in enumerate(peds, 1):
         p.track_id = k
-    rows = [(p.track_id, *r) for p in peds for r in p.rows]
-    tracks = {c: np.asarray([r[i] for r in rows], np.int64 if i < 2 else np.float64)
-              for i, c in enumerate(TRACK_COLUMNS[:-1])}
-    tracks["state"] = np.asarray([TrackState(r[-1]).name.lower() for r in rows], dtype=object)
+    tracks = tracks_table(peds)
     n = cfg.thresholds.n
     if peds and level.opt.classify:
         tr = Tracks(path="<count>", track_id=tracks["track_id"].astype(str).astype(object),
@@ -200,15 +197,7 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
                     "reason": np.full(B, "not-judged", dtype=object), "pace_hz": nan,
                     "stride_m": nan, "ratio": nan, "speed_mps": nan,
                     "n_samples": np.asarray([len(p.rows) for p in peds], np.int64)}
-    rows = [(b[0] + 1, p.track_id, *b[1:6], *(b[6:8] if b[8] else (-1.0, -1.0)),
-             0.0 if b[8] else -1.0) for p in peds for b in p.boxes]
-    mot = {c: np.asarray([r[i] for r in rows], np.int64 if i < 2 else np.float64)
-           for i, c in enumerate(MOT_COLUMNS)}
-    det = {c: np.asarray([r[i] for r in level.detections], np.int64)
-           for i, c in enumerate(("frame", "x0", "y0", "x1", "y1", "area"))}
-    detections = {"frame": det["frame"] + 1, "bb_left": det["x0"], "bb_top": det["y0"],
-                  "bb_width": det["x1"] - det["x0"], "bb_height": det["y1"] - det["y0"],
-                  "area": det["area"]}
+    mot, detections = mot_table(peds), detections_table(level.detections)
     top = walking_top_speed(cfg)
     verdicts["too_fast"] = np.asarray([track_speed(p) > top for p in peds], bool)
     verdicts["counted"] = counted(verdicts)
@@ -226,3 +215,49 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
         summary["notes"].append(f"all {level.filter.slots} pedestrian slots were in use in "
                                 f"{len(set(level.full_frames))} frame(s); raise max_pedestrians")
     return CountResult(mot, tracks, verdicts, counts, detections, summary)
+
+
+def _columns(records: list, fields: tuple[str, ...]) -> dict[str, tuple]:
+    """Per field of a NamedTuple type, the values of `records` (empty tuples when none)."""
+    return dict(zip(fields, zip(*records))) if records else {f: () for f in fields}
+
+
+def tracks_table(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
+    """The tracks format of the pedestrians' rows (`track.rows.TrackRow`), their track ids
+    first."""
+    from ..model.status import TrackState
+
+    rows = [r for p in peds for r in p.rows]
+    cols = _columns(rows, TrackRow._fields)
+    out = {"track_id": np.asarray([p.track_id for p in peds for _ in p.rows], np.int64),
+           "frame": np.asarray(cols["frame"], np.int64)}
+    for name in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est"):
+        out[name] = np.asarray(cols[name], np.float64)
+    out["state"] = np.asarray([TrackState(s).name.lower() for s in cols["state"]], dtype=object)
+    return out
+
+
+def mot_table(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
+    """MOT columns (`MOT_COLUMNS`) of the pedestrians' patches (`rows.BoxRow`): frame 1-based;
+    x, y, z = ground x, y, 0 where the foot point has a ground point, else -1, -1, -1."""
+    boxes = [b for p in peds for b in p.boxes]
+    cols = _columns(boxes, BoxRow._fields)
+    ok = np.asarray(cols["ok"], bool)
+    out = {"frame": np.asarray(cols["frame"], np.int64) + 1,
+           "id": np.asarray([p.track_id for p in peds for _ in p.boxes], np.int64)}
+    for name, col in (("bb_left", "left"), ("bb_top", "top"), ("bb_width", "w"),
+                      ("bb_height", "h"), ("conf", "conf")):
+        out[name] = np.asarray(cols[col], np.float64)
+    out["x"] = np.where(ok, np.asarray(cols["x"], np.float64), -1.0)
+    out["y"] = np.where(ok, np.asarray(cols["y"], np.float64), -1.0)
+    out["z"] = np.where(ok, 0.0, -1.0)
+    return out
+
+
+def detections_table(blobs: list[BlobRow]) -> dict[str, np.ndarray]:
+    """Per-frame blob boxes (`rows.BlobRow`) as MOT-style columns (`DETECTION_COLUMNS`), frame
+    1-based."""
+    cols = {k: np.asarray(v, np.int64) for k, v in _columns(blobs, BlobRow._fields).items()}
+    return {"frame": cols["frame"] + 1, "bb_left": cols["x0"], "bb_top": cols["y0"],
+            "bb_width": cols["x1"] - cols["x0"], "bb_height": cols["y1"] - cols["y0"],
+            "area": cols["area"]}

@@ -32,6 +32,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import jax
@@ -58,8 +59,9 @@ from ..model.ekf import (
     select,
     step,
 )
-from ..model.flat_tree import join as _join, split as _split
 from ..model.params import Camera, Config, Noise
+from ..track.rows import Layout
+from ..track.toolkit import SlotSteps
 
 
 DYNAMICS = ("2d", "3d-shape", "3d")
@@ -220,9 +222,21 @@ def _linear_step(noise: Noise, carry: Carry, z, dt, present) -> Carry:
     return Carry(state, carry.started | start)
 
 
+class FilterOut(NamedTuple):
+    """A frame's results per slot of `SlotFilter`, packed (`FILTER_OUT`) in one (S, 9) array."""
+
+    started: np.ndarray  # (S,) 1: the filter has started (the first measurement was usable)
+    est_uv: np.ndarray  # (S, 2) estimated foot point (u, v) px
+    next_uv: np.ndarray  # (S, 2) predicted foot point for the next frame px
+    ground: np.ndarray  # (S, 2) state position: ground (x, y) m for "3d", else (u, v) px
+    velocity: np.ndarray  # (S, 2) state velocity: (vx, vy) m/s for "3d", else (du, dv) px/s
+
+
+FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2))
+
+
 def _advance(dynamics: str, params, carry, reset, z, dt, dt_next, present):
-    """Every slot one frame; returns the carry and a host array (S, 9): started, estimated foot
-    (u, v), predicted next foot (u, v), ground (x, y) m, velocity (vx, vy) (m/s or px/s)."""
+    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 9)."""
     cfg, noise_img = params
     empty = empty_carry(z.dtype)
     carry = jax.vmap(lambda r, c: select(r, empty, c))(reset, carry)
@@ -240,47 +254,36 @@ def _advance(dynamics: str, params, carry, reset, z, dt, dt_next, present):
         est_uv = carry.state.mean[:, jnp.array([0, 2])]
         next_uv = nxt.mean[:, jnp.array([0, 2])]
     mean = carry.state.mean
-    host = jnp.concatenate([carry.started[:, None].astype(z.dtype), est_uv, next_uv,
-                            mean[:, jnp.array([0, 2])], mean[:, jnp.array([1, 3])]], axis=1)
-    return carry, host
-
-
-@functools.partial(jax.jit, static_argnums=(0, 1, 2))
-def _advance_flat(dynamics, params_structure, carry_structure, params_leaves, carry_leaves,
-                       *args):
-    carry, host = _advance(dynamics, _join(params_leaves, params_structure),
-                           _join(carry_leaves, carry_structure), *args)
-    return _split(carry)[0], host
+    return carry, FILTER_OUT.pack(z.dtype, started=carry.started, est_uv=est_uv,
+                                  next_uv=next_uv, ground=mean[:, jnp.array([0, 2])],
+                                  velocity=mean[:, jnp.array([1, 3])])
 
 
 class SlotFilter:
-    """`slots` pedestrian filters advanced together by one jitted call per frame."""
+    """`slots` pedestrian filters advanced together by one jitted call per frame
+    (`track.toolkit.SlotSteps`)."""
 
     def __init__(self, cfg: Config, dynamics: str = "3d", slots: int = 32):
         if dynamics not in DYNAMICS:
             raise ValueError(f"dynamics must be one of {DYNAMICS}, got {dynamics!r}")
         self.dynamics, self.slots = dynamics, int(slots)
-        self._params, self._params_structure = _split((cfg, image_noise(cfg)))
-        carry = jax.tree.map(lambda a: jnp.broadcast_to(a, (self.slots,) + a.shape).copy(),
-                             empty_carry())
-        self._carry, self._carry_structure = _split(carry)
+        self._steps = SlotSteps(_advance, (cfg, image_noise(cfg)), self.slots, (dynamics,))
         self.dt_nominal = float(cfg.camera.dt)
 
     def step(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
-             dt_next: float | None = None) -> np.ndarray:
+             dt_next: float | None = None) -> FilterOut:
         """Advance every slot by dt s (reset slots start afresh from their measurement z, NaN =
-        none); returns the host array of `_advance` as float64 (S, 9)."""
-        return np.asarray(self.dispatch(reset, z, present, dt, dt_next), np.float64)
+        none); returns the `FilterOut` of float64 host arrays."""
+        return FILTER_OUT.unpack(np.asarray(self.dispatch(reset, z, present, dt, dt_next),
+                                            np.float64))
 
     def dispatch(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
                  dt_next: float | None = None) -> jax.Array:
-        """`step` without waiting: the host array (float32) as the jitted call returns it."""
+        """`step` without waiting: the packed `FilterOut` (float32) as the jitted call returns
+        it."""
         dt_next = self.dt_nominal if dt_next is None else dt_next
-        self._carry, host = _advance_flat(
-            self.dynamics, self._params_structure, self._carry_structure, self._params,
-            self._carry, np.asarray(reset, bool), np.asarray(z, np.float32), np.float32(dt),
-            np.float32(dt_next), np.asarray(present, bool))
-        return host
+        return self._steps(np.asarray(reset, bool), np.asarray(z, np.float32), np.float32(dt),
+                           np.float32(dt_next), np.asarray(present, bool))
 
 
 # ----------------------------------------------------------------------------------------------

@@ -11,11 +11,11 @@ Per frame (`PedestrianLevel.update`):
    pedestrians splits, they are assigned to its children by the Hungarian method on the distance
    of their predicted foot points to the children's bottom centres); a pedestrian with no
    related blob takes the blobs its predicted patch overlaps (re-acquisition after occlusion).
-   Each pedestrian's patch is placed (`pedestrians.place_patch`), older pedestrians first, each
+   Each pedestrian's patch is placed (`patches.place_patch`), older pedestrians first, each
    claiming the pixels it covers from those after it (groups). Pedestrians sharing a blob too
    narrow to hold them side by side (< `merge_widths` x their summed patch widths: walking past
    each other) are not measured: they keep their predicted positions, so identities survive the
-   merge. One jitted call advances every filter (`pedestrians.SlotFilter`).
+   merge. One jitted call advances every filter (`patches.SlotFilter`).
 4. Refinement: blob columns no pedestrian explains (a pedestrian explains `walker_widths` W
    around its foot point: a walker's blob spans its stance foot to its leading arm), at least
    `new_min_widths` W wide, holding enough pixels and reaching the blob's bottom (feet, not
@@ -29,8 +29,9 @@ Per frame (`PedestrianLevel.update`):
    `coast_s` s (default: the config's predict_timeout_s), then ends; with the "3d" dynamics
    one whose ground velocity changes by more than `max_dv_mps` within `dv_window_s` s has lost
    its walker (its patch slid onto another object or down a merged blob: no walker or cyclist
-   turns or brakes that fast) and ends without those frames (`_velocity_jump`), so neither the
-   wrong stretch nor its wrong stride reaches the track, and stitching sees a clean end;
+   turns or brakes that fast) and ends without those frames (`track.toolkit.velocity_jump`),
+   so neither the wrong stretch nor its wrong stride reaches the track, and stitching sees a
+   clean end;
    two whose foot points are
    within `duplicate_widths` W with the same image velocity for `duplicate_frames` frames are
    one: the younger ends. Relations for the next frame: the blobs the placed patch overlaps.
@@ -51,9 +52,20 @@ import numpy as np
 
 from ..model.params import Config
 from ..model.status import TrackState
+from ..track.rows import TrackRow
+from ..track.toolkit import PendingStep, dv_frames, match_window, velocity_jump
 from ..vision.blobs import box_table, meeting
 from ..vision.detect import window_b_intensity
-from .patches import ShapeModel, SlotFilter, ground_point, patch_box, place_patch
+from .patches import (
+    FILTER_OUT,
+    FilterOut,
+    ShapeModel,
+    SlotFilter,
+    ground_point,
+    patch_box,
+    place_patch,
+)
+from .rows import BlobRow, BoxRow, GroundRow
 
 
 if TYPE_CHECKING:
@@ -66,10 +78,9 @@ class Pedestrian:
     born: int  # frame index
     track_id: int = 0  # 0 while tentative
     blobs: set = field(default_factory=set)  # related blobs (indices into the last frame's)
-    rows: list = field(default_factory=list)  # tracks-format rows (see tracker.tracks_columns)
-    ground: list = field(default_factory=list)  # per row: filter (x, y) m, velocity (m/s for
-    # "3d", px/s otherwise)
-    boxes: list = field(default_factory=list)  # (index, left, top, w, h, conf, x, y, ok)
+    rows: list[TrackRow] = field(default_factory=list)  # the tracks format, per frame
+    ground: list[GroundRow] = field(default_factory=list)  # per row: the filter's state
+    boxes: list[BoxRow] = field(default_factory=list)  # per row: the patch, a MOT row
     hits: int = 0
     misses: int = 0
     coast: float = 0.0  # s without a measurement
@@ -78,6 +89,7 @@ class Pedestrian:
     size: tuple = (math.nan, math.nan)  # patch (w, h) px at est_uv
     step_uv: tuple = (0.0, 0.0)  # predicted image motion per frame, px
     close: int = 0
+    win_start: int = 0  # first row of the next rhythm window (`match_window`)
     windows_done: int = 0
     result: dict | None = None
     decided: bool = False
@@ -112,10 +124,10 @@ class PedestrianLevel:
         self.missing_frames: list[int] = []
         self.full_frames: list[int] = []  # frames where a new pedestrian found no free slot
         self.stitched = 0  # tracks joined onto an earlier one at the end (count.stitch_level)
-        self.detections: list[tuple] = []
+        self.detections: list[BlobRow] = []
         self.image_shape: tuple[int, int] | None = None
-        self._dv_frames = max(1, round(opt.dv_window_s * float(cfg.camera.fps)))
-        self.defer, self._pending = defer, None
+        self._dv_frames = dv_frames(opt.dv_window_s, float(cfg.camera.fps))
+        self.defer, self._pending = defer, PendingStep(FILTER_OUT, np.float64)
 
     # ------------------------------------------------------------------------------------------
     def update(self, index: int, t: float, gray: np.ndarray | None) -> None:
@@ -145,7 +157,7 @@ class PedestrianLevel:
                 blobs, labels = [], None
             else:
                 graph = blob_graph(self.prev_blobs, blobs)
-                self.detections += [(index, *b.box, b.area) for b in blobs]
+                self.detections += [BlobRow(index, *b.box, b.area) for b in blobs]
         self._flush()
         for p in self.peds:
             p.z = (math.nan, math.nan)  # no measurement unless placed below
@@ -163,19 +175,18 @@ class PedestrianLevel:
             for p in self._new_pedestrians(blobs, labels):
                 present[p.slot] = reset[p.slot] = True
                 z[p.slot] = p.z
-        self._pending = (self.filter.dispatch(reset, z, present, dt), index, t, dt, boxes, D)
+        self._pending.hold(self.filter.dispatch(reset, z, present, dt), index, t, dt, boxes, D)
         if not self.defer:
             self._flush()
         self.prev_blobs = blobs
 
     def _flush(self) -> None:
         """The end of the pending frame: its filter results to each pedestrian, duplicates."""
-        if self._pending is None:
-            return
-        host, index, t, dt, boxes, D = self._pending
-        self._pending, host = None, np.asarray(host, np.float64)
+        self._pending.flush(self._apply_filter)
+
+    def _apply_filter(self, out: FilterOut, index, t, dt, boxes, D) -> None:
         for p in list(self.peds):
-            self._after(p, host[p.slot], index, t, dt, boxes, D)
+            self._after(p, out, index, t, dt, boxes, D)
         self._duplicates()
 
     def _relate(self, graph, blobs, boxes) -> dict[int, set]:
@@ -321,30 +332,33 @@ class PedestrianLevel:
         thr = self.cfg.thresholds
         return bool(ok) and float(thr.range_min) <= float(y) <= float(thr.range_max)
 
-    def _after(self, p: Pedestrian, host, index, t, dt, boxes, D) -> None:
-        if host[0] < 0.5:  # the first measurement had no ground point (above the horizon)
+    def _after(self, p: Pedestrian, out: FilterOut, index, t, dt, boxes, D) -> None:
+        s = p.slot
+        if out.started[s] < 0.5:  # the first measurement had no ground point (above the horizon)
             self.peds.remove(p)
             return
         measured = _finite(p.z)
         p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
         p.coast = 0.0 if measured else p.coast + dt
-        p.est_uv, p.next_uv = (host[1], host[2]), (host[3], host[4])
-        p.step_uv = (host[3] - host[1], host[4] - host[2])
+        (eu, ev), (nu, nv) = out.est_uv[s], out.next_uv[s]
+        p.est_uv, p.next_uv = (eu, ev), (nu, nv)
+        p.step_uv = (nu - eu, nv - ev)
         w, h = (float(q) for q in self.shape.size(*p.est_uv))
         p.size = (w, h)
         if self.opt.dynamics == "3d":
-            gx, gy, ok = host[5], host[6], True
+            (gx, gy), ok = out.ground[s], True
         else:
             gx, gy, ok = (float(q) for q in ground_point(self.shape.camera, *p.est_uv))
         fu, fv = p.z if measured else p.est_uv
         W = float(self.shape.size(fu, fv)[0])
         inten = math.nan if D is None else window_b_intensity(D, fu, fv, W)
         state = TrackState.OBSERVE if measured else TrackState.PREDICT
-        p.rows.append((index, t, p.z[0], p.z[1], W if measured else math.nan, inten, gx, gy,
-                       int(state)))
-        p.boxes.append((index, p.est_uv[0] - w / 2, p.est_uv[1] - h, w, h,
-                        1.0 if measured else 0.5, gx, gy, bool(ok)))
-        p.ground.append((gx, gy, host[7], host[8]))
+        p.rows.append(TrackRow(index, t, p.z[0], p.z[1], W if measured else math.nan, inten,
+                               gx, gy, int(state)))
+        p.boxes.append(BoxRow(index, eu - w / 2, ev - h, w, h, 1.0 if measured else 0.5, gx,
+                              gy, bool(ok)))
+        vx, vy = out.velocity[s]
+        p.ground.append(GroundRow(gx, gy, vx, vy))
         p.blobs = meeting(self._box(p.est_uv), boxes, 0.1)
         if p.track_id == 0:
             if p.hits >= self.opt.confirm_hits:
@@ -364,15 +378,16 @@ class PedestrianLevel:
             self._end(p)
 
     def _velocity_jump(self, p: Pedestrian) -> int:
-        """"3d": frames to drop when the EKF ground velocity changed by more than
-        `max_dv_mps` over the last `dv_window_s` s (faster than a walker or a cyclist turns or
-        brakes: the patch slid onto another object or down a merged blob), else 0. Only once
-        the track is 2 windows old (the filter starts at rest)."""
-        k = self._dv_frames
-        if self.opt.dynamics != "3d" or len(p.ground) <= 2 * k:
+        """"3d": the rows to drop when its EKF ground velocity changed by more than
+        `max_dv_mps` within `dv_window_s` s (`track.toolkit.velocity_jump`), else 0."""
+        if self.opt.dynamics != "3d":
             return 0
-        (_, _, vx, vy), (_, _, wx, wy) = p.ground[-1], p.ground[-1 - k]
-        return k if math.hypot(vx - wx, vy - wy) > self.opt.max_dv_mps else 0
+        return velocity_jump(p.ground, self._dv_frames, self.opt.max_dv_mps)
+
+    def _match(self, p: Pedestrian) -> None:
+        """Online verdict (drawn on the overlay): `track.toolkit.match_window` on its windows
+        as `rhythm.classify_track` takes them (one every hop_samples rows, none skipped)."""
+        match_window(self.cfg, p, skip_missing=False, measured_speed=False)
 
     def _duplicates(self) -> None:
         for i, a in enumerate(self.peds):
@@ -387,32 +402,13 @@ class PedestrianLevel:
             if p.close >= self.opt.duplicate_frames:
                 self._end(p)
 
-    def _match(self, p: Pedestrian) -> None:
-        """Online: (13)-(15) on each completed window of N frames, one every
-        `thresholds.hop_samples` (`rhythm.window_grid`'s windows), until Pedestrian."""
-        import jax.numpy as jnp
-
-        from ..model.rhythm import classify_window_jit
-        from ..model.status import Verdict
-
-        n, k = self.cfg.thresholds.n, self.cfg.thresholds.hop_samples * p.windows_done
-        if p.decided or len(p.rows) < k + n:
-            return
-        rows = np.asarray([r[1:8] for r in p.rows[k:k + n]], np.float64)
-        res = classify_window_jit(self.cfg, jnp.asarray(rows[:, 4], jnp.float32),
-                        jnp.asarray(rows[:, 0] - rows[0, 0], jnp.float32),
-                        jnp.asarray(rows[:, 5:7], jnp.float32), jnp.asarray(True))
-        p.windows_done += 1
-        p.decided = int(res.verdict) == Verdict.PEDESTRIAN
-        if p.result is None or p.decided:
-            p.result = {"verdict": int(res.verdict)}
-
     def _end(self, p: Pedestrian) -> None:
         if p in self.peds:
             self.peds.remove(p)
         if p.track_id == 0:
             return
-        last = max((i for i, r in enumerate(p.rows) if r[8] == 2), default=-1)
+        last = max((i for i, r in enumerate(p.rows) if r.state == TrackState.OBSERVE),
+                   default=-1)
         p.rows, p.boxes, p.ground = p.rows[:last + 1], p.boxes[:last + 1], p.ground[:last + 1]
         self.finished.append(p)
 
@@ -424,10 +420,10 @@ class PedestrianLevel:
         for p in self.peds:
             if not p.boxes:
                 continue
-            _, left, top, w, h, conf, *_ = p.boxes[-1]
-            verdict = None if p.result is None else VERDICT_LABELS[p.result["verdict"]]
-            out.append({"track_id": p.track_id, "box": (left, top, w, h), "measured": conf == 1.0,
-                        "verdict": verdict})
+            b = p.boxes[-1]
+            verdict = None if p.result is None else VERDICT_LABELS[int(p.result["verdict"])]
+            out.append({"track_id": p.track_id, "box": (b.left, b.top, b.w, b.h),
+                        "measured": b.conf == 1.0, "verdict": verdict})
         return out
 
     def end_all(self) -> list[Pedestrian]:

@@ -52,9 +52,10 @@ def piece_of(p: Pedestrian, shape, dynamics: str, fit_s: float) -> Piece:
     `fit_s` s gives its start; its end is the EKF ground state at its last (measured) row for
     "3d" (projected, with the image velocity of its ground velocity), else the same fit over
     its last `fit_s` s."""
-    rows = np.asarray([r[1:4] + (r[8],) for r in p.rows], np.float64).reshape(-1, 4)
-    t, uv = rows[:, 0], rows[:, 1:3]
-    use = (rows[:, 3] == int(TrackState.OBSERVE)) & np.all(np.isfinite(uv), axis=1)
+    t = np.asarray([r.t for r in p.rows], np.float64)
+    uv = np.asarray([(r.u, r.v) for r in p.rows], np.float64).reshape(-1, 2)
+    state = np.asarray([r.state for r in p.rows], np.int64)
+    use = (state == int(TrackState.OBSERVE)) & np.all(np.isfinite(uv), axis=1)
     t0, t1 = float(t[0]), float(t[-1])
     head = use & (t <= t0 + fit_s)
     start = _line_fit(t[head], uv[head], t0)
@@ -62,15 +63,15 @@ def piece_of(p: Pedestrian, shape, dynamics: str, fit_s: float) -> Piece:
         (math.nan, math.nan)
     ground = None
     if dynamics == "3d":
-        ground = tuple(float(q) for q in p.ground[-1])
-        x, y, vx, vy = ground
+        last = p.ground[-1]
+        x, y, vx, vy = ground = (float(last.x), float(last.y), float(last.vx), float(last.vy))
         u, v = project_3d(shape.camera, x, y, 0.0)
         u2, v2 = project_3d(shape.camera, x + 0.1 * vx, y + 0.1 * vy, 0.0)
         end = (u, v, (u2 - u) / 0.1, (v2 - v) / 0.1)
     else:
         tail = use & (t >= t1 - fit_s)
         end = _line_fit(t[tail], uv[tail], t1)
-    return Piece(int(p.rows[0][0]), int(p.rows[-1][0]), t0, t1, start, end, size, ground)
+    return Piece(int(p.rows[0].frame), int(p.rows[-1].frame), t0, t1, start, end, size, ground)
 
 
 def _predict(A: Piece, dt: float, camera: tuple | None) -> np.ndarray:

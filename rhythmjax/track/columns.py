@@ -8,14 +8,15 @@ import math
 import numpy as np
 
 from ..model.status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
+from .rows import TrackRow
 
 
-TRACK_COLUMNS = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",
-                 "state"]
+TRACK_COLUMNS = ["track_id", *TrackRow._fields]  # track_id, then the fields of a `TrackRow`
 
 
 def tracks_columns(objs: list) -> dict[str, np.ndarray]:
-    """The tracks format (ARCHITECTURE.md) plus the filter's ground estimate and the state."""
+    """The tracks format (ARCHITECTURE.md) plus the filter's ground estimate and the state, from
+    objects with a track_id and rows (`TrackRow`)."""
     rows = [(o.track_id, *r) for o in objs for r in o.rows]
     cols = list(zip(*rows)) if rows else [[] for _ in TRACK_COLUMNS]
     out = {k: np.asarray(c) for k, c in zip(TRACK_COLUMNS, cols)}

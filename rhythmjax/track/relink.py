@@ -3,7 +3,8 @@ behind another, or its detections refused for longer than the Fig. 3 time-out) i
 `relink_s` seconds; a new object that appears where that track's last observed ground motion
 puts it continues the old track (same id, its rows, its rhythm-window position) instead of
 starting a new one. The frames in between become rows with no measurement and no rhythm sample
-(NaN), which the window rules of `tracker._match` treat as missing (at most a quarter of N).
+(NaN), which the window rules of `track.toolkit.match_window` treat as missing (at most a
+quarter of N).
 
 The gate is in the image, as the detector's errors are: the lost track's last OBSERVE ground
 state (x, y m; vx, vy m/s) moved on at constant velocity for the gap and projected (3) must lie
@@ -15,18 +16,32 @@ the new foot point).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from ..model.camera_np import project_3d
 from ..model.status import TrackState
+from .rows import TrackRow, Velocity
 
 
-def last_observed(rows: list[tuple], vel: list) -> tuple[float, float, float, float, float] | None:
-    """(t s, x m, y m, vx m/s, vy m/s) at a track's last OBSERVE row; None without one."""
+class Anchor(NamedTuple):
+    """A lost track's last observed ground state: time t s, position (x, y) m, velocity
+    (vx, vy) m/s."""
+
+    t: float
+    x: float
+    y: float
+    vx: float
+    vy: float
+
+
+def last_observed(rows: list[TrackRow], vel: list[Velocity]) -> Anchor | None:
+    """The `Anchor` at a track's last OBSERVE row; None without one."""
     for r, v in zip(reversed(rows), reversed(vel)):
-        if r[8] == int(TrackState.OBSERVE) and all(math.isfinite(q) for q in (*r[6:8], *v)):
-            return float(r[1]), float(r[6]), float(r[7]), float(v[0]), float(v[1])
+        if r.state == int(TrackState.OBSERVE) and all(
+                math.isfinite(q) for q in (r.x_est, r.y_est, v.vx, v.vy)):
+            return Anchor(float(r.t), float(r.x_est), float(r.y_est), float(v.vx), float(v.vy))
     return None
 
 
@@ -44,17 +59,17 @@ def gate_distance(camera, anchor, t: float, uv, W: float, *, gate_w: float, gate
     return d / (1.0 + gate_per_s * gap)
 
 
-def gap_rows(last: tuple, index: int, t: float, xy) -> list[tuple]:
+def gap_rows(last: TrackRow, index: int, t: float, xy) -> list[TrackRow]:
     """Rows for the frames strictly between `last` (a track row) and frame `index` at time t:
     no measurement, no rhythm sample, time and ground position interpolated, state NONE."""
-    i0, t0, x0, y0 = int(last[0]), float(last[1]), float(last[6]), float(last[7])
+    i0, t0, x0, y0 = int(last.frame), float(last.t), float(last.x_est), float(last.y_est)
     n = index - i0
     out = []
     for i in range(i0 + 1, index):
         a = (i - i0) / n
-        out.append((i, t0 + a * (t - t0), math.nan, math.nan, math.nan, math.nan,
-                    x0 + a * (float(xy[0]) - x0), y0 + a * (float(xy[1]) - y0),
-                    int(TrackState.NONE)))
+        out.append(TrackRow(i, t0 + a * (t - t0), math.nan, math.nan, math.nan, math.nan,
+                            x0 + a * (float(xy[0]) - x0), y0 + a * (float(xy[1]) - y0),
+                            int(TrackState.NONE)))
     return out
 
 

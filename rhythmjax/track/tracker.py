@@ -16,9 +16,9 @@ times out is kept for `relink_s` s, and a new object where it would be continues
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -27,22 +27,49 @@ import numpy as np
 from ..model.camera import image_width, measure
 from ..model.camera_np import camera_tuple
 from ..model.ekf import Carry, empty_carry, predict, step
-from ..model.flat_tree import join as _join, split as _split
 from ..model.gates import PaperGates
 from ..model.params import Config
-from ..model.rhythm import MAX_MISSING_FRACTION, classify_window_jit
-from ..model.status import VERDICT_LABELS, TrackState, Verdict
+from ..model.status import VERDICT_LABELS, TrackState
 from ..vision import detect
 from . import relink
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
+from .rows import NAN_VELOCITY, Layout, TrackRow, Velocity
+from .toolkit import PendingStep, SlotSteps, dv_frames, match_window, velocity_jump
+
+
+class FrameIn(NamedTuple):
+    """A frame's inputs per slot, packed (`FRAME_IN`) in one (S, 6) float32 array: one
+    host-to-device transfer instead of five halves the jitted call's cost (~110 to ~50 us)."""
+
+    reset: np.ndarray  # (S,) 1: the slot starts a new object this frame
+    z: np.ndarray  # (S, 2) measured foot point (u, v) px, NaN: none
+    width: np.ndarray  # (S,) measured image width px (gate (10)), NaN: none
+    present: np.ndarray  # (S,) 1: the slot holds an object
+    dt: np.ndarray  # (S,) s since the last frame (the same in every row)
+
+
+class StepOut(NamedTuple):
+    """A frame's results per slot, packed (`STEP_OUT`) in one (S, 13) array: one transfer."""
+
+    valid: np.ndarray  # (S,) 1: the gates accepted the measurement
+    started: np.ndarray  # (S,) 1: the filter has started
+    mean: np.ndarray  # (S, 4) filtered ground state (x, vx, y, vy) m, m/s
+    next_uv: np.ndarray  # (S, 2) predicted foot point for the next frame px
+    est_uv: np.ndarray  # (S, 2) foot point of the filtered state px
+    W: np.ndarray  # (S,) window-B width W px at the filtered ground point
+    W_next: np.ndarray  # (S,) W px at the predicted ground point
+
+
+FRAME_IN = Layout(FrameIn, (1, 2, 1, 1, 1))
+STEP_OUT = Layout(StepOut, (1, 1, 4, 2, 2, 1, 1))
 
 
 @dataclass
 class _Object:
     track_id: int
     state: TrackState
-    rows: list[tuple] = field(default_factory=list)
+    rows: list[TrackRow] = field(default_factory=list)
     predict_time: float = 0.0
     windows_done: int = 0
     result: dict | None = None  # the deciding (or first) window's outcome
@@ -52,12 +79,24 @@ class _Object:
     close_frames: int = 0  # frames in a row its estimate coincided with an older track's
     win_start: int = 0  # first row of the next rhythm window
     high_run: int = 0  # frames in a row its measured foot point lay too high (_foot_too_high)
-    vel: list = field(default_factory=list)  # EKF ground velocity (vx, vy) m/s per row
+    vel: list[Velocity] = field(default_factory=list)  # EKF ground velocity m/s per row
 
 
-def _advance(cfg: Config, carry: Carry, reset, z, width, dt, present):
-    """Every slot one frame: reset new slots, `ekf.step` with the paper's gates, and what the
-    next frame needs (predicted foot point) and this frame's window-B size W (px)."""
+class _Lost(NamedTuple):
+    """A track that timed out in PREDICT, kept for `relink_s` s (`_relink`)."""
+
+    obj: _Object
+    anchor: relink.Anchor  # its last observed ground state
+    windows: tuple  # its rhythm windows then: (win_start, result, decided, windows_done)
+
+
+def _advance(cfg: Config, carry: Carry, frame_in):
+    """Every slot one frame (`FrameIn` packed): reset new slots, `ekf.step` with the paper's
+    gates, and what the next frame needs (predicted foot point) and this frame's window-B size
+    W (px), packed as `StepOut`."""
+    fin = FRAME_IN.unpack(frame_in)
+    reset, z, width = fin.reset > 0.5, fin.z, fin.width
+    present, dt = fin.present > 0.5, fin.dt[0]
     empty = empty_carry(z.dtype)
     carry = jax.vmap(lambda r, c: jax.tree.map(lambda a, b: jnp.where(r, b, a), c, empty))(
         reset, carry)
@@ -70,22 +109,8 @@ def _advance(cfg: Config, carry: Carry, reset, z, width, dt, present):
     est_uv = jax.vmap(lambda m: measure(cfg.camera, m))(out.mean)
     W = image_width(cfg.camera, cfg.width.mean, out.mean[:, 2])
     W_next = image_width(cfg.camera, cfg.width.mean, nxt.mean[:, 2])
-    host = jnp.concatenate([out.valid[:, None].astype(z.dtype), out.started[:, None].astype(
-        z.dtype), out.mean, next_uv, est_uv, W[:, None], W_next[:, None]], axis=1)
-    return carry, host  # one (S, 13) array: one device-to-host transfer per frame
-
-
-@functools.partial(jax.jit, static_argnums=(0, 1))
-def _advance_flat(cfg_structure, carry_structure, cfg_leaves, carry_leaves, frame_in):
-    """`_advance` on flat leaves; the frame's inputs come packed in one (S, 6) float32 array
-    (reset, u, v, width, present, dt): one host-to-device transfer instead of five halves the
-    call's cost (~110 to ~50 us a frame)."""
-    reset, z, width = frame_in[:, 0] > 0.5, frame_in[:, 1:3], frame_in[:, 3]
-    present, dt = frame_in[:, 4] > 0.5, frame_in[0, 5]
-    carry, host = _advance(_join(cfg_leaves, cfg_structure), _join(carry_leaves,
-                                                                   carry_structure),
-                           reset, z, width, dt, present)
-    return _split(carry)[0], host
+    return carry, STEP_OUT.pack(z.dtype, valid=out.valid, started=out.started, mean=out.mean,
+                                next_uv=next_uv, est_uv=est_uv, W=W, W_next=W_next)
 
 
 class OnlineTracker:
@@ -94,10 +119,7 @@ class OnlineTracker:
     def __init__(self, cfg: Config, options: TrackerOptions | None = None):
         self.cfg, self.opt = cfg, options or TrackerOptions()
         S = self.opt.max_objects
-        carry = jax.tree.map(lambda a: jnp.broadcast_to(a, (S,) + a.shape).copy(),
-                             empty_carry())
-        self._cfg_leaves, self._cfg_structure = _split(cfg)
-        self._carry, self._carry_structure = _split(carry)
+        self._steps = SlotSteps(_advance, cfg, S)  # every slot's filter, one jitted call
         self._slots: list[_Object | None] = [None] * S
         self._next_uv = np.full((S, 2), np.nan)
         self._next_W = np.full(S, np.nan)  # W (px) at the predicted ground point
@@ -109,8 +131,9 @@ class OnlineTracker:
         self._timeout = float(thr.predict_timeout)
         self._height_per_W = 1.7 / float(cfg.width.mean)
         self._finished: list[_Object] = []
-        self._lost: list[tuple[_Object, tuple, tuple]] = []  # (object, anchor, window state)
-        self._pending: tuple | None = None  # the last frame's step, its results not yet read
+        self._lost: list[_Lost] = []  # timed-out tracks a new object may continue
+        self._pending = PendingStep(STEP_OUT)  # the last frame's step, not yet read
+        self._dv_frames = dv_frames(self.opt.dv_window_s, float(cfg.camera.fps))
         self.glitch_frames: list[int] = []
         self.relinked = 0  # tracks continued by `_relink`
         self._camera = camera_tuple(cfg.camera)
@@ -129,8 +152,9 @@ class OnlineTracker:
         dt = t - self._last_t
         self._last_t = t
         S, opt = self.opt.max_objects, self.opt
-        frame_in = np.full((S, 6), np.nan, np.float32)  # see _advance_flat
-        z, width = frame_in[:, 1:3], frame_in[:, 3]
+        frame_in = FRAME_IN.empty(S)
+        fin = FRAME_IN.unpack(frame_in)  # writable views of frame_in
+        z, width = fin.z, fin.width
         present, reset = np.zeros(S, bool), np.zeros(S, bool)
         D = M = None
         glitch = frame is None
@@ -189,30 +213,25 @@ class OnlineTracker:
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT)
                 present[s], reset[s] = True, True
                 z[s], width[s] = (det.u, det.v), det.width
-        frame_in[:, 0], frame_in[:, 4], frame_in[:, 5] = reset, present, dt
-        self._carry, host = _advance_flat(self._cfg_structure, self._carry_structure,
-                                          self._cfg_leaves, self._carry, frame_in)
-        self._pending = (host, index, t, dt, z, width, D, glitch, shared, held)
+        fin.reset[:], fin.present[:], fin.dt[:] = reset, present, dt
+        self._pending.hold(self._steps(frame_in), index, t, dt, z, width, D, glitch, shared,
+                           held)
 
     def _flush(self) -> None:
         """Read the last step's results and advance every object's state machine with them.
         `update` calls it once the next frame's motion image is computed, so the step's
         arithmetic overlaps it; `finished`, `snapshot` and `finish` call it first."""
-        if self._pending is None:
-            return
-        host, index, t, dt, z, width, D, glitch, shared, held = self._pending
-        self._pending = None
-        host = np.asarray(host)
-        valid, started, mean = host[:, 0] > 0.5, host[:, 1] > 0.5, host[:, 2:6]
-        next_uv, est_uv, W = host[:, 6:8], host[:, 8:10], host[:, 10]
-        self._next_uv = next_uv
-        self._next_W = host[:, 11]
+        self._pending.flush(self._apply_step)
+
+    def _apply_step(self, out: StepOut, index, t, dt, z, width, D, glitch, shared, held):
+        valid, started = out.valid > 0.5, out.started > 0.5
+        self._next_uv, self._next_W = out.next_uv, out.W_next
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._after_step(s, obj, index, t, dt, z[s], width[s], bool(valid[s]),
-                                 bool(started[s]), mean[s], est_uv[s], float(W[s]), D,
-                                 glitch or s in shared, s in held)
-        self._merge(est_uv, W, mean)
+                                 bool(started[s]), out.mean[s], out.est_uv[s], float(out.W[s]),
+                                 D, glitch or s in shared, s in held)
+        self._merge(out.est_uv, out.W, out.mean)
 
     def _foot_too_high(self, s: int, det) -> bool:
         """A settled track's detection whose foot point lies more than `high_foot_widths` W
@@ -295,63 +314,20 @@ class OnlineTracker:
         fu, fv = (z if measured and not self.opt.sample_estimate else est_uv)
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         intensity = math.nan if no_sample or D is None else detect.window_b_intensity(D, fu, fv, W)
-        obj.rows.append((index, t, float(z[0]), float(z[1]), float(width), intensity,
-                         float(mean[0]), float(mean[2]), int(obj.state)))
-        obj.vel.append((float(mean[1]), float(mean[3])))
-        jump = self._velocity_jump(obj)
+        obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
+                                 float(mean[0]), float(mean[2]), int(obj.state)))
+        obj.vel.append(Velocity(float(mean[1]), float(mean[3])))
+        jump = 0 if self.opt.max_dv_mps <= 0 else \
+            velocity_jump(obj.vel, self._dv_frames, self.opt.max_dv_mps)
         if jump:  # lost its object: the implausible frames go, the track ends before them
             del obj.rows[-jump:], obj.vel[-jump:]
             obj.win_start = min(obj.win_start, len(obj.rows))
             self._end(s)
             return
-        self._match(obj)
+        match_window(self.cfg, obj)
         out_of_range = not (self._range[0] <= mean[2] <= self._range[1])
         if out_of_range or obj.predict_time > self._timeout:
             self._end(s, lost=not out_of_range)
-
-    def _velocity_jump(self, obj: _Object) -> int:
-        """Rows to drop when the EKF ground velocity changed by more than max_dv_mps over the
-        last dv_window_s s (k frames), once the track is 2k frames old (the filter starts at
-        rest), else 0."""
-        k = max(1, round(self.opt.dv_window_s * float(self.cfg.camera.fps)))
-        if self.opt.max_dv_mps <= 0 or len(obj.vel) <= 2 * k:
-            return 0
-        (vx, vy), (wx, wy) = obj.vel[-1], obj.vel[-1 - k]
-        return k if math.hypot(vx - wx, vy - wy) > self.opt.max_dv_mps else 0
-
-    def _match(self, obj: _Object, *, final: bool = False) -> None:
-        """(13)-(15) on each completed window of N frames (one every `thresholds.hop_samples`)
-        until Pedestrian (Sec. 4.2). `final` (the track ends with N rows or more but no window
-        judged, every one having been restarted past missing samples): the N rows with the
-        fewest missing are judged."""
-        n = self.cfg.thresholds.n
-        k = obj.win_start
-        if final:
-            if obj.result is not None or len(obj.rows) < n:
-                return
-            bad = np.concatenate([[0], np.cumsum([not math.isfinite(r[5]) for r in obj.rows])])
-            k = int(np.argmin(bad[n:] - bad[:-n]))
-        elif obj.decided or len(obj.rows) < k + n:
-            return
-        rows = np.asarray([r[1:9] for r in obj.rows[k:k + n]], np.float64)
-        t, intensity, xy = rows[:, 0], rows[:, 4], rows[:, 5:7]
-        observed = np.where((rows[:, 7] == TrackState.OBSERVE)[:, None], rows[:, 1:3], np.nan)
-        missing = np.flatnonzero(~np.isfinite(intensity))
-        if not final and len(missing) > MAX_MISSING_FRACTION * n:  # mixed with a neighbour:
-            obj.win_start = k + int(missing[-1]) + 1  # restart after it
-            return
-        obj.win_start = k + self.cfg.thresholds.hop_samples
-        res = classify_window_jit(self.cfg, jnp.asarray(intensity, jnp.float32),
-                        jnp.asarray(t - t[0], jnp.float32), jnp.asarray(xy, jnp.float32),
-                        jnp.asarray(True), jnp.asarray(observed, jnp.float32))
-        obj.windows_done += 1
-        pedestrian = int(res.verdict) == Verdict.PEDESTRIAN
-        if obj.result is None or pedestrian:
-            obj.result = {k_: np.asarray(getattr(res, k_)) for k_ in (
-                "verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "peak_freq",
-                "peak_power", "peak_mask")}
-            obj.result["window"] = (k, k + n)
-        obj.decided = pedestrian
 
     @property
     def finished(self) -> list[_Object]:
@@ -376,9 +352,9 @@ class OnlineTracker:
         if lost and self.opt.relink_s > 0 and len(obj.rows) >= self.opt.merge_young:
             anchor = relink.last_observed(obj.rows, obj.vel)
             if anchor is not None:
-                self._lost.append((obj, anchor, (obj.win_start, obj.result, obj.decided,
-                                                  obj.windows_done)))
-        self._match(obj, final=True)
+                self._lost.append(_Lost(obj, anchor, (obj.win_start, obj.result, obj.decided,
+                                                      obj.windows_done)))
+        match_window(self.cfg, obj, final=True)
         self._finished.append(obj)
         self._slots[s] = None
 
@@ -386,10 +362,10 @@ class OnlineTracker:
         """A new object (its first frame: foot point z, W px, ground estimate `mean`) that
         continues a recently lost track takes over its id, rows and rhythm windows
         (`relink.py`); False when none fits."""
-        self._lost = [e for e in self._lost if t - e[1][0] <= self.opt.relink_s]
+        self._lost = [e for e in self._lost if t - e.anchor.t <= self.opt.relink_s]
         if not self._lost or not np.all(np.isfinite(z)):
             return False
-        i = relink.best_match([e[1] for e in self._lost], self._camera, t, z, W,
+        i = relink.best_match([e.anchor for e in self._lost], self._camera, t, z, W,
                               gate_w=self.opt.relink_gate_w, gate_h=self.opt.relink_gate_h,
                               gate_per_s=self.opt.relink_gate_per_s,
                               height_per_W=self._height_per_W)
@@ -399,7 +375,7 @@ class OnlineTracker:
         self._finished.remove(old)
         gap = relink.gap_rows(old.rows[-1], index, t, (mean[0], mean[2]))
         obj.rows = old.rows + gap
-        obj.vel = old.vel + [(math.nan, math.nan)] * len(gap)
+        obj.vel = old.vel + [NAN_VELOCITY] * len(gap)
         obj.track_id = old.track_id
         self.relinked += 1
         return True
@@ -415,7 +391,8 @@ class OnlineTracker:
         return tracks_columns(objs), verdict_columns(objs, self.cfg.thresholds.n), objs
 
 
-def _box(uv, w, h) -> tuple[int, int, int, int]:
+def _box(uv, w, h) -> detect.WindowBox:
+    """The (x0, y0, w, h) px window of size w x h centred on uv; empty when uv is not finite."""
     if not np.all(np.isfinite(uv)) or w <= 0:
         return (0, 0, 0, 0)
     return (int(uv[0] - w / 2), int(uv[1] - h / 2), int(w), int(h))

@@ -34,7 +34,7 @@ import cv2
 import numpy as np
 
 
-Box = tuple[int, int, int, int]  # x0, y0, x1, y1 px, half-open
+CornerBox = tuple[int, int, int, int]  # x0, y0, x1, y1 px, half-open
 Number = float | int
 MAX_CROPS = 64  # find_blobs: above this many regions, one full-frame CC beats per-box crops
 MAX_U16_LABELS = 65535  # find_blobs: more blobs than this get int32 labels
@@ -139,7 +139,7 @@ class BackgroundModel:
 class Blob:
     """A connected region of the foreground mask (all coordinates px)."""
 
-    box: Box  # x0, y0, x1, y1, half-open
+    box: CornerBox  # x0, y0, x1, y1, half-open
     area: int  # number of pixels
     perimeter: float  # outer contour through boundary pixel centres
     centroid: tuple[float, float]  # (u, v)

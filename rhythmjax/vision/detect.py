@@ -37,7 +37,7 @@ from ..model.camera import ground_from_image, image_width
 from ..model.params import Camera, WidthModel
 
 
-Box = tuple[int, int, int, int]  # x0, y0, width, height in px (OpenCV's convention)
+WindowBox = tuple[int, int, int, int]  # x0, y0, width, height px (OpenCV's convention)
 Number = float | int | np.floating | np.integer  # a px coordinate or size
 SOBEL_HALO_PX = 1  # the 3x3 Sobel stencil spreads E this far beyond the thresholded difference
 
@@ -51,7 +51,7 @@ class Detection:
     u: float
     v: float
     width: float
-    box: Box
+    box: WindowBox
     area: int
 
 
@@ -149,7 +149,7 @@ def _window(shape: tuple[int, ...], cu: float, cv: float, w: int, h: int) -> tup
 def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarray,
                      window_size: Number | Sequence[Number] | np.ndarray, *,
                      fraction: Number = 0.3, min_area: int = 10, halo: int = SOBEL_HALO_PX,
-                     core: Box | None = None, dilate_px: int = 3,
+                     core: WindowBox | None = None, dilate_px: int = 3,
                      body_px: Number | None = None) -> Detection | None:
     """Detect the object in a window centred on the predicted foot point `center_uv` = (u, v) px.
 
@@ -193,7 +193,7 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
     return _bottom_point(crop, x0, y0, fraction, min_area, halo)
 
 
-def _object_regions(crop: np.ndarray, core: Box, dilate_px: int,
+def _object_regions(crop: np.ndarray, core: WindowBox, dilate_px: int,
                     body_px: Number | None = None) -> np.ndarray | None:
     """The motion of `crop` restricted to the regions that belong to the object in `core` (crop
     coordinates): the region with the most motion pixels inside `core`, and every other region
@@ -246,14 +246,14 @@ def _join_body(keep: np.ndarray, touching: np.ndarray, stats: np.ndarray, dilate
         lo, hi = min(lo, int(x0[k])), max(hi, int(x1[k]))
 
 
-def box_overlap(a: Box, b: Box) -> int:
+def box_overlap(a: WindowBox, b: WindowBox) -> int:
     """Intersection area (px^2) of two (x0, y0, w, h) boxes."""
     ox = min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0])
     oy = min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1])
     return max(ox, 0) * max(oy, 0)
 
 
-def find_objects(motion: np.ndarray, *, min_area: int, exclude_boxes: Sequence[Box] = (),
+def find_objects(motion: np.ndarray, *, min_area: int, exclude_boxes: Sequence[WindowBox] = (),
                  dilate_px: int = 3, fraction: Number = 0.3, max_objects: int = 64,
                  halo: int = SOBEL_HALO_PX, downscale: int = 1) -> list[Detection]:
     """New objects anywhere in M: connected regions (8-connected) of the motion mask dilated by a
@@ -332,7 +332,7 @@ def _find_objects_coarse(motion, min_area, exclude_boxes, dilate_px, fraction, m
     return _keep(regions(), exclude_boxes, max_objects)
 
 
-def motion_outside(motion: np.ndarray, boxes: Sequence[Box], margin: int = 0) -> int:
+def motion_outside(motion: np.ndarray, boxes: Sequence[WindowBox], margin: int = 0) -> int:
     """Number of motion pixels (M > 0) outside every box (x0, y0, w, h) px grown by `margin` px
     on each side, boxes clipped to the frame. A new object needs `min_area` of them (the tracker
     skips `find_objects` below)."""
@@ -357,7 +357,7 @@ def shared_detections(dets: dict[int, Detection], overlap: Number = 0.5) -> set[
     return out
 
 
-def _inside(det: Detection, b: Box) -> bool:
+def _inside(det: Detection, b: WindowBox) -> bool:
     return b[0] <= det.u < b[0] + b[2] and b[1] <= det.v < b[1] + b[3]
 
 

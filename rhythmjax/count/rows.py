@@ -1,0 +1,45 @@
+"""Named per-frame records of the pedestrians level (`pedestrian_level.Pedestrian` keeps one of
+each per tracked frame besides its `track.rows.TrackRow`), read by `stitch` and `counting`."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+
+class BoxRow(NamedTuple):
+    """A pedestrian's patch in one frame, a MOT row to be: frame index (0-based), box (left,
+    top, w, h) px at the filter's estimated foot point, conf (1 measured, 0.5 predicted),
+    ground point (x, y) m and whether it has one (`ok`)."""
+
+    frame: int
+    left: float
+    top: float
+    w: float
+    h: float
+    conf: float
+    x: float
+    y: float
+    ok: bool
+
+
+class GroundRow(NamedTuple):
+    """A pedestrian's filter state in one frame: ground (x, y) m (the EKF state for "3d", the
+    inverse perspective of the estimated foot point otherwise) and the filter's velocity
+    (vx, vy): m/s on the ground for "3d", px/s in the image for "2d" and "3d-shape"."""
+
+    x: float
+    y: float
+    vx: float
+    vy: float
+
+
+class BlobRow(NamedTuple):
+    """A blob detected in one frame: frame index (0-based), box (x0, y0, x1, y1) px half-open,
+    area px."""
+
+    frame: int
+    x0: int
+    y0: int
+    x1: int
+    y1: int
+    area: int

@@ -1,0 +1,165 @@
+"""What the two online trackers share (the rhythm paper's `tracker.OnlineTracker` and the tracking
+paper's `count.pedestrian_level.PedestrianLevel`; `count` imports `track`, never the reverse):
+
+- `SlotSteps`: S filters advanced by ONE jitted call per frame, their carry kept on the device as
+  flat leaves (`model.flat_tree`: jax's C++ dispatch then skips the Python flattening of the
+  Config and Carry pytrees) and the per-frame outputs packed in one array (`rows.Layout`);
+- `PendingStep`: a frame's device result held until the host reads it (`flush`), so the step
+  computes while the host prepares the next frame (XLA dispatch is asynchronous);
+- `velocity_jump`: the filter's ground velocity changed faster than a walker or a cyclist can
+  (its measurements slid onto another object): the rows to drop before the track ends;
+- `match_window`: (13)-(15) of the rhythm paper (Sec. 4.2) on the next completed window of N
+  rows of a track (`model.rhythm.classify_window_jit`), one every `thresholds.hop_samples`,
+  until one says Pedestrian.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol, runtime_checkable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..model.ekf import empty_carry
+from ..model.flat_tree import join, split
+from ..model.params import Config
+from ..model.rhythm import MAX_MISSING_FRACTION, classify_window_jit
+from ..model.status import TrackState, Verdict
+from .rows import Layout, TrackRow
+
+
+RESULT_FIELDS = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "peak_freq",
+                 "peak_power", "peak_mask")  # the window outcome a tracker keeps (`match_window`)
+
+
+# ----------------------------------------------------------------------------------------------
+# the jitted per-frame step
+
+
+@functools.partial(jax.jit, static_argnums=(0, 1, 2, 3))
+def _flat_step(advance, static, params_structure, carry_structure, params_leaves, carry_leaves,
+               *inputs):
+    """`advance(*static, params, carry, *inputs) -> (carry, out)` on flat leaves."""
+    carry, out = advance(*static, join(params_leaves, params_structure),
+                         join(carry_leaves, carry_structure), *inputs)
+    return split(carry)[0], out
+
+
+class SlotSteps:
+    """`slots` filters (each an `ekf.Carry`, all starting empty) advanced together: calling it
+    with a frame's inputs runs `advance(*static, params, carry, *inputs)` jitted (compiled once
+    per `advance`, `static` and structure) and returns its device output without waiting.
+    `advance` must be a module-level function (it is a static argument of the jit)."""
+
+    def __init__(self, advance: Callable, params: Any, slots: int, static: tuple = ()):
+        self.slots = int(slots)
+        self._advance, self._static = advance, tuple(static)
+        self._params, self._params_structure = split(params)
+        carry = jax.tree.map(lambda a: jnp.broadcast_to(a, (self.slots,) + a.shape).copy(),
+                             empty_carry())
+        self._carry, self._carry_structure = split(carry)
+
+    def __call__(self, *inputs) -> jax.Array:
+        self._carry, out = _flat_step(self._advance, self._static, self._params_structure,
+                                      self._carry_structure, self._params, self._carry, *inputs)
+        return out
+
+
+class PendingStep:
+    """One frame's device output and the host context it is to be applied with, held until
+    `flush` reads it (as `dtype`), unpacks it (`layout`) and calls `apply(result, *context)`."""
+
+    __slots__ = ("layout", "dtype", "_held")
+
+    def __init__(self, layout: Layout, dtype=None):
+        self.layout, self.dtype, self._held = layout, dtype, None
+
+    def hold(self, out, *context) -> None:
+        self._held = (out, context)
+
+    def flush(self, apply: Callable) -> None:
+        """Apply the held result, if any (once)."""
+        if self._held is None:
+            return
+        out, context = self._held
+        self._held = None
+        apply(self.layout.unpack(np.asarray(out, self.dtype)), *context)
+
+
+# ----------------------------------------------------------------------------------------------
+# the host-side rules
+
+
+def dv_frames(dv_window_s: float, fps: float) -> int:
+    """The frames k of a velocity-jump span of `dv_window_s` s (at least 1)."""
+    return max(1, round(dv_window_s * float(fps)))
+
+
+def velocity_jump(velocities: Sequence, k: int, max_dv_mps: float) -> int:
+    """Rows to drop (k) when the ground velocity (items with .vx, .vy m/s) changed by more than
+    `max_dv_mps` between the last row and k rows before it, else 0. Only once there are more
+    than 2k rows (a filter starts at rest and takes time to reach its object's speed)."""
+    if len(velocities) <= 2 * k:
+        return 0
+    a, b = velocities[-1], velocities[-1 - k]
+    return k if math.hypot(a.vx - b.vx, a.vy - b.vy) > max_dv_mps else 0
+
+
+@runtime_checkable
+class RhythmWindows(Protocol):
+    """What `match_window` reads and updates on a tracked object."""
+
+    rows: list[TrackRow]
+    win_start: int  # first row of the next window
+    windows_done: int  # windows judged
+    result: dict | None  # the deciding (or first) window's outcome, `RESULT_FIELDS` + window
+    decided: bool  # a window said Pedestrian: matching stops
+
+
+def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
+                 skip_missing: bool = True, measured_speed: bool = True) -> None:
+    """(13)-(15) on the next completed window of N rows of `obj` (one starts every
+    `thresholds.hop_samples` rows) until one says Pedestrian (Sec. 4.2): at most one window per
+    call; the first window's outcome is kept, replaced by the first Pedestrian one.
+
+    skip_missing: a window with more than `MAX_MISSING_FRACTION` of its rhythm samples missing
+    (mixed with a neighbour) is not judged; the next starts after its last missing sample.
+    measured_speed: the speed of (12) from the foot points of the OBSERVE rows (else the
+    filtered ground positions only). final (the track ends with N rows or more and no window
+    judged, every one having been skipped): the N rows with the fewest missing are judged."""
+    n = cfg.thresholds.n
+    rows = obj.rows
+    k = obj.win_start
+    if final:
+        if obj.result is not None or len(rows) < n:
+            return
+        bad = np.concatenate([[0], np.cumsum([not math.isfinite(r.intensity) for r in rows])])
+        k = int(np.argmin(bad[n:] - bad[:-n]))
+    elif obj.decided or len(rows) < k + n:
+        return
+    window = rows[k:k + n]
+    t = np.asarray([r.t for r in window], np.float64)
+    intensity = np.asarray([r.intensity for r in window], np.float64)
+    xy = np.asarray([(r.x_est, r.y_est) for r in window], np.float64)
+    missing = np.flatnonzero(~np.isfinite(intensity))
+    if skip_missing and not final and len(missing) > MAX_MISSING_FRACTION * n:
+        obj.win_start = k + int(missing[-1]) + 1
+        return
+    obj.win_start = k + cfg.thresholds.hop_samples
+    args = (cfg, jnp.asarray(intensity, jnp.float32), jnp.asarray(t - t[0], jnp.float32),
+            jnp.asarray(xy, jnp.float32), jnp.asarray(True))
+    if measured_speed:
+        observed = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE
+                               else (math.nan, math.nan) for r in window], np.float64)
+        args += (jnp.asarray(observed, jnp.float32),)
+    res = classify_window_jit(*args)
+    obj.windows_done += 1
+    pedestrian = int(res.verdict) == Verdict.PEDESTRIAN
+    if obj.result is None or pedestrian:
+        obj.result = {name: np.asarray(getattr(res, name)) for name in RESULT_FIELDS}
+        obj.result["window"] = (k, k + n)
+    obj.decided = pedestrian
