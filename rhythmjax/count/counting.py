@@ -96,7 +96,9 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     patch at the filter's estimated foot point; conf 1 measured, 0.5 predicted; x, y the ground
     estimate (m; the EKF state for "3d", the inverse perspective of the estimated foot point
     otherwise) and z = 0 (on the ground plane); x = y = z = -1 (the MOT convention for "no world
-    position") where the foot point has no ground point. counts (`count_walkers`): tracks,
+    position") where the foot point has no ground point. tracks: width_px is the measured width
+    of the blob the patch was placed on (`widths.measured_width`; NaN when predicted), the W_IMG
+    of gate (10) when the tracks are judged. counts (`count_walkers`): tracks,
     pedestrians, non_pedestrians, unclassified (shorter than N or unusable), too_fast and
     walkers = tracks - non_pedestrians - too_fast (`COUNT_RULE`: unclassified tracks count
     unless too fast to walk)."""

@@ -66,6 +66,7 @@ from .patches import (
     place_patch,
 )
 from .rows import BlobRow, BoxRow, GroundRow
+from .widths import measured_width
 
 
 if TYPE_CHECKING:
@@ -94,6 +95,7 @@ class Pedestrian:
     result: dict | None = None
     decided: bool = False
     z: tuple = (math.nan, math.nan)  # this frame's measurement
+    z_width: float = math.nan  # its measured width px (`widths.measured_width`), gate (10)
 
 
 def _finite(uv) -> bool:
@@ -160,7 +162,7 @@ class PedestrianLevel:
                 self.detections += [BlobRow(index, *b.box, b.area) for b in blobs]
         self._flush()
         for p in self.peds:
-            p.z = (math.nan, math.nan)  # no measurement unless placed below
+            p.z, p.z_width = (math.nan, math.nan), math.nan  # none unless placed below
         boxes = box_table(blobs)
         rel = self._relate(graph, blobs, boxes)
         S = self.filter.slots
@@ -261,7 +263,8 @@ class PedestrianLevel:
                              v_max=v_max, min_cover=opt.min_cover, bbox=bbox)
             if pl is None:
                 continue
-            p.z = (pl.u, pl.v)
+            p.z = (pl.u, pl.v)  # the object's width: its blob's run, a patch width around
+            p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
             if k > 1:
                 x0, y0, x1, y1 = (int(round(q)) for q in (pl.u - pl.w / 2, pl.v - pl.h,
                                                           pl.u + pl.w / 2, pl.v + 1))
@@ -318,7 +321,7 @@ class PedestrianLevel:
                     z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1])) if r.size else None
                     if z is not None and self._in_range(z):
                         p = Pedestrian(slot=free_slots.pop(0), born=self.n_frames)
-                        p.z = z
+                        p.z, p.z_width = z, float(a1 - a0)  # its share of the run
                         new.append(p)
         self.peds += new
         return new
@@ -353,8 +356,8 @@ class PedestrianLevel:
         W = float(self.shape.size(fu, fv)[0])
         inten = math.nan if D is None else window_b_intensity(D, fu, fv, W)
         state = TrackState.OBSERVE if measured else TrackState.PREDICT
-        p.rows.append(TrackRow(index, t, p.z[0], p.z[1], W if measured else math.nan, inten,
-                               gx, gy, int(state)))
+        p.rows.append(TrackRow(index, t, p.z[0], p.z[1], p.z_width if measured else math.nan,
+                               inten, gx, gy, int(state)))
         p.boxes.append(BoxRow(index, eu - w / 2, ev - h, w, h, 1.0 if measured else 0.5, gx,
                               gy, bool(ok)))
         vx, vy = out.velocity[s]

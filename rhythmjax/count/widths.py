@@ -1,0 +1,55 @@
+"""The measured image width of a pedestrian's patch: the W_IMG of the rhythm paper's width gate
+(10), which `rhythm.classify_track` applies to the tracks `count` writes.
+
+The patch itself has the MODEL width (an average pedestrian, `patches.ShapeModel`), so it says
+nothing about the object; what was measured is the blob under it. `measured_width` takes the
+pixels of the related blobs (not claimed by an older patch) in the patch's rows, the columns that
+hold any of them within `reach_px` of the patch's sides, and returns the length of the run of
+such columns that overlaps the patch's own columns most: the object's horizontal extent, as the
+online tracker's `detect.detect_in_window` measures it (a walker with a leg forward is wider than
+the patch; two walkers merged into one blob are twice as wide, and (10) rejects the row).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .patches import related_mask
+
+
+def column_runs(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end (exclusive) indices of the runs of True in a 1-D bool array."""
+    ext = np.zeros(cols.size + 2, np.int8)
+    ext[1:-1] = cols
+    edges = np.flatnonzero(np.diff(ext))
+    return edges[::2], edges[1::2]
+
+
+def measured_width(labels: np.ndarray, related, claimed: np.ndarray | None, u: float, v: float,
+                   w: float, h: float, reach_px: float) -> float:
+    """Width px of the object under the patch standing on (u, v) px, w x h px (module doc).
+
+    labels: (H, W) int labels image; related: the labels of the patch's blobs; claimed: (H, W)
+    bool pixels taken by older patches (None: none). Rows: round(v - h) to floor(v); columns
+    of the patch: [floor(u - w/2 + 0.5), floor(u + w/2 + 0.5)); columns searched: those plus
+    `reach_px` on either side, inside the image. NaN when no run overlaps the patch."""
+    H, W = labels.shape
+    if not all(math.isfinite(q) for q in (u, v, w, h, reach_px)):
+        return math.nan
+    y0, y1 = max(0, int(math.floor(v - h + 0.5))), min(H, int(math.floor(v)) + 1)
+    a0, a1 = int(math.floor(u - 0.5 * w + 0.5)), int(math.floor(u + 0.5 * w + 0.5))
+    x0 = max(0, int(math.floor(a0 - reach_px)))
+    x1 = min(W, int(math.ceil(a1 + reach_px)))
+    if y1 <= y0 or x1 <= x0 or a1 <= a0:
+        return math.nan
+    mask = related_mask(labels[y0:y1, x0:x1], related)
+    if claimed is not None:
+        mask &= ~claimed[y0:y1, x0:x1]
+    starts, ends = column_runs(mask.any(axis=0))
+    overlap = np.minimum(ends, a1 - x0) - np.maximum(starts, a0 - x0)
+    if overlap.size == 0 or overlap.max() <= 0:
+        return math.nan
+    i = int(np.argmax(overlap))
+    return float(ends[i] - starts[i])

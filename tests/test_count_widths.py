@@ -1,0 +1,79 @@
+"""The measured width of a pedestrian's patch (`count.widths.measured_width`, the W_IMG of gate
+(10) in count's tracks): hand-worked cases and a plain-loop reference on random label images."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rhythmjax.count.widths import column_runs, measured_width
+
+
+def _reference(labels, related, claimed, u, v, w, h, reach):
+    """Column by column in plain Python (the module doc's rule)."""
+    H, W = labels.shape
+    y0, y1 = max(0, math.floor(v - h + 0.5)), min(H, math.floor(v) + 1)
+    a0, a1 = math.floor(u - w / 2 + 0.5), math.floor(u + w / 2 + 0.5)
+    x0, x1 = max(0, math.floor(a0 - reach)), min(W, math.ceil(a1 + reach))
+    occupied = []
+    for x in range(x0, x1):
+        occupied.append(any(int(labels[y, x]) in related
+                            and not (claimed is not None and claimed[y, x])
+                            for y in range(y0, y1)))
+    runs, start = [], None
+    for i, c in enumerate(occupied + [False]):
+        if c and start is None:
+            start = i
+        elif not c and start is not None:
+            runs.append((x0 + start, x0 + i))
+            start = None
+    best, width = 0, math.nan
+    for s, e in runs:
+        ov = min(e, a1) - max(s, a0)
+        if ov > best:
+            best, width = ov, float(e - s)
+    return width
+
+
+def test_column_runs_by_hand():
+    s, e = column_runs(np.array([0, 1, 1, 0, 0, 1, 0, 1, 1, 1], bool))
+    assert s.tolist() == [1, 5, 7] and e.tolist() == [3, 6, 10]
+
+
+def test_lone_blob_wider_than_the_patch():
+    """A 17 px wide blob (columns 40..56, rows 20..60) under a 10 px patch centred at 48: 17."""
+    labels = np.zeros((80, 100), np.int32)
+    labels[20:61, 40:57] = 3
+    assert measured_width(labels, [3], None, 48.0, 60.0, 10.0, 40.0, 10.0) == 17.0
+    # the search reaches only reach_px past the patch's columns [43, 53): columns 41..54, 14
+    assert measured_width(labels, [3], None, 48.0, 60.0, 10.0, 40.0, 2.0) == 14.0
+    # an unrelated label, rows above the patch, or claimed pixels do not count
+    assert math.isnan(measured_width(labels, [4], None, 48.0, 60.0, 10.0, 40.0, 10.0))
+    assert math.isnan(measured_width(labels, [3], None, 48.0, 15.0, 10.0, 10.0, 10.0))
+    claimed = np.zeros(labels.shape, bool)
+    claimed[:, 40:46] = True
+    assert measured_width(labels, [3], claimed, 48.0, 60.0, 10.0, 40.0, 10.0) == 11.0
+
+
+def test_the_run_under_the_patch_wins():
+    """Two bodies 4 columns apart: the one the patch overlaps most is measured."""
+    labels = np.zeros((50, 100), np.int32)
+    labels[10:40, 20:32] = 1  # 12 wide
+    labels[10:40, 36:44] = 1  # 8 wide, same blob label (joined elsewhere)
+    assert measured_width(labels, [1], None, 40.0, 39.0, 8.0, 29.0, 12.0) == 8.0
+    assert measured_width(labels, [1], None, 26.0, 39.0, 8.0, 29.0, 12.0) == 12.0
+
+
+def test_matches_the_plain_loop_on_random_images():
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        H, W = rng.integers(20, 60, 2)
+        labels = (rng.random((H, W)) < 0.15).astype(np.int32) * rng.integers(1, 4, (H, W))
+        claimed = rng.random((H, W)) < 0.2 if rng.random() < 0.5 else None
+        related = [int(q) for q in rng.choice([1, 2, 3], rng.integers(1, 3), replace=False)]
+        u, v = rng.uniform(-5, W + 5), rng.uniform(0, H + 5)
+        w, h, reach = rng.uniform(2, 15), rng.uniform(3, 30), rng.uniform(0, 10)
+        got = measured_width(labels, related, claimed, u, v, w, h, reach)
+        want = _reference(labels, set(related), claimed, u, v, w, h, reach)
+        assert (math.isnan(got) and math.isnan(want)) or got == want, (u, v, w, h, reach)
