@@ -4,10 +4,11 @@ Pedestrian model (PAPERS.md, "Multi-pedestrian paper", part 3): a rectangular pa
 its foot point (u, v) px (bottom centre). Its size is the image of an average pedestrian
 `width_m` wide (default: the config's `width.mean`, 0.5 m) and `height_m` tall (1.7 m):
 
-    3-D shape ("3d-shape", "3d"): at the foot point's ground point (x, y) of (3),
-        w = a f width_m / depth(y)                       (the width at the feet, px)
-        h = v - v_top, v_top = the row of (x, y, height_m) through `synth.project_3d`'s model
-            (equation (3) with h replaced by h - height_m; the head is nearer the image plane);
+    3-D shape ("3d-shape", "3d"): at the foot point's ground point (x, y) of (3) with roll,
+        w = a f width_m cos(roll) / depth(y)        (the width at the feet along the rows, px)
+        h = v - v_top, v_top = the row of (x, y, height_m) (`camera.upright_size_with`: (3)
+            with h replaced by h - height_m; the head is nearer the image plane); with roll
+            the size depends on the foot point's column as well as its row;
     2-D shape ("2d"): one fixed size, that of the average pedestrian at x = 0 and the middle
         of the detection range (range_min + range_max) / 2 ("near the middle of the scene").
 

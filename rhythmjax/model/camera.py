@@ -78,17 +78,12 @@ def depth_with(k: Terms, y, z=None):
     return k.f + y * k.cos_theta + hz * k.sin_theta
 
 
-def _roll_is_host_zero(sin_roll, cos_roll) -> bool:
-    """True only for host constants with roll exactly 0: the rotation is then the identity and
-    is skipped (the same bits for finite values, less work per call). Never True under JAX."""
-    return type(sin_roll) is float and sin_roll == 0.0 and cos_roll == 1.0
-
-
 def roll_offsets(k: Terms, du, dv):
     """Offsets (du, dv) px from (Uc, Vc) in the image of (3) -> in the rolled image (v down):
-    the rotation by +roll."""
+    the rotation by +roll. Host constants with roll exactly 0 (Python floats; never under JAX)
+    skip it: the identity, the same bits for finite offsets, less work per call."""
     sr, cr = k.sin_roll, k.cos_roll
-    if _roll_is_host_zero(sr, cr):
+    if type(sr) is float and sr == 0.0 and cr == 1.0:
         return du, dv
     return cr * du - sr * dv, sr * du + cr * dv
 
@@ -96,7 +91,7 @@ def roll_offsets(k: Terms, du, dv):
 def unroll_offsets(k: Terms, du, dv):
     """The inverse of `roll_offsets`: offsets in the rolled image -> in the image of (3)."""
     sr, cr = k.sin_roll, k.cos_roll
-    if _roll_is_host_zero(sr, cr):
+    if type(sr) is float and sr == 0.0 and cr == 1.0:
         return du, dv
     return cr * du + sr * dv, cr * dv - sr * du
 
@@ -110,7 +105,7 @@ def project_with(xp, k: Terms, x, y, z=None):
     d = f + y * c + hz * s  # `depth_with`
     d_safe = xp.where(d > MIN_DEPTH_M, d, 1.0)
     du = a * f * x / d_safe
-    dv = -(b * f * (y * s - hz * c) / d_safe)
+    dv = b * f * (hz * c - y * s) / d_safe  # v - Vc of (3)
     du, dv = roll_offsets(k, du, dv)
     return uc + du, vc + dv
 
@@ -123,12 +118,11 @@ def ground_with(xp, k: Terms, u, v):
     there x = y = 0 (finite, not NaN)."""
     f, h, a, b, uc, vc, s, c, _, _ = k
     where = xp.where
-    du, dv = unroll_offsets(k, u - uc, v - vc)
-    dv_up = -dv  # Vc - v of (3)
+    du, dv = unroll_offsets(k, u - uc, v - vc)  # dv = v - Vc of (3)
     bf = b * f
-    den = bf * s - dv_up * c  # > 0 below the horizon
+    den = bf * s + dv * c  # > 0 below the horizon
     ok = xp.isfinite(u) & xp.isfinite(v) & (den > 1e-6 * bf)
-    y = (dv_up * (f + h * s) + bf * h * c) / where(ok, den, 1.0)
+    y = (bf * h * c - dv * (f + h * s)) / where(ok, den, 1.0)
     d = f + y * c + h * s  # `depth_with`
     ok = ok & (d > MIN_DEPTH_M)
     x = du * where(ok, d, 1.0) / (a * f)

@@ -69,8 +69,17 @@ class SCALAR:
     isfinite = staticmethod(math.isfinite)
 
 
+_SCALARS = (float, int, np.float64)
+
+
 def _f64(q) -> np.ndarray:
     return np.asarray(q, np.float64)
+
+
+def _scalars(*qs) -> bool:
+    """True when every argument is a plain number: then the front runs on Python floats
+    (`SCALAR`; the same float64 bits, without NumPy's per-call cost on 0-d arrays)."""
+    return all(type(q) in _SCALARS for q in qs)
 
 
 def depth_3d(camera: Camera | tuple, y, z):
@@ -81,13 +90,19 @@ def depth_3d(camera: Camera | tuple, y, z):
 def project_3d(camera: Camera | tuple, x, y, z):
     """(u, v) px of the point (x, y) m on the ground plane and z m above it: equation (3) with
     roll, the camera height h replaced by h - z (`camera.project_with`). z = 0 is (3) exactly.
-    Behind the camera (depth <= 1 mm, see `depth_3d`) the values are finite and meaningless."""
+    Behind the camera (depth <= 1 mm, see `depth_3d`) the values are finite and meaningless.
+    Arrays give arrays; numbers give Python floats."""
+    if _scalars(x, y, z):
+        return project_with(SCALAR, host_terms(camera), float(x), float(y), float(z))
     return project_with(np, host_terms(camera), _f64(x), _f64(y), _f64(z))
 
 
 def ground_of_pixels(camera: Camera | tuple, u, v):
     """Inverse perspective: ground (x, y) m of image points (u, v) px and `ok` (below the
-    horizon, in front of the camera, finite); x = y = 0 where not ok (`camera.ground_with`)."""
+    horizon, in front of the camera, finite); x = y = 0 where not ok (`camera.ground_with`).
+    Arrays give arrays; numbers give Python floats and a bool."""
+    if _scalars(u, v):
+        return ground_with(SCALAR, host_terms(camera), float(u), float(v))
     return ground_with(np, host_terms(camera), _f64(u), _f64(v))
 
 
