@@ -239,10 +239,10 @@ def test_new_pedestrians_start_only_in_the_detection_range():
 
 
 def _g(ground: list[tuple]) -> list:
-    """`Pedestrian.ground` records (x, y m, vx, vy m/s) of plain tuples."""
+    """`Pedestrian.ground` records of plain (x, y m, vx, vy m/s) tuples (no image velocity)."""
     from rhythmjax.count.rows import GroundRow
 
-    return [GroundRow(*g) for g in ground]
+    return [GroundRow(*g, math.nan, math.nan) for g in ground]
 
 
 def test_a_track_whose_ground_velocity_jumps_ends_before_the_jump():

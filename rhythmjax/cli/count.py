@@ -10,7 +10,7 @@ import sys
 from ..count.counting import count_frames
 from ..count.options import CountOptions
 from ..io import atomic_write, check_writable, dumps_json, make_output_dir, write_table
-from ..io.mot import write_mot
+from ..io.mot import VELOCITY_COLUMNS, write_mot
 from ..model.params import ConfigError
 from .common import (
     TRACK_ORDER,
@@ -41,8 +41,13 @@ def cmd_count(args) -> int:
 
     Writes DIR/mot.txt (MOTChallenge: frame (1-based), id, bb_left, bb_top, bb_width,
     bb_height, conf (1 measured, 0.5 predicted), x, y (ground, m), z (0; -1 -1 -1 where the
-    foot point has no ground point); no header), DIR/tracks.parquet (the tracks format, which
-    `rhythmjax classify` re-judges), DIR/verdicts.csv (with too_fast and counted per track) and
+    foot point has no ground point); no header), DIR/mot_velocity.txt (the same ten columns,
+    then each pedestrian's velocity in that frame: vx, vy on the ground (m/s; the EKF state for
+    --dynamics 3d, nan otherwise) and du, dv in the image (px/s); kept apart because
+    py-motmetrics misreads a MOT file with more than ten columns), DIR/tracks.parquet (the
+    tracks format, which `rhythmjax classify` re-judges: width_px is the measured width of the
+    blob under the patch, for the width gate (10); plus vx, vy, du, dv), DIR/verdicts.csv
+    (with too_fast and counted per track) and
     DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
     walkers; the rule in words; the run summary).
     Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
@@ -65,7 +70,9 @@ def cmd_count(args) -> int:
                    **{k: v for k, v in res.summary.items() if k != "notes"},
                    "bad_frames": len(src.bad_frames), "notes": notes}
         write_mot(os.path.join(args.output, "mot.txt"), res.mot)
-        write_table(os.path.join(args.output, "tracks.parquet"), res.tracks, TRACK_ORDER)
+        write_mot(os.path.join(args.output, "mot_velocity.txt"), res.mot, VELOCITY_COLUMNS)
+        write_table(os.path.join(args.output, "tracks.parquet"), res.tracks,
+                    TRACK_ORDER + list(VELOCITY_COLUMNS))
         write_table(os.path.join(args.output, "verdicts.csv"), res.verdicts,
                     VERDICT_ORDER + ["too_fast", "counted"])
         with atomic_write(os.path.join(args.output, "counts.json"), "w") as f:

@@ -44,12 +44,13 @@ from typing import Any
 
 import numpy as np
 
+from ..io.mot import VELOCITY_COLUMNS
 from ..model.params import Config
 from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
 from .options import CountOptions
 from .pedestrian_level import Pedestrian, PedestrianLevel
-from .rows import BlobRow, BoxRow
+from .rows import BlobRow, BoxRow, GroundRow
 from .stitch import stitch_level
 
 
@@ -69,8 +70,9 @@ COUNT_RULE = ("walkers = tracks - non_pedestrians - too_fast: every confirmed tr
 
 @dataclass
 class CountResult:
-    """MOT rows (frame 1-based, id, box px, conf, ground x, y m, z), the tracks format, the
-    verdicts, the counts and the per-frame blob boxes; see `count_frames`."""
+    """MOT rows (frame 1-based, id, box px, conf, ground x, y m, z; velocities vx, vy m/s, du,
+    dv px/s), the tracks format (with the same velocities), the verdicts, the counts and the
+    per-frame blob boxes; see `count_frames`."""
 
     mot: dict[str, np.ndarray]
     tracks: dict[str, np.ndarray]
@@ -96,7 +98,9 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     patch at the filter's estimated foot point; conf 1 measured, 0.5 predicted; x, y the ground
     estimate (m; the EKF state for "3d", the inverse perspective of the estimated foot point
     otherwise) and z = 0 (on the ground plane); x = y = z = -1 (the MOT convention for "no world
-    position") where the foot point has no ground point. tracks: width_px is the measured width
+    position") where the foot point has no ground point; then vx, vy (ground velocity m/s, the
+    EKF state for "3d", NaN otherwise) and du, dv (image velocity px/s of the estimated foot
+    point; `rows.GroundRow`), which the tracks get too. tracks: width_px is the measured width
     of the blob the patch was placed on (`widths.measured_width`; NaN when predicted), the W_IMG
     of gate (10) when the tracks are judged. counts (`count_walkers`): tracks,
     pedestrians, non_pedestrians, unclassified (shorter than N or unusable), too_fast and
@@ -236,12 +240,21 @@ def tracks_table(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
     for name in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est"):
         out[name] = np.asarray(cols[name], np.float64)
     out["state"] = np.asarray([TrackState(s).name.lower() for s in cols["state"]], dtype=object)
+    out.update(velocity_columns(peds))
     return out
+
+
+def velocity_columns(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
+    """Per row of the pedestrians' tracks, the filter's velocities (`rows.GroundRow`): ground
+    vx, vy m/s ("3d"; NaN otherwise) and image du, dv px/s (`VELOCITY_COLUMNS`)."""
+    cols = _columns([g for p in peds for g in p.ground], GroundRow._fields)
+    return {name: np.asarray(cols[name], np.float64) for name in VELOCITY_COLUMNS}
 
 
 def mot_table(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
     """MOT columns (`MOT_COLUMNS`) of the pedestrians' patches (`rows.BoxRow`): frame 1-based;
-    x, y, z = ground x, y, 0 where the foot point has a ground point, else -1, -1, -1."""
+    x, y, z = ground x, y, 0 where the foot point has a ground point, else -1, -1, -1; then the
+    extra `VELOCITY_COLUMNS` (`velocity_columns`)."""
     boxes = [b for p in peds for b in p.boxes]
     cols = _columns(boxes, BoxRow._fields)
     ok = np.asarray(cols["ok"], bool)
@@ -253,6 +266,7 @@ def mot_table(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
     out["x"] = np.where(ok, np.asarray(cols["x"], np.float64), -1.0)
     out["y"] = np.where(ok, np.asarray(cols["y"], np.float64), -1.0)
     out["z"] = np.where(ok, 0.0, -1.0)
+    out.update(velocity_columns(peds))
     return out
 
 

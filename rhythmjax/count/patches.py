@@ -231,13 +231,21 @@ class FilterOut(NamedTuple):
     next_uv: np.ndarray  # (S, 2) predicted foot point for the next frame px
     ground: np.ndarray  # (S, 2) state position: ground (x, y) m for "3d", else (u, v) px
     velocity: np.ndarray  # (S, 2) state velocity: (vx, vy) m/s for "3d", else (du, dv) px/s
+    image_velocity: np.ndarray  # (S, 2) d(u, v)/dt px/s of the estimated foot point
 
 
-FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2))
+FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2))
+
+
+def image_velocity(camera: Camera, mean):
+    """d(u, v)/dt (px/s) of the foot point (3) of a ground state (x, vx, y, vy) moving at its
+    velocity: the Jacobian of `camera.measure` times (vx, 0, vy, 0) (`jax.jvp`, exact)."""
+    rate = jnp.stack([mean[1], jnp.zeros_like(mean[1]), mean[3], jnp.zeros_like(mean[3])])
+    return jax.jvp(lambda m: measure(camera, m), (mean,), (rate,))[1]
 
 
 def _advance(dynamics: str, params, carry, reset, z, dt, dt_next, present):
-    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 9)."""
+    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 11)."""
     cfg, noise_img = params
     empty = empty_carry(z.dtype)
     carry = jax.vmap(lambda r, c: select(r, empty, c))(reset, carry)
@@ -248,16 +256,18 @@ def _advance(dynamics: str, params, carry, reset, z, dt, dt_next, present):
         nxt = jax.vmap(lambda s: predict(cfg.noise, s, dt_next))(carry.state)
         est_uv = jax.vmap(lambda m: measure(cfg.camera, m))(carry.state.mean)
         next_uv = jax.vmap(lambda m: measure(cfg.camera, m))(nxt.mean)
+        duv = jax.vmap(lambda m: image_velocity(cfg.camera, m))(carry.state.mean)
     else:
         run = jax.vmap(_linear_step, in_axes=(None, 0, 0, None, 0))
         carry = run(noise_img, carry, z, dt, present)
         nxt = jax.vmap(lambda s: predict(noise_img, s, dt_next))(carry.state)
         est_uv = carry.state.mean[:, jnp.array([0, 2])]
         next_uv = nxt.mean[:, jnp.array([0, 2])]
+        duv = carry.state.mean[:, jnp.array([1, 3])]  # the state's own (du, dv)
     mean = carry.state.mean
     return carry, FILTER_OUT.pack(z.dtype, started=carry.started, est_uv=est_uv,
                                   next_uv=next_uv, ground=mean[:, jnp.array([0, 2])],
-                                  velocity=mean[:, jnp.array([1, 3])])
+                                  velocity=mean[:, jnp.array([1, 3])], image_velocity=duv)
 
 
 class SlotFilter:

@@ -360,8 +360,8 @@ class PedestrianLevel:
                                inten, gx, gy, int(state)))
         p.boxes.append(BoxRow(index, eu - w / 2, ev - h, w, h, 1.0 if measured else 0.5, gx,
                               gy, bool(ok)))
-        vx, vy = out.velocity[s]
-        p.ground.append(GroundRow(gx, gy, vx, vy))
+        vx, vy = out.velocity[s] if self.opt.dynamics == "3d" else (math.nan, math.nan)
+        p.ground.append(GroundRow(gx, gy, vx, vy, *out.image_velocity[s]))
         p.blobs = meeting(self._box(p.est_uv), boxes, 0.1)
         if p.track_id == 0:
             if p.hits >= self.opt.confirm_hits:

@@ -24,13 +24,18 @@ class BoxRow(NamedTuple):
 
 class GroundRow(NamedTuple):
     """A pedestrian's filter state in one frame: ground (x, y) m (the EKF state for "3d", the
-    inverse perspective of the estimated foot point otherwise) and the filter's velocity
-    (vx, vy): m/s on the ground for "3d", px/s in the image for "2d" and "3d-shape"."""
+    inverse perspective of the estimated foot point otherwise), ground velocity (vx, vy) m/s
+    (the EKF state for "3d"; NaN for "2d" and "3d-shape", whose filters run in the image) and
+    image velocity (du, dv) px/s of the estimated foot point (the state's own for "2d" and
+    "3d-shape"; for "3d" the ground velocity through the Jacobian of (3):
+    `patches.image_velocity`). The tracking paper's per-pedestrian velocity output."""
 
     x: float
     y: float
     vx: float
     vy: float
+    du: float
+    dv: float
 
 
 class BlobRow(NamedTuple):
