@@ -20,7 +20,7 @@ Dynamics, equation (1) with zero-mean Gaussian acceleration noise, one of three 
         core's EKF (`ekf.step`, measurement (3)) with `ekf.FromAnnotations` validity: the
         pedestrians level does its own association, so every measurement it gives is used.
 All slots advance in ONE jitted, vmapped call per frame (`SlotFilter`), compiled once per
-(variant, slot count), as `tracker._advance_flat` does (`flat_tree`).
+(variant, slot count), through `track.toolkit.SlotSteps` as the online tracker's filters.
 
 Placement ("Calculating pedestrian positions"): `place_patch` moves the patch horizontally around
 its predicted foot point to cover as many pixels of its related blobs as it can (an integral
