@@ -102,7 +102,7 @@ def project_with(xp, k: Terms, x, y, z=None):
     replaced by 1 m (a double `where`: finite values and gradients, meaningless there)."""
     f, h, a, b, uc, vc, s, c, _, _ = k
     hz = h if z is None else h - z
-    d = f + y * c + hz * s  # `depth_with`
+    d = depth_with(k, y, z)
     d_safe = xp.where(d > MIN_DEPTH_M, d, 1.0)
     du = a * f * x / d_safe
     dv = b * f * (hz * c - y * s) / d_safe  # v - Vc of (3)
@@ -123,7 +123,7 @@ def ground_with(xp, k: Terms, u, v):
     den = bf * s + dv * c  # > 0 below the horizon
     ok = xp.isfinite(u) & xp.isfinite(v) & (den > 1e-6 * bf)
     y = (bf * h * c - dv * (f + h * s)) / where(ok, den, 1.0)
-    d = f + y * c + h * s  # `depth_with`
+    d = depth_with(k, y)
     ok = ok & (d > MIN_DEPTH_M)
     x = du * where(ok, d, 1.0) / (a * f)
     return where(ok, x, 0.0), where(ok, y, 0.0), ok

@@ -39,12 +39,13 @@ class HostCamera(NamedTuple):
 
 
 def camera_tuple(camera: Camera | tuple) -> HostCamera:
-    """`HostCamera` of a `Camera` (its float32 values exactly, as float64); a tuple passes
-    through (a 7-tuple without the roll, the older form, is read as roll = 0)."""
+    """`HostCamera` of a `Camera` (its float32 values exactly, as float64); a `HostCamera`
+    passes through, another tuple is read as one, as Python floats (a 7-tuple without the roll,
+    the older form, as roll = 0)."""
     if isinstance(camera, HostCamera):
         return camera
     if isinstance(camera, tuple):
-        return HostCamera(*camera)
+        return HostCamera(*(float(q) for q in camera))
     return HostCamera(*(float(np.asarray(getattr(camera, k))) for k in HostCamera._fields))
 
 
