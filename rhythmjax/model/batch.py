@@ -3,6 +3,11 @@
 Tracks are padded to a bucketed length T (by `io.to_batch`) and cut into chunks of a fixed number
 of tracks; the last chunk is padded with empty tracks. One compilation serves every chunk of a
 bucket. A progress bar is shown on a terminal.
+
+Each track is first cut at Fig. 3's ends (`segments.split_tracks`: the PREDICT time-out and the
+exit from the detection range, as the online tracker ends a track); every segment is classified
+on its own, and a track's verdict is its first segment that says Pedestrian, else its first
+classified segment, else its first (matching goes on until Pedestrian, Sec. 4.2).
 """
 
 from __future__ import annotations
@@ -14,7 +19,8 @@ import numpy as np
 
 from .params import Config
 from .rhythm import classify_batch
-from .status import REASON_LABELS, VERDICT_LABELS
+from .segments import split_tracks
+from .status import REASON_LABELS, VERDICT_LABELS, Verdict
 
 
 VERDICT_COLUMNS = ["track_id", "verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps",
@@ -51,9 +57,9 @@ def _progress(total: int, enabled: bool):
     return None
 
 
-def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = True) -> dict:
-    """Classify every track of a `TrackBatch`; returns NumPy columns of the verdicts table
-    (`VERDICT_COLUMNS`, verdict and reason as labels) plus `peak_*` arrays for plots."""
+def classify_each(cfg: Config, batch, chunk: int, progress: bool) -> dict:
+    """`classify_batch` over the tracks of a TrackBatch as they are (no Fig. 3 split), codes
+    not labels: NumPy columns, one row per track."""
     B = len(batch.ids)
     fields = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
               "peak_freq", "peak_power", "peak_mask")
@@ -67,7 +73,40 @@ def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = Tr
             bar.update(e - s)
     if bar is not None:
         bar.close()
-    out = {k: (np.concatenate(v) if v else np.zeros((0,))) for k, v in parts.items()}
+    return {k: (np.concatenate(v) if v else np.zeros((0,))) for k, v in parts.items()}
+
+
+def pick_segments(verdict: np.ndarray, owner: np.ndarray, n_tracks: int) -> np.ndarray:
+    """Per track, the index of the segment that gives its verdict: the first (in time) whose
+    verdict is Pedestrian, else the first not Unclassified, else the first. `owner` (sorted)
+    is each segment's track."""
+    rank = np.where(verdict == Verdict.PEDESTRIAN, 0,
+                    np.where(verdict == Verdict.UNCLASSIFIED, 2, 1))
+    order = np.lexsort((np.arange(len(owner)), rank, owner))  # by track, rank, time
+    first = np.r_[True, owner[order][1:] != owner[order][:-1]] if len(order) else order
+    pick = np.full(n_tracks, -1, np.int64)
+    pick[owner[order][first]] = order[first]
+    return pick
+
+
+def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = True,
+                    split: bool = True) -> dict:
+    """Classify every track of a `TrackBatch`; returns NumPy columns of the verdicts table
+    (`VERDICT_COLUMNS`, verdict and reason as labels) plus `peak_*` arrays for plots and
+    `n_segments` (Fig. 3 segments per track; `split` False: every track whole, one segment,
+    the behaviour before the time-out and the range exit were applied). `n_samples` counts
+    the frames tracked over all of a track's segments."""
+    B = len(batch.ids)
+    if split:
+        segs, owner = split_tracks(cfg, batch, _chunk_size(B, chunk))
+    else:
+        segs, owner = batch, np.arange(B)
+    res = classify_each(cfg, segs, chunk, progress)
+    pick = pick_segments(res["verdict"], owner, B) if B else np.zeros(0, np.int64)
+    out = {k: v[pick] for k, v in res.items()}
+    out["n_samples"] = np.bincount(owner, res["n_samples"], minlength=B) if B else \
+        np.zeros(0, np.int64)
+    out["n_segments"] = np.bincount(owner, minlength=B).astype(np.int64)
     out["track_id"] = np.asarray(batch.ids, dtype=object)
     out["verdict"] = np.asarray([VERDICT_LABELS[int(c)] for c in out["verdict"]], dtype=object)
     out["reason"] = np.asarray([REASON_LABELS[int(c)] for c in out["reason"]], dtype=object)

@@ -1,38 +1,49 @@
 """The Extended Kalman Filter of equations (4)-(9), written once for inference and for fitting.
 
 State X = (x_p, x_v, y_p, y_v) on the ground plane (m, m/s), constant velocity (1); measurement
-Y = (u_p, v_p) through the camera of (3). Every step runs the same three calls (STYLE R5):
+Y = (u_p, v_p) in px through the camera of (3). Every step runs the same three calls (STYLE R5):
 
-    prior = predict(...)                    # (5), (8)
-    cand = update(..., prior, z_safe)       # (4), (6), (7): the temporary estimate X~ of (11)
+    prior = predict(noise, state, dt)       # (5), (8)
+    cand = update(camera, noise, prior, z)  # (4), (6), (7), H of (9): the X~ of (11)
     state = select(valid, cand, prior)      # the gate switch of Fig. 2
 
 Only the source of `valid` differs: `FromAnnotations` (fitting: the measurement is present) or
 `gates.PaperGates` (inference: the width gate (10) and the outlier gate (11) exactly as written).
-The covariance update is the Joseph form, of which only the upper triangle is computed, so P
-stays symmetric positive definite in float32; the 2x2 innovation covariance S is inverted in
-closed form (adjugate over determinant, guarded: S >= R > 0). The algebra is written entry by
-entry (section below), so that under vmap XLA fuses a step into a few vector loops. A NaN
-or missing measurement is replaced by the predicted measurement *before* it is used (double
-where), so it becomes a prediction step with finite gradients.
+The algebra is the paper's, in 4x4 and 2x2 matrix form. The covariance update is the Joseph form,
+so P stays symmetric positive definite in float32; the 2x2 innovation covariance S is inverted
+in closed form (adjugate over determinant, guarded: S >= R > 0). A NaN or missing measurement
+is replaced by the predicted measurement *before* it is used (double where), so it becomes a
+prediction step with finite gradients.
 """
 
 from __future__ import annotations
 
 import abc
 import math
-from typing import NamedTuple
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, PyTree
 
-from .camera import ground_from_image, in_front, project
+from .camera import ground_from_image, in_front, measure, measure_jacobian
 from .params import Camera, Noise
 
 
 _LOG_2PI = math.log(2.0 * math.pi)
+
+
+def _mm(a: Array, b: Array) -> Array:
+    """a @ b for the 4x4, 4x2, 2x4 and 2x2 matrices (or a vector b) of the filter, as a sum of
+    outer products: under vmap these are elementwise vector loops, about 10x faster on CPU than
+    batched 4x4 dot products (benchmarks/bench_ekf.py, docs/design_ekf.md)."""
+    if b.ndim == 1:
+        return sum(a[:, k] * b[k] for k in range(a.shape[1]))
+    return sum(a[:, k, None] * b[None, k, :] for k in range(a.shape[1]))
+
+
+def _symmetric(a: Float[Array, "n n"]) -> Float[Array, "n n"]:
+    return 0.5 * (a + a.T)
 
 
 class Gaussian(eqx.Module):
@@ -64,168 +75,56 @@ def inverse_2x2(S: Float[Array, "2 2"]) -> tuple[Float[Array, "2 2"], Float[Arra
 
 
 def transition(dt: Float[Array, ""]) -> Float[Array, "4 4"]:
-    """F of (1) for a step of dt seconds (the prediction below applies it entry by entry)."""
+    """F of (1) for a step of dt seconds: positions advance by dt times the velocities."""
     one, zero = jnp.ones_like(dt), jnp.zeros_like(dt)
     row = lambda *xs: jnp.stack(xs)
     return jnp.stack([row(one, dt, zero, zero), row(zero, one, zero, zero),
                       row(zero, zero, one, dt), row(zero, zero, zero, one)])
 
 
-# ----------------------------------------------------------------------------------------------
-# The algebra, written once on unpacked entries
-#
-# A state is held as its 4 mean entries and the 10 upper-triangle covariance entries, each an
-# array of the same shape (a scalar for one track). Under vmap every entry becomes one contiguous
-# (B,) vector and XLA fuses a whole step into a few elementwise loops; with (B, 4, 4) arrays the
-# same step is a chain of tiny reductions over minor axes of length 4, about 5x slower on CPU
-# (benchmarks/bench_ekf.py). H of (9) has non-zeros only in the position columns (h depends on
-# x_p and y_p alone), and the products below skip the structural zeros.
-
-_UPPER = ((0, 0), (0, 1), (0, 2), (0, 3), (1, 1), (1, 2), (1, 3), (2, 2), (2, 3), (3, 3))
-
-
-def _entries(p):
-    """The full 4x4 covariance as nested lists from the 10 upper-triangle entries."""
-    full = {}
-    for k, (i, j) in enumerate(_UPPER):
-        full[i, j] = full[j, i] = p[k]
-    return [[full[i, j] for j in range(4)] for i in range(4)]
-
-
-def _unpack(g: Gaussian):
-    return (tuple(g.mean[..., i] for i in range(4)),
-            tuple(g.cov[..., i, j] for i, j in _UPPER))
-
-
-def _pack(m, p) -> Gaussian:
-    P = _entries(p)
-    return Gaussian(jnp.stack(m, axis=-1),
-                    jnp.stack([jnp.stack(row, axis=-1) for row in P], axis=-2))
-
-
-def _lin(*terms):
-    """Sum of products a * b, skipping the terms whose Python factor is 0 and not multiplying
-    by a Python 1 (the structural zeros and ones of F, H and I - K H)."""
-    out = 0.0
-    for a, b in terms:
-        if isinstance(a, int) and a == 0 or isinstance(b, int) and b == 0:
-            continue
-        out = out + (b if isinstance(a, int) else a if isinstance(b, int) else a * b)
-    return out
-
-
-def _predict_entries(q2, m, p, dt):
-    """(5), (8) for F of (1): positions advance by dt * velocity; Q = diag(0, qx^2, 0, qy^2) dt."""
-    x, vx, y, vy = m
-    p00, p01, p02, p03, p11, p12, p13, p22, p23, p33 = p
-    mean = (x + dt * vx, vx, y + dt * vy, vy)
-    cov = (p00 + dt * (2.0 * p01 + dt * p11), p01 + dt * p11,
-           p02 + dt * (p12 + p03 + dt * p13), p03 + dt * p13,
-           p11 + q2[0] * dt, p12 + dt * p13, p13,
-           p22 + dt * (2.0 * p23 + dt * p33), p23 + dt * p33,
-           p33 + q2[1] * dt)
-    return mean, cov
-
-
-class _Cand(NamedTuple):
-    """The temporary update, unpacked: see `Update`."""
-
-    mean: tuple
-    cov: tuple
-    zhat: tuple  # h(X(k|k-1)), px
-    nu: tuple
-    S: tuple  # (s00, s01, s11), px^2
-    HPHt: tuple  # (hp00, hp01, hp11), px^2
-    det: Array
-    nis: Array
-    ok: Array
-
-
-def _computed_once(R):
-    """A function that divides every float leaf of a pytree by a runtime 1.0 (exact).
-
-    Under vmap each entry is a vector loop, and XLA's CPU fusion copies a cheap producer into
-    every consumer that reads it, so the 14 state entries each recomputed H, K and S^-1
-    (1 273 fused vector operations per step, 376 needed). A division counts as expensive, and
-    XLA does not copy it: its result is computed once and read by its consumers (724 per step;
-    1.15-1.35x faster, benchmarks/bench_ekf.py). `lax.optimization_barrier` does not do this on
-    CPU (XLA removes it before fusion). Where R is a compile-time constant the 1.0 folds away
-    and the filter is the same, only not faster."""
-    one = jnp.where(R[0, 0] > -1.0, 1.0, 2.0).astype(R.dtype)
-    return lambda tree: jax.tree.map(
-        lambda a: a / one if jnp.issubdtype(jnp.result_type(a), jnp.floating) else a, tree)
-
-
-def _update_entries(camera: Camera, R, m, p, z, available=True) -> _Cand:
-    """(4), (6), (7) with H of (9) and the Joseph form; where `available` is False the
-    measurement is replaced by the predicted one first (double where)."""
-    x, _, y, _ = m
-    one = jnp.ones_like(x)
-    keep = _computed_once(R)
-    (u, v), (hux, hvx) = jax.jvp(lambda xx: project(camera, xx, y), (x,), (one,))
-    _, (huy, hvy) = jax.jvp(lambda yy: project(camera, x, yy), (y,), (one,))
-    u, v, hux, hvx, huy, hvy = keep((u, v, hux, hvx, huy, hvy))
-    H = ((hux, 0, huy, 0), (hvx, 0, hvy, 0))
-    P = _entries(p)
-    PHt = [[_lin(*zip(P[i], H[r])) for r in range(2)] for i in range(4)]  # 4x2
-    hp = [[_lin(*zip(H[r], (PHt[k][c] for k in range(4)))) for c in range(2)] for r in range(2)]
-    r00, r01, r11 = R[0, 0], 0.5 * (R[0, 1] + R[1, 0]), R[1, 1]
-    hp00, hp01, hp11 = hp[0][0], 0.5 * (hp[0][1] + hp[1][0]), hp[1][1]
-    s00, s01, s11 = hp00 + r00, hp01 + r01, hp11 + r11
-    det = s00 * s11 - s01 * s01
-    ok = (jnp.isfinite(det) & (det > 0) & (s00 > 0) & in_front(camera, y)
-          & (s00 >= r00 * (1.0 - 1e-3)) & (s11 >= r11 * (1.0 - 1e-3)))
-    safe = jnp.where(ok, det, 1.0)
-    i00, i01, i11 = s11 / safe, -s01 / safe, s00 / safe
-    ok = ok & jnp.isfinite(i00) & jnp.isfinite(i01) & jnp.isfinite(i11)
-    # a failed check means "do not update" (the gate switch predicts); S^-1 := I there
-    i00, i01, i11 = jnp.where(ok, i00, 1.0), jnp.where(ok, i01, 0.0), jnp.where(ok, i11, 1.0)
-    K = [(_lin((g[0], i00), (g[1], i01)), _lin((g[0], i01), (g[1], i11))) for g in PHt]  # (6)
-    zu = jnp.where(available, z[..., 0], u)
-    zv = jnp.where(available, z[..., 1], v)
-    nu0, nu1 = zu - u, zv - v
-    K, nu0, nu1, i00, i01, i11 = keep((K, nu0, nu1, i00, i01, i11))
-    mean = tuple(m[i] + K[i][0] * nu0 + K[i][1] * nu1 for i in range(4))
-    A = [[int(i == j) - _lin((K[i][0], H[0][j]), (K[i][1], H[1][j])) if j in (0, 2)
-          else int(i == j) for j in range(4)] for i in range(4)]  # I - K H
-    AP = [[_lin(*zip(A[i], (P[k][c] for k in range(4)))) for c in range(4)] for i in range(4)]
-    KR = [(K[i][0] * r00 + K[i][1] * r01, K[i][0] * r01 + K[i][1] * r11) for i in range(4)]
-    cov = tuple(_lin(*zip(AP[i], A[j])) + KR[i][0] * K[j][0] + KR[i][1] * K[j][1]
-                for i, j in _UPPER)
-    nis = nu0 * (i00 * nu0 + i01 * nu1) + nu1 * (i01 * nu0 + i11 * nu1)
-    return _Cand(mean, cov, (u, v), (nu0, nu1), (s00, s01, s11), (hp00, hp01, hp11), det, nis,
-                 ok)
-
-
-def _sym2(a, b, c):
-    return jnp.stack([jnp.stack([a, b]), jnp.stack([b, c])])
-
-
-def _to_update(c: _Cand) -> Update:
-    logdet = jnp.log(jnp.where(c.ok, c.det, 1.0))
-    return Update(_pack(c.mean, c.cov), jnp.stack(c.nu), _sym2(*c.S), _sym2(*c.HPHt), c.nis,
-                  -0.5 * (c.nis + logdet + 2.0 * _LOG_2PI), c.ok)
-
-
 def predict(noise: Noise, state: Gaussian, dt: Float[Array, ""]) -> Gaussian:
-    """(5) and (8): X(k+1|k) = F X(k|k), P(k+1|k) = F P(k|k) F^T + Q."""
-    return _pack(*_predict_entries(jnp.exp(2.0 * noise.log_q), *_unpack(state), dt))
+    """(5) and (8): X(k+1|k) = F X(k|k), P(k+1|k) = F P(k|k) F^T + Q, with F of (1) and
+    Q = diag(0, qx^2, 0, qy^2) dt (`Noise.Q`)."""
+    F = transition(jnp.asarray(dt, state.mean.dtype))
+    mean = _mm(F, state.mean)
+    cov = _mm(_mm(F, state.cov), F.T) + noise.Q(dt).astype(state.cov.dtype)
+    return Gaussian(mean, _symmetric(cov))
 
 
 def update(camera: Camera, noise: Noise, prior: Gaussian, z: Float[Array, "2"]) -> Update:
-    """(4), (6), (7) with H from (9); `z` must be finite (see `step`).
+    """(4), (6), (7) with H of (9); `z` must be finite (see `step`).
 
     The covariance uses the Joseph form (I - K H) P (I - K H)^T + K R K^T, algebraically equal to
     (7) and positive definite in float32 where (7) is not (RELIABILITY.md, finding 1). S is
     checked (finite, positive definite, S >= R on the diagonal, prior in front of the camera);
-    a failed check sets `ok` False, which the gate switch turns into a prediction.
+    a failed check sets `ok` False (and S^-1 := I), which the gate switch turns into a
+    prediction.
     """
-    return _to_update(_update_entries(camera, noise.R(), *_unpack(prior), z))
+    R = _symmetric(noise.R()).astype(prior.cov.dtype)
+    P = prior.cov
+    z_pred = measure(camera, prior.mean)  # h(X(k|k-1)) of (2), (3)
+    H = measure_jacobian(camera, prior.mean)  # (9)
+    PHt = _mm(P, H.T)
+    HPHt = _symmetric(_mm(H, PHt))
+    S = HPHt + R
+    S_inv, det = inverse_2x2(S)
+    ok = (jnp.isfinite(det) & (det > 0) & (S[0, 0] > 0) & in_front(camera, prior.mean[2])
+          & jnp.all(jnp.diag(S) >= jnp.diag(R) * (1.0 - 1e-3)) & jnp.all(jnp.isfinite(S_inv)))
+    S_inv = jnp.where(ok, S_inv, jnp.eye(2, dtype=S.dtype))
+    K = _mm(PHt, S_inv)  # (6)
+    nu = z - z_pred
+    mean = prior.mean + _mm(K, nu)  # (4)
+    A = jnp.eye(4, dtype=P.dtype) - _mm(K, H)
+    cov = _mm(_mm(A, P), A.T) + _mm(_mm(K, R), K.T)  # (7), Joseph form
+    nis = nu @ _mm(S_inv, nu)
+    logdet = jnp.log(jnp.where(ok, det, 1.0))
+    return Update(Gaussian(mean, _symmetric(cov)), nu, S, HPHt, nis,
+                  -0.5 * (nis + logdet + 2.0 * _LOG_2PI), ok)
 
 
 def select(valid: Bool[Array, ""], cand: PyTree, prior: PyTree) -> PyTree:
     """The gate switch of Fig. 2: the update where valid, the prediction otherwise (any two
-    matching pytrees: a `Gaussian`, or unpacked entries)."""
+    matching pytrees, e.g. two `Gaussian`s)."""
     return jax.tree.map(lambda a, b: jnp.where(valid, a, b), cand, prior)
 
 
@@ -315,30 +214,29 @@ def empty_carry(dtype=None) -> Carry:
     return Carry(Gaussian(jnp.zeros(4, dtype), jnp.eye(4, dtype=dtype)), jnp.asarray(False))
 
 
-def _tracked_step(camera, noise, validity, m, p, z, width, dt, available):
-    """Predict, candidate update, gate, select on unpacked entries: the part of every step
-    after the start. Returns the prior and the selected state (unpacked), the candidate as an
-    `Update`, and `valid`."""
-    prior = _predict_entries(jnp.exp(2.0 * noise.log_q), m, p, dt)
-    c = _update_entries(camera, noise.R(), *prior, z, available)
-    cand = _to_update(c)
-    z_safe = jnp.where(available, z, jnp.stack(c.zhat))  # double where, module doc
-    valid = available & c.ok & validity(camera, _pack(*prior), cand, z_safe, width)
-    return prior, cand, valid, select(valid, (c.mean, c.cov), prior)
+def _tracked_step(camera, noise, validity, state: Gaussian, z, width, dt, available):
+    """Predict, candidate update, gate, select: the part of every step after the start.
+    Returns the prior, the candidate `Update`, `valid` and the selected state."""
+    prior = predict(noise, state, dt)  # (5), (8)
+    z_safe = jnp.where(available, z, measure(camera, prior.mean))  # double where (module doc)
+    cand = update(camera, noise, prior, z_safe)  # (4), (6), (7)
+    valid = available & cand.ok & validity(camera, prior, cand, z_safe, width)
+    return prior, cand, valid, select(valid, cand.posterior, prior)
 
 
-def _can_start(camera, validity, z, width, available):
-    """Whether a measurement may start a track: it has a ground point the validity accepts."""
+def can_start(camera, validity, z, width, available):
+    """Whether a measurement may start a track (DETECT -> OBSERVE): it is `available`, has a
+    ground point, and the validity accepts it."""
     x, y, ok = ground_from_image(camera, z[0], z[1])
     return available & ok & validity.accept_initial(camera, z, width, jnp.stack([x, y]))
 
 
-def _output(state, prior, cand, valid, available, started_before, started):
-    state, prior_mean = _pack(*state), jnp.stack(prior[0])
-    zero = jnp.zeros((), prior_mean.dtype)
+def _output(state: Gaussian, prior: Gaussian, cand: Update, valid, available, started_before,
+            started) -> StepOutput:
+    zero = jnp.zeros((), prior.mean.dtype)
     seen = available & started_before
     return StepOutput(
-        mean=state.mean, cov=state.cov, pred_mean=prior_mean,
+        mean=state.mean, cov=state.cov, pred_mean=prior.mean,
         innovation=jnp.where(seen, cand.innovation, 0.0), nis=jnp.where(seen, cand.nis, zero),
         loglik=jnp.where(valid, cand.loglik, zero), available=available, valid=valid,
         started=started)
@@ -354,20 +252,20 @@ def step(
     dt: Float[Array, ""],
     present: Bool[Array, ""],
 ) -> tuple[Carry, StepOutput]:
-    """One frame of one object (the online tracker): start on the first usable measurement,
-    then predict-update-select. `filter_track` runs the same logic over a whole track."""
+    """One frame of one object (the online tracker): start on the first usable measurement
+    (`initial_state`), then predict-update-select. `filter_track` runs the same logic over a
+    whole track."""
     available = present & jnp.all(jnp.isfinite(z))
-    before = _unpack(carry.state)
-    prior, cand, valid, tracked = _tracked_step(camera, noise, validity, *before, z, width, dt,
-                                                available)
+    prior, cand, valid, tracked = _tracked_step(camera, noise, validity, carry.state, z, width,
+                                                dt, available)
     valid = valid & carry.started
     z_safe = jnp.where(available, z, 0.0)
     init, _ = initial_state(camera, noise, z_safe)
-    start_now = ~carry.started & _can_start(camera, validity, z_safe, width, available)
-    state = select(start_now, _unpack(init), select(carry.started, tracked, before))
+    start_now = ~carry.started & can_start(camera, validity, z_safe, width, available)
+    state = select(start_now, init, select(carry.started, tracked, carry.state))
     started = carry.started | start_now
-    return Carry(_pack(*state), started), _output(state, prior, cand, valid, available,
-                                                  carry.started, started)
+    return Carry(state, started), _output(state, prior, cand, valid, available, carry.started,
+                                          started)
 
 
 class FilterOutput(eqx.Module):
@@ -393,17 +291,16 @@ def filter_track(
     present = jnp.asarray(present)
     available = present & jnp.all(jnp.isfinite(z), axis=-1)
     z0 = jnp.where(available[:, None], z, 0.0)
-    can = jax.vmap(_can_start, in_axes=(None, None, 0, 0, 0))(camera, validity, z0, width,
+    can = jax.vmap(can_start, in_axes=(None, None, 0, 0, 0))(camera, validity, z0, width,
                                                              available)
     k0 = jnp.argmax(can)
     has_start = can[k0]
-    init = _unpack(initial_state(camera, noise, z0[k0])[0])
-    first = _unpack(empty_carry(z.dtype).state)
+    init, _ = initial_state(camera, noise, z0[k0])
 
     def body(state, inp):
         k, zk, wk, dtk, ak = inp
         before = has_start & (k > k0)
-        prior, cand, valid, tracked = _tracked_step(camera, noise, validity, *state, zk, wk, dtk,
+        prior, cand, valid, tracked = _tracked_step(camera, noise, validity, state, zk, wk, dtk,
                                                     ak)
         valid = valid & before
         now = has_start & (k == k0)
@@ -411,8 +308,26 @@ def filter_track(
         return new, _output(new, prior, cand, valid, ak, before, before | now)
 
     ks = jnp.arange(z.shape[0])
-    _, out = jax.lax.scan(body, first, (ks, z, width, dt, available))
+    _, out = jax.lax.scan(body, empty_carry(z.dtype).state, (ks, z, width, dt, available))
     return FilterOutput(out, jnp.sum(out.loglik))
+
+
+def vmap_in_chunks(run_track, camera, noise, validity, z, width, dt, present, chunk: int):
+    """`run_track` (a `filter_track`) vmapped over a batch of padded tracks sharing the
+    parameters. Batches larger than `chunk` run as a sequential map over chunks of `chunk`
+    tracks, which bounds the memory of one step's intermediates; the batch is padded with absent
+    tracks to a multiple of `chunk` and the padding dropped."""
+    run = jax.vmap(run_track, in_axes=(None, None, None, 0, 0, 0, 0))
+    B = z.shape[0]
+    if B <= chunk:
+        return run(camera, noise, validity, z, width, dt, present)
+    n = -(-B // chunk)
+    pad = lambda a, v: jnp.concatenate([a, jnp.full((n * chunk - B,) + a.shape[1:], v, a.dtype)])
+    split = lambda a: a.reshape((n, chunk) + a.shape[1:])
+    args = (split(pad(z, 0.0)), split(pad(width, 0.0)), split(pad(dt, 0.0)),
+            split(pad(present, False)))
+    out = jax.lax.map(lambda a: run(camera, noise, validity, *a), args)
+    return jax.tree.map(lambda a: a.reshape((n * chunk,) + a.shape[2:])[:B], out)
 
 
 @eqx.filter_jit
@@ -426,21 +341,6 @@ def filter_batch(
     present: Bool[Array, "B T"],
     chunk: int = 4096,
 ) -> FilterOutput:
-    """`filter_track` vmapped over a batch of padded tracks sharing the parameters.
-
-    Batches larger than `chunk` run as a sequential map over chunks of `chunk` tracks, which
-    bounds the memory of one step's intermediates; the batch is padded with absent tracks to a
-    multiple of `chunk` and the padding dropped. Measured at 16384 tracks x 64 steps on 2 CPU
-    cores (benchmarks/bench_ekf.py): chunks of 4096 or more are about 1.3x faster than 1024
-    when only the means are used, and equal when the covariances are written as well."""
-    run = jax.vmap(filter_track, in_axes=(None, None, None, 0, 0, 0, 0))
-    B = z.shape[0]
-    if B <= chunk:
-        return run(camera, noise, validity, z, width, dt, present)
-    n = -(-B // chunk)
-    pad = lambda a, v: jnp.concatenate([a, jnp.full((n * chunk - B,) + a.shape[1:], v, a.dtype)])
-    split = lambda a: a.reshape((n, chunk) + a.shape[1:])
-    args = (split(pad(z, 0.0)), split(pad(width, 0.0)), split(pad(dt, 0.0)),
-            split(pad(present, False)))
-    out = jax.lax.map(lambda a: run(camera, noise, validity, *a), args)
-    return jax.tree.map(lambda a: a.reshape((n * chunk,) + a.shape[2:])[:B], out)
+    """`filter_track` vmapped over a batch of padded tracks sharing the parameters, in chunks of
+    `chunk` tracks (`vmap_in_chunks`). `ekf_fused.filter_batch` is the same, faster on CPU."""
+    return vmap_in_chunks(filter_track, camera, noise, validity, z, width, dt, present, chunk)

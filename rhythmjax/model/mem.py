@@ -3,7 +3,8 @@
 Pure JAX with fixed shapes: `burg` is a `lax.scan` over the M orders of an N-sample window, so it
 jits once per (N, M), vmaps over tracks and differentiates with respect to the signal. `spectrum`
 = `burg` (default: Kaveh-Lippert parabolic taper) + `lattice_psd` (from the reflection
-coefficients: float32-safe for sharp peaks) + `find_peaks` (top-k interior maxima, refined).
+coefficients: float32-safe for sharp peaks) + `find_peaks` (the k strongest interior maxima,
+refined; `local_maxima`: all of them).
 
 Sign convention (everywhere in this module): the AR model is
 ``x[t] + sum_{k=1..M} a_k x[t-k] = e[t]``, so ``a = -rho`` of statsmodels' `burg` and ``a`` equals
@@ -198,38 +199,47 @@ def lattice_psd(
     return sigma2 * (dt / mag2)  # this order: sigma2 * dt alone can underflow
 
 
-def find_peaks(psd: Float[Array, " nf"], freqs: Float[Array, " nf"], k: int = 8) -> Peaks:
-    """The `k` strongest interior local maxima of `psd` (end points 0 and Nyquist excluded).
+def local_maxima(psd: Float[Array, " nf"], freqs: Float[Array, " nf"]) -> Peaks:
+    """Every interior local maximum of `psd` (end points 0 and Nyquist excluded), one slot per
+    interior grid point (nf - 2 slots, grid order, `mask` True on the maxima).
 
     Each peak's frequency (Hz) and power are refined by a parabola through the log-power at the
     grid point and its two neighbours (accuracy well below the grid step, for a uniform grid).
     The log-ratios to the neighbours are taken as log1p of relative differences, so broad peaks
-    keep float32 precision. A plateau counts once (its first point). Sorted by refined power."""
+    keep float32 precision. A plateau counts once (its first point). The sum of (13) runs over
+    these (`rhythm.spectral_sum`); `find_peaks` keeps the k strongest."""
     fi = jnp.finfo(psd.dtype)
     p = jnp.where(jnp.isfinite(psd), jnp.maximum(psd, fi.tiny), fi.tiny)
-    mid = p[1:-1]
-    is_peak = (mid > p[:-2]) & (mid >= p[2:])
-    kk = min(k, mid.shape[0])
-    _, idx = jax.lax.top_k(jnp.where(is_peak, mid, 0.0), kk)
-    mask = is_peak[idx]
-    i = idx + 1
-    p1 = p[i]
+    p1 = p[1:-1]
+    mask = (p1 > p[:-2]) & (p1 >= p[2:])
 
     def log_ratio(q):  # log(q / p1) <= 0, log1p near 1 (broad peaks), plain log far from it
         r = jnp.maximum(q / p1, fi.tiny)
         near = r > 0.5
         return jnp.where(near, jnp.log1p(jnp.where(near, (q - p1) / p1, 0.0)), jnp.log(r))
 
-    r0, r2 = log_ratio(p[i - 1]), log_ratio(p[i + 1])
+    r0, r2 = log_ratio(p[:-2]), log_ratio(p[2:])
     curv = r0 + r2
     sharp = curv < 0.0
     delta = jnp.clip(0.5 * (r0 - r2) / jnp.where(sharp, curv, -1.0), -0.5, 0.5)
     delta = jnp.where(sharp, delta, 0.0)
-    freq = freqs[i] + delta * (freqs[1] - freqs[0])
+    freq = freqs[1:-1] + delta * (freqs[1] - freqs[0])
     gain = -0.25 * (r0 - r2) * delta  # log of refined / grid power, >= 0
-    logp = jnp.log(p1) + gain
-    order = jnp.argsort(jnp.where(mask, -logp, jnp.inf), stable=True)
-    freq, power, mask = freq[order], (p1 * jnp.exp(gain))[order], mask[order]
+    power = p1 * jnp.exp(gain)
+    return Peaks(freq=jnp.where(mask, freq, 0.0), power=jnp.where(mask, power, 0.0), mask=mask)
+
+
+def find_peaks(psd: Float[Array, " nf"], freqs: Float[Array, " nf"], k: int = 8) -> Peaks:
+    """The `k` strongest of `local_maxima` (chosen by grid power, sorted by refined power,
+    descending); empty slots are masked."""
+    every = local_maxima(psd, freqs)
+    fi = jnp.finfo(psd.dtype)
+    grid_power = jnp.where(jnp.isfinite(psd), jnp.maximum(psd, fi.tiny), fi.tiny)[1:-1]
+    kk = min(k, grid_power.shape[0])
+    _, idx = jax.lax.top_k(jnp.where(every.mask, grid_power, 0.0), kk)
+    freq, power, mask = every.freq[idx], every.power[idx], every.mask[idx]
+    order = jnp.argsort(jnp.where(mask, -power, jnp.inf), stable=True)
+    freq, power, mask = freq[order], power[order], mask[order]
     if kk < k:  # fewer interior points than slots
         pad = lambda v, c: jnp.concatenate([v, jnp.full(k - kk, c, v.dtype)])
         freq, power, mask = pad(freq, 0), pad(power, 0), pad(mask, False)

@@ -29,11 +29,11 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Bool, Float, Int
+from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
 from . import mem
 from .camera import ground_from_image
-from .ekf import filter_track
+from .ekf_fused import filter_track
 from .gates import PaperGates, walking_ok
 from .params import Config, Thresholds, WalkingModel
 from .status import Reason, Verdict
@@ -136,14 +136,28 @@ def half_pace(peaks: mem.Peaks, ratio: Float[Array, ""]) -> Bool[Array, " k"]:
     return ok & (ratio > 0) & (p2 >= ratio * p)
 
 
+def spectral_sum(peaks: mem.Peaks, p_thr: Float[ArrayLike, ""]) -> Float[Array, ""]:
+    """S of (13): the summed power of every peak above P_thr (same units as `peaks.power`).
+
+    Give it every local maximum of the spectrum (`mem.local_maxima`), not a top-k."""
+    return jnp.sum(jnp.where(peaks.mask & (peaks.power > p_thr), peaks.power, 0.0))
+
+
 def match(
-    peaks: mem.Peaks, speed: Float[Array, ""], walking: WalkingModel, thr: Thresholds
+    peaks: mem.Peaks, speed: Float[Array, ""], walking: WalkingModel, thr: Thresholds,
+    total: Float[Array, ""] | None = None,
 ) -> tuple[Int[Array, ""], Int[Array, ""], Float[Array, ""], Float[Array, ""], Float[Array, ""]]:
     """(13)-(15) on one spectrum's peaks. Returns verdict, reason, pace F, stride T, ratio R.
 
+    `peaks` are the candidates for (14), strongest first (`mem.find_peaks`); `total` is S of
+    (13) over every peak of the spectrum (`spectral_sum` of `mem.local_maxima`), or, when None,
+    over `peaks` (the same when the spectrum has no more peaks than slots: an AR(M) spectrum has
+    at most ceil((M - 1) / 2) interior maxima, 7 at M = 15, so 8 slots hold them all; fit/walking
+    relies on this). A peak outside the k strongest has R <= 1 / (k + 1) by (15), so with
+    R_thr >= 1 / (k + 1) it can never be the Pedestrian peak.
     The reported peak is the best-matching one when any passes (14), else the strongest peak."""
     strong = peaks.mask & (peaks.power > thr.p_thr)  # (13)
-    S = jnp.sum(jnp.where(strong, peaks.power, 0.0))
+    S = spectral_sum(peaks, thr.p_thr) if total is None else total
     stride = speed / jnp.where(peaks.mask, peaks.freq, 1.0)  # (12) with D = speed * N dt
     passes = strong & walking_ok(walking, thr.k_sigma3, peaks.freq, stride)  # (14)
     passes = passes & ~half_pace(peaks, thr.harmonic_ratio)
@@ -188,12 +202,13 @@ def classify_window(
     x, nonconstant = normalise_window(fill_gaps(intensity, known))
     spec = mem.spectrum(x, jnp.where(dt_ok, dt_med, 1.0), thr.m, n_freqs=N_FREQS,
                         n_peaks=N_PEAKS)
-    peaks = spec.peaks
-    mask = peaks.mask & nonconstant & spec.ok
-    power = jnp.where(mask, peaks.power / jnp.where(dt_ok, dt_med, 1.0), 0.0)  # x white level
-    peaks = mem.Peaks(peaks.freq, power, mask)
+    white = lambda pk: mem.Peaks(pk.freq, jnp.where(  # power x white level (module doc)
+        pk.mask & nonconstant & spec.ok, pk.power / jnp.where(dt_ok, dt_med, 1.0), 0.0),
+        pk.mask & nonconstant & spec.ok)
+    peaks = white(spec.peaks)
+    total = spectral_sum(white(mem.local_maxima(spec.psd, spec.freqs)), thr.p_thr)  # (13)
     speed = window_speed(cfg, t, xy, observed)
-    verdict, reason, pace, stride, ratio = match(peaks, speed, cfg.walking, thr)
+    verdict, reason, pace, stride, ratio = match(peaks, speed, cfg.walking, thr, total)
     bad = usable & ~signal_ok
     unclassified = ~usable | bad
     nan = jnp.asarray(jnp.nan, x.dtype)

@@ -1,0 +1,134 @@
+"""Fig. 3's PREDICT time-out and range exit on stored tracks (the batch path of `classify`).
+
+The online tracker (track/tracker.py) ends a track (PREDICT -> NONE) when the estimate has been
+predicted, with no measurement used, for more than `thresholds.predict_timeout` s, or when the
+estimate leaves the detection range [range_min, range_max] (ground y, m); a later detection
+starts a new track with a new filter. A stored track can hold such an end: a run of missing
+rows (NaN measurement), a gap in its frame numbers longer than `to_batch`'s `max_gap_frames`
+(one step of the real duration), measurements the gates (10), (11) refuse, or an estimate that
+walks out of the range. `split_tracks` cuts every track at these ends into segments, each filtered
+from its own start as the online tracker would (DETECT -> OBSERVE on the first measurement in
+range), so a segment is classified exactly as the same rows would be on their own.
+
+The state machine per step k after the start, with pt the time predicted since the last used
+measurement (s): elapsed = pt + dt[k]; elapsed > predict_timeout ends the segment, at row k
+when row k is a prediction (the online tracker records it, then ends), before row k when row k
+is a used measurement (reached only after the time-out, by a long frame gap); else an estimate
+outside the range ends it at row k; else pt = 0 when row k is used, elapsed otherwise.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax.numpy as jnp
+import numpy as np
+
+from .ekf_fused import filter_batch
+from .gates import PaperGates
+from .params import Config
+
+
+# Steps stored in float32 (1/15 s rounds up by 4.5e-9 s): 15 of them must still be 1 s, "not more
+# than" a 1 s time-out, as the online tracker's float64 clock says.
+TIME_TOLERANCE_S = 1e-5
+
+def first_segment_end(cfg: Config, started, valid, y, dt, length) -> np.ndarray:
+    """Per track (B,), the last row (inclusive) of the first segment, -1 when it runs to the end.
+
+    `started`, `valid` (B, T) bool and `y` (B, T) m are the filter's outputs over the track
+    (`ekf.StepOutput`: started, valid, mean[..., 2]), `dt` (B, T) s, `length` (B,) rows."""
+    thr = cfg.thresholds
+    timeout, lo, hi = (float(a) for a in (thr.predict_timeout, thr.range_min, thr.range_max))
+    started, valid = np.asarray(started, bool), np.asarray(valid, bool)
+    y, dt = np.asarray(y, np.float64), np.asarray(dt, np.float64)
+    B, T = started.shape
+    k0 = np.argmax(started, axis=1)
+    has = started[np.arange(B), k0]
+    end = np.full(B, -1, np.int64)
+    pt = np.zeros(B)
+    for k in range(1, T):
+        live = has & (k > k0) & (k < length) & (end < 0)
+        if not live.any():
+            continue
+        elapsed = pt + dt[:, k]
+        timed_out = live & (elapsed > timeout + TIME_TOLERANCE_S)
+        left = live & ~timed_out & ~((y[:, k] >= lo) & (y[:, k] <= hi))
+        end = np.where(timed_out, np.where(valid[:, k], k - 1, k), end)
+        end = np.where(left, k, end)
+        pt = np.where(live, np.where(valid[:, k], 0.0, elapsed), pt)
+    return end
+
+
+def _filter(cfg: Config, batch, rows: int):
+    """`ekf_fused.filter_batch` with the paper's gates over a TrackBatch, in chunks of `rows`
+    tracks (padded: one compiled shape); returns started, valid and y (B, T) as NumPy."""
+    gates = PaperGates(cfg.width, cfg.thresholds)
+    B = len(batch.ids)
+    parts = []
+    for s in range(0, B, rows):
+        e = min(s + rows, B)
+        pad = lambda a, v, e=e, s=s: np.concatenate(
+            [a[s:e], np.full((rows - (e - s),) + a.shape[1:], v, a.dtype)])
+        out = filter_batch(cfg.camera, cfg.noise, gates, jnp.asarray(pad(batch.z, np.nan)),
+                           jnp.asarray(pad(batch.width, np.nan)), jnp.asarray(pad(batch.dt, 1.0)),
+                           jnp.asarray(pad(batch.present, False))).steps
+        parts.append([np.asarray(a)[: e - s] for a in (out.started, out.valid, out.mean[..., 2])])
+    return [np.concatenate(p) for p in zip(*parts)]
+
+
+def _rows(batch, which: np.ndarray, first: np.ndarray, n: np.ndarray):
+    """A TrackBatch of rows first[i] .. first[i] + n[i] - 1 of tracks `which`, shifted to row 0
+    and padded as `io.files.to_batch` pads (NaN, absent, t going on by the nominal step)."""
+    T = batch.z.shape[1]
+    idx = np.arange(T)[None, :]
+    src = np.minimum(first[:, None] + idx, T - 1)
+    inside = idx < n[:, None]
+    take = lambda a: a[which[:, None], src]
+    dt0 = batch.dt[which, :1]
+
+    def masked(a, fill):
+        if a is None:
+            return None
+        a = take(a)
+        shape = inside.shape + (1,) * (a.ndim - 2)
+        return np.where(inside.reshape(shape), a, fill).astype(a.dtype)
+
+    t = take(batch.t)
+    t_last = t[np.arange(len(which)), np.maximum(n - 1, 0)][:, None]
+    t = np.where(inside, t, t_last + dt0 * (idx - n[:, None] + 1)).astype(batch.t.dtype)
+    # the steps between the rows as stored (not re-derived from float32 t): bit for bit those
+    # `to_batch` gives the rows on their own
+    dt = np.where(inside & (idx > 0), take(batch.dt), dt0).astype(batch.dt.dtype)
+    return dataclasses.replace(
+        batch, ids=[batch.ids[i] for i in which], z=masked(batch.z, np.nan),
+        width=masked(batch.width, np.nan), intensity=masked(batch.intensity, np.nan), t=t,
+        dt=dt, present=inside, length=n.astype(np.int32),
+        labels=None if batch.labels is None else [batch.labels[i] for i in which],
+        xy=masked(batch.xy, np.nan))
+
+
+def split_tracks(cfg: Config, batch, rows: int = 256):
+    """Cut every track of a TrackBatch at its Fig. 3 ends (module doc). Returns the segments as
+    a TrackBatch (each padded to the same T, ids and labels of their track) and, per segment,
+    the index of its track; segments are in track order, then time order. A track without an
+    end is one segment equal to itself."""
+    B = len(batch.ids)
+    if B == 0:
+        return batch, np.zeros(0, np.int64)
+    rest = batch
+    owner, first = np.arange(B), np.zeros(B, np.int64)  # the rest's track and its first row
+    pieces: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # (track, first row, rows)
+    while len(owner):
+        started, valid, y = _filter(cfg, rest, rows)
+        end = first_segment_end(cfg, started, valid, y, rest.dt, rest.length)
+        n = np.where(end >= 0, end + 1, rest.length).astype(np.int64)
+        pieces.append((owner, first, n))
+        more = (end >= 0) & (rest.length > n)
+        owner, first = owner[more], first[more] + n[more]
+        rest = _rows(batch, owner, first, batch.length[owner] - first)
+    track = np.concatenate([p[0] for p in pieces])
+    start = np.concatenate([p[1] for p in pieces])
+    count = np.concatenate([p[2] for p in pieces])
+    order = np.lexsort((start, track))
+    return _rows(batch, track[order], start[order], count[order]), track[order]
