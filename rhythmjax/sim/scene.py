@@ -28,6 +28,7 @@ import cv2
 import numpy as np
 
 from ..model.camera_np import (
+    HostCamera,
     camera_tuple,
     depth_3d as depth_3d,
     ground_of_pixels as _ground_of_pixels,
@@ -215,7 +216,7 @@ def _world(parts, x, y, heading):
     return wx, wy, pts[:, 2]
 
 
-def _draw(img, camera: Camera, afs: float, kind: str, a: dict, tau: float, bx: float, by: float,
+def _draw(img, camera: HostCamera, afs: float, kind: str, a: dict, tau: float, bx: float, by: float,
           heading: float):
     """Draw one actor; return (umin, umax, vmax) px of its drawn extent, or None if not drawn."""
     parts = sa.object_parts(kind, tau, a)
@@ -278,7 +279,8 @@ def render_scene(key_or_seed, spec: SceneSpec) -> Scene:
     bg = render_background(cam, r_tex, ground_mean=spec.ground_mean,
                            ground_contrast=spec.ground_contrast, sky=spec.sky)
     T, H, W = spec.n_frames, cam.image_height, cam.image_width
-    afs = camera_tuple(cam).a * camera_tuple(cam).f  # px per m at depth 1 m
+    host = camera_tuple(cam)  # the camera as host floats, once (not per actor and frame)
+    afs = host.a * host.f  # px per m at depth 1 m
     jitter = (r_jit.standard_normal((T, 2)) * spec.jitter_px if spec.jitter_px > 0
               else np.zeros((T, 2)))
     lut_p, lut_n = _noise_luts(spec.noise_std) if spec.noise_std > 0 else (None, None)
@@ -294,7 +296,7 @@ def render_scene(key_or_seed, spec: SceneSpec) -> Scene:
         live.sort(key=lambda i: -(paths[i][3][k]))  # far first
         for i in live:
             act = spec.actors[i]
-            ext = _draw(img, cam, afs, act.kind, attrs[i], float(paths[i][1][k]),
+            ext = _draw(img, host, afs, act.kind, attrs[i], float(paths[i][1][k]),
                         float(paths[i][2][k]), float(paths[i][3][k]), act.heading_rad)
             if ext is not None:
                 wid[i, k], vlow[i, k] = ext[1] - ext[0], ext[2]
@@ -309,10 +311,10 @@ def render_scene(key_or_seed, spec: SceneSpec) -> Scene:
     truth = []
     for i, act in enumerate(spec.actors):
         alive, _, bx, by, fx, fy = paths[i]
-        u, v = project_3d(cam, fx, fy, 0.0)
+        u, v = project_3d(host, fx, fy, 0.0)
         v = np.where(np.isfinite(vlow[i]), vlow[i], v)  # the lowest drawn point (see module doc)
         u, v = u + jitter[:, 0], v + jitter[:, 1]
-        front = depth_3d(cam, fy, 0.0) > _MIN_DEPTH
+        front = depth_3d(host, fy, 0.0) > _MIN_DEPTH
         vis = alive & front & (u >= 0) & (u <= W - 1) & (v >= 0) & (v <= H - 1)
         nan = np.where(alive & front, 1.0, np.nan)
         truth.append(ObjectTruth(
@@ -402,23 +404,24 @@ def _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion, r
     """Up to 300 random straight paths for one actor: the first whose image box clashes with no
     placed actor's, else the least clashing one in view; None when none stays in view."""
     fps, W, H = float(camera.fps), camera.image_width, camera.image_height
-    afs = camera_tuple(camera).a * camera_tuple(camera).f
+    host = camera_tuple(camera)
+    afs = host.a * host.f
     best = None
     for _ in range(300):
         head = float(rng.uniform(-math.pi, math.pi))
         ym = float(rng.uniform(*range_m))
-        half = 0.8 * (W / 2) * ym * math.cos(camera_tuple(camera).theta) / afs
+        half = 0.8 * (W / 2) * ym * math.cos(host.theta) / afs
         xm = float(rng.uniform(-half, half))
         tau = (k - start - life / 2) / fps
         x = xm + speed * tau * math.cos(head)
         y = ym + speed * tau * math.sin(head)
-        u, v = project_3d(camera, x, y, 0.0)
+        u, v = project_3d(host, x, y, 0.0)
         a = alive
         if not ((y[a] > range_m[0]).all() and (y[a] < range_m[1]).all()
                 and (u[a] > margin_px).all() and (u[a] < W - margin_px).all()
                 and (v[a] < H - margin_px).all()):
             continue
-        d = depth_3d(camera, y, 0.0)
+        d = depth_3d(host, y, 0.0)
         hw_px, h_px = sa.EXTENT[kind][0] * afs / d, sa.EXTENT[kind][1] * afs / d
         clash = 0
         if not occlusion:
