@@ -78,20 +78,17 @@ def depth_with(k: Terms, y, z=None):
     return k.f + y * k.cos_theta + hz * k.sin_theta
 
 
-def roll_offsets(k: Terms, du, dv):
-    """Offsets (du, dv) px from (Uc, Vc) in the image of (3) -> in the rolled image (v down):
-    the rotation by +roll. Host constants with roll exactly 0 (Python floats; never under JAX)
-    skip it: the identity, the same bits for finite offsets, less work per call."""
-    sr, cr = k.sin_roll, k.cos_roll
-    if type(sr) is float and sr == 0.0 and cr == 1.0:
-        return du, dv
-    return cr * du - sr * dv, sr * du + cr * dv
+def _is_host_zero_roll(sin_roll, cos_roll) -> bool:
+    """True only for host constants (Python floats; never under JAX) with roll exactly 0: the
+    rotation is then the identity and is skipped (the same bits for finite values, less work)."""
+    return type(sin_roll) is float and sin_roll == 0.0 and cos_roll == 1.0
 
 
 def unroll_offsets(k: Terms, du, dv):
-    """The inverse of `roll_offsets`: offsets in the rolled image -> in the image of (3)."""
+    """Offsets (du, dv) px from (Uc, Vc) in the rolled image (v down) -> in the image of (3):
+    the rotation by -roll (the inverse of the one in `project_with`)."""
     sr, cr = k.sin_roll, k.cos_roll
-    if type(sr) is float and sr == 0.0 and cr == 1.0:
+    if _is_host_zero_roll(sr, cr):
         return du, dv
     return cr * du + sr * dv, cr * dv - sr * du
 
@@ -100,14 +97,16 @@ def project_with(xp, k: Terms, x, y, z=None):
     """Equation (3) with roll: image point (u, v) px of the point (x, y) m on the ground plane
     and z m above it (None: on it). Behind the camera (depth <= `MIN_DEPTH_M`) the depth is
     replaced by 1 m (a double `where`: finite values and gradients, meaningless there)."""
-    f, h, a, b, uc, vc, s, c, _, _ = k
+    f, h, a, b, uc, vc, s, c, sr, cr = k
     hz = h if z is None else h - z
     d = depth_with(k, y, z)
     d_safe = xp.where(d > MIN_DEPTH_M, d, 1.0)
-    du = a * f * x / d_safe
-    dv = b * f * (hz * c - y * s) / d_safe  # v - Vc of (3)
-    du, dv = roll_offsets(k, du, dv)
-    return uc + du, vc + dv
+    du = a * f * x / d_safe  # u - Uc of (3)
+    up = b * f * (y * s - hz * c) / d_safe  # Vc - v of (3)
+    if _is_host_zero_roll(sr, cr):
+        return uc + du, vc - up
+    # the rotation by +roll (v down): u - Uc = cr du - sr (v - Vc), v - Vc = sr du + cr (v - Vc)
+    return uc + (cr * du + sr * up), vc - (cr * up - sr * du)
 
 
 def ground_with(xp, k: Terms, u, v):
