@@ -37,8 +37,11 @@ def _reference(labels, related, claimed, u, v, w, h, reach):
 
 
 def test_column_runs_by_hand():
-    s, e = column_runs(np.array([0, 1, 1, 0, 0, 1, 0, 1, 1, 1], bool))
-    assert s.tolist() == [1, 5, 7] and e.tolist() == [3, 6, 10]
+    assert column_runs(np.array([0, 1, 1, 0, 0, 1, 0, 1, 1, 1], bool)) == [(1, 3), (5, 6),
+                                                                           (7, 10)]
+    assert column_runs(np.array([1, 0, 0, 1], bool)) == [(0, 1), (3, 4)]
+    assert column_runs(np.array([1, 1], bool)) == [(0, 2)]
+    assert column_runs(np.zeros(3, bool)) == [] and column_runs(np.zeros(0, bool)) == []
 
 
 def test_lone_blob_wider_than_the_patch():

@@ -19,12 +19,13 @@ import numpy as np
 from .patches import related_mask
 
 
-def column_runs(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Start and end (exclusive) indices of the runs of True in a 1-D bool array."""
-    ext = np.zeros(cols.size + 2, np.int8)
-    ext[1:-1] = cols
-    edges = np.flatnonzero(np.diff(ext))
-    return edges[::2], edges[1::2]
+def column_runs(cols: np.ndarray) -> list[tuple[int, int]]:
+    """(start, end exclusive) of each run of True in a 1-D bool array, in order."""
+    if cols.size == 0:
+        return []
+    inner = (np.flatnonzero(cols[1:] != cols[:-1]) + 1).tolist()
+    edges = ([0] if cols[0] else []) + inner + ([int(cols.size)] if cols[-1] else [])
+    return list(zip(edges[::2], edges[1::2]))
 
 
 def measured_width(labels: np.ndarray, related, claimed: np.ndarray | None, u: float, v: float,
@@ -47,9 +48,9 @@ def measured_width(labels: np.ndarray, related, claimed: np.ndarray | None, u: f
     mask = related_mask(labels[y0:y1, x0:x1], related)
     if claimed is not None:
         mask &= ~claimed[y0:y1, x0:x1]
-    starts, ends = column_runs(mask.any(axis=0))
-    overlap = np.minimum(ends, a1 - x0) - np.maximum(starts, a0 - x0)
-    if overlap.size == 0 or overlap.max() <= 0:
-        return math.nan
-    i = int(np.argmax(overlap))
-    return float(ends[i] - starts[i])
+    best, width = 0, math.nan  # the first run of the largest overlap with [a0, a1)
+    for start, end in column_runs(mask.any(axis=0)):
+        overlap = min(end, a1 - x0) - max(start, a0 - x0)
+        if overlap > best:
+            best, width = overlap, float(end - start)
+    return width
