@@ -1,11 +1,13 @@
-"""Throughput of the batched EKF (`rhythmjax.model.ekf.filter_batch`, float32, jit + vmap) against
-filterpy's `ExtendedKalmanFilter` (one Python object per track) and dynamax's
+"""Throughput of the batched EKF (`rhythmjax.model.ekf_fused.filter_batch`, the per-entry kernel,
+float32, jit + vmap) against the readable `rhythmjax.model.ekf.filter_batch` (the same filter in
+4x4 matrix form), filterpy's `ExtendedKalmanFilter` (one Python object per track) and dynamax's
 `extended_kalman_filter` (jit + vmap), on synthetic walkers of T = 64 steps.
 
     python benchmarks/bench_ekf.py [--quick] [--sizes 1 64 ...]
     JAX_PLATFORMS=cuda python benchmarks/bench_ekf.py   # on a GPU (peers' rows stay on CPU)
 
-Prints a markdown table: track-steps per second (best warm call) with the outputs dynamax is
+Prints a markdown table: track-steps per second (best warm call) of the fused kernel ("ours")
+and of the readable filter (means + covariances), with the outputs dynamax is
 asked for (filtered means and covariances per step: the ratios use this rate) and with every
 output of `FilterOutput` (predictions, innovations, NIS, log-likelihood, gate flags as well),
 then a second like-for-like pair with the filtered means alone (what classification uses;
@@ -40,7 +42,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from rhythmjax.model import ekf
+from rhythmjax.model import ekf, ekf_fused
 from rhythmjax.model.params import Camera, Noise
 
 
@@ -50,7 +52,7 @@ AF, S15, C15, F_M, H_M, UC, VC = 800.0, math.sin(math.radians(15)), math.cos(mat
 SIZES = (1, 64, 1024, 16384)
 FILTERPY_MAX_TRACKS = 64
 
-# Flops of one tracked step of `ekf.filter_track` as now written (entry by entry, structural
+# Flops of one tracked step of `ekf_fused.filter_track` as now written (entry by entry, structural
 # zeros of F, H and I - K H skipped; a multiply-add counts 2): the arithmetic floor per step.
 FLOPS = {
     "predict: F x and F P F^T + Q on the 10 upper entries": 4 + 29,
@@ -100,6 +102,13 @@ def timed(jitted, args, repeats: int) -> tuple[float, float]:
 def _means_and_covs(*args):
     """What dynamax's filter is asked for: the filtered means and covariances per step (XLA
     drops the rest of `FilterOutput`)."""
+    out = ekf_fused.filter_batch(*args)
+    return out.steps.mean, out.steps.cov
+
+
+@eqx.filter_jit
+def _readable_means_and_covs(*args):
+    """`_means_and_covs` of the readable filter, `ekf.filter_batch`."""
     out = ekf.filter_batch(*args)
     return out.steps.mean, out.steps.cov
 
@@ -107,19 +116,22 @@ def _means_and_covs(*args):
 @eqx.filter_jit
 def _means(*args):
     """The filtered means alone (XLA drops the rest)."""
-    return ekf.filter_batch(*args).steps.mean
+    return ekf_fused.filter_batch(*args).steps.mean
 
 
 def bench_ours(data, repeats):
-    """(compile s, best s for means + covariances, best s for the whole `FilterOutput`, output)."""
+    """(compile s, best s for means + covariances, best s for the whole `FilterOutput`, best s
+    for the means, best s for the readable filter's means + covariances, output)."""
     z, w, dt = (jnp.asarray(data[k]) for k in ("z", "width", "dt"))
     present = jnp.ones(z.shape[:2], bool)
     args = (Camera(), Noise(q_std=(Q_STD, Q_STD), r_std=(R_STD, R_STD)), ekf.FromAnnotations(),
             z, w, dt, present)
     compile_s, best = timed(_means_and_covs, args, repeats)
-    _, best_full = timed(ekf.filter_batch, args, repeats)
+    _, best_full = timed(ekf_fused.filter_batch, args, repeats)
     _, best_means = timed(_means, args, repeats)
-    return compile_s, best, best_full, best_means, ekf.filter_batch(*args)
+    _, best_readable = timed(_readable_means_and_covs, args, repeats)
+    return (compile_s, best, best_full, best_means, best_readable,
+            ekf_fused.filter_batch(*args))
 
 
 # -- filterpy -------------------------------------------------------------------------------------
@@ -220,7 +232,7 @@ def main():
     for n in sizes:
         data = walkers(n, rng)
         repeats = 5  # best of 5: a shared machine's load spikes hit single calls
-        compile_s, best, best_full, best_means, out = bench_ours(data, repeats)
+        compile_s, best, best_full, best_means, best_readable, out = bench_ours(data, repeats)
         ours_rate = n * T / best
         init_mean = np.asarray(out.steps.mean[:, 0], np.float64)
         init_cov = np.asarray(out.steps.cov[:, 0], np.float64)
@@ -230,6 +242,7 @@ def main():
         checks.append(("filterpy", n, np.abs(ours_last - fp_means).max()))
         row = {"n": n, "ours": ours_rate, "full": n * T / best_full, "compile": compile_s,
                "means": n * T / best_means, "dyn_means": None,
+               "readable": n * T / best_readable,
                "filterpy": fp_rate,
                "fp_n": fp_n, "dynamax": None, "dyn_compile": None}
         if dynamax_run is not None:
@@ -243,15 +256,17 @@ def main():
         rows.append(row)
     print()
     print("| tracks | ours, means + covs (track-steps/s) | ours, all outputs | ours compile (s) "
+          "| readable ekf, means + covs | ours/readable "
           "| filterpy (track-steps/s) | dynamax (track-steps/s) | dynamax compile (s) "
           "| ours/filterpy | ours/dynamax | ours GFLOP/s | % of GEMM rate |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
         dyn = f"{r['dynamax']:.3g}" if r["dynamax"] else "skipped"
         dync = f"{r['dyn_compile']:.2f}" if r["dynamax"] else "-"
         ratio_d = f"{r['ours'] / r['dynamax']:.2f}" if r["dynamax"] else "-"
         gflops = r["ours"] * FLOPS_PER_STEP / 1e9
         print(f"| {r['n']} | {r['ours']:.3g} | {r['full']:.3g} | {r['compile']:.2f} | "
+              f"{r['readable']:.3g} | {r['ours'] / r['readable']:.1f} | "
               f"{r['filterpy']:.3g}"
               f" ({r['fp_n']} tracks timed) | {dyn} | {dync} | {r['ours'] / r['filterpy']:.1f}"
               f" | {ratio_d} | {gflops:.3f} | {100 * gflops / peak:.2f} |")

@@ -6,6 +6,7 @@ import dataclasses
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from rhythmjax.io import read_tracks, to_batch, write_table
 from rhythmjax.model import ekf_fused
@@ -61,6 +62,7 @@ def _batch(tr):
 
 
 def _walker_with_gap(tmp_path):
+    """A walker (156 frames) with 20 rows of missing measurements, frames 66-85."""
     cols, _ = make_tracks(n_walkers=1, n_bicycles=0, n_dogs=0, n_cars=0, seed=3,
                           min_frames=156, max_frames=157, gap_rate=0.0)
     cols = {k: np.asarray(v) for k, v in cols.items()}
@@ -70,14 +72,9 @@ def _walker_with_gap(tmp_path):
     return _write(tmp_path, cols)
 
 
-def test_long_nan_gap_splits_and_each_segment_is_judged_on_its_own(tmp_path):
-    tr = _walker_with_gap(tmp_path)
-    batch = _batch(tr)
-    segs, owner = split_tracks(CFG, batch)
-    assert owner.tolist() == [0, 0]
-    n1, n2 = (int(n) for n in segs.length)
-    # the first segment ends at the first missing row past the 1 s time-out (15 frames)
-    assert n1 == 66 + GAP + 1 and n1 + n2 == int(batch.length[0])
+def _pieces_are_judged_on_their_own(tr, segs, n1):
+    """The two segments are the rows before and from row n1, padded as `to_batch` pads them
+    alone, and classified exactly as those rows on their own."""
     pieces = [_batch(_subset(tr, np.arange(len(tr)) < n1)),
               _batch(_subset(tr, np.arange(len(tr)) >= n1))]
     for i, piece in enumerate(pieces):  # the same rows, padded to the track's longer T
@@ -90,6 +87,18 @@ def test_long_nan_gap_splits_and_each_segment_is_judged_on_its_own(tmp_path):
     alone = [classify_each(CFG, p, 8, False) for p in pieces]
     for k in ("verdict", "reason", "pace_hz", "stride_m", "ratio", "n_samples"):
         np.testing.assert_array_equal(each[k], np.concatenate([a[k] for a in alone]), err_msg=k)
+    return each
+
+
+def test_long_nan_gap_splits_and_each_segment_is_judged_on_its_own(tmp_path):
+    tr = _walker_with_gap(tmp_path)
+    batch = _batch(tr)
+    segs, owner = split_tracks(CFG, batch)
+    assert owner.tolist() == [0, 0]
+    n1, n2 = (int(n) for n in segs.length)
+    # 15 missing rows are 1 s, not more than the time-out; the 16th ends the segment
+    assert n1 == 66 + GAP + 1 and n1 + n2 == int(batch.length[0])
+    each = _pieces_are_judged_on_their_own(tr, segs, n1)
     assert np.all(each["verdict"] != 0)  # both segments are long enough to be judged
     out = classify_tracks(CFG, batch, progress=False)
     assert out["n_segments"].tolist() == [2]
@@ -97,6 +106,21 @@ def test_long_nan_gap_splits_and_each_segment_is_judged_on_its_own(tmp_path):
     assert out["verdict"][0] == "pedestrian" and out["reason"][0] == "matched"
     whole = classify_tracks(CFG, batch, progress=False, split=False)
     assert whole["n_segments"].tolist() == [1]
+
+
+def test_frame_gap_longer_than_the_time_out_splits(tmp_path):
+    """Rows missing from the file (frames 66-85): `to_batch` keeps one step of 1.4 s,
+    and the segment ends there, before the next row (a measurement the gates accept)."""
+    cols, _ = make_tracks(n_walkers=1, n_bicycles=0, n_dogs=0, n_cars=0, seed=3,
+                          min_frames=156, max_frames=157, gap_rate=0.0)
+    keep = (np.asarray(cols["frame"]) < 66) | (np.asarray(cols["frame"]) >= 86)
+    tr = _write(tmp_path, {k: np.asarray(v)[keep] for k, v in cols.items()})
+    batch = _batch(tr)
+    assert float(batch.dt[0, 66]) == pytest.approx(21 / 15, rel=1e-6)  # frame 65 -> 86
+    segs, owner = split_tracks(CFG, batch)
+    assert owner.tolist() == [0, 0] and int(segs.length[0]) == 66
+    each = _pieces_are_judged_on_their_own(tr, segs, 66)
+    assert each["n_samples"].tolist() == [66, int(batch.length[0]) - 66]
 
 
 def _leaving_walker(tmp_path):

@@ -249,6 +249,9 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
 
     A gap of up to `max_gap_frames` frames is filled with missing rows (NaN measurement,
     present=True, t interpolated linearly); a longer gap stays one step of the real duration.
+    Neither splits a track: `model.batch.classify_tracks` cuts it where Fig. 3 ends it (a
+    prediction, over missing rows or one long step, longer than predict_timeout; the estimate
+    leaving the range), `model.segments`.
     T = max(min_len, longest track), rounded up to a power of two when `bucket`, so that batches
     of similar length share one compiled shape. The nominal step is 1/fps (`fps` or the
     tracks'), else the median time per frame, else 1 s."""

@@ -21,6 +21,9 @@ Conventions fixed here (the paper is silent):
   speed runs low (a bicycle at 3.15 m/s measured 1.70 m/s and so strode like a walker).
 - Missing intensities inside the window are linearly interpolated; more than a quarter missing,
   or a sampling interval varying by more than 10 % inside the window, gives `bad-signal`.
+- S of (13) sums every local maximum of the spectrum above P_thr (`spectral_sum` of
+  `mem.local_maxima`); the candidates for (14) and the reported peaks are the N_PEAKS strongest
+  (`match` says why that loses nothing).
 """
 
 from __future__ import annotations
@@ -39,7 +42,7 @@ from .params import Config, Thresholds, WalkingModel
 from .status import Reason, Verdict
 
 
-N_PEAKS = 8  # peak slots kept per spectrum (fixed size, masked)
+N_PEAKS = 8  # candidate peaks for (14), (15) per spectrum (fixed size, masked); S sums all
 N_FREQS = 512  # frequency grid points from 0 to Nyquist
 MAX_MISSING_FRACTION = 0.25
 MAX_DT_JITTER = 0.10
