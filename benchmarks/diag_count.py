@@ -10,7 +10,8 @@ k - 1 each) - (walkers with none) + (counted tracks owned by no walker).
 
     python benchmarks/diag_count.py [--seed S] [--scenes 10] [--only 0,3] [--set KEY=JSON ...]
 
---set overrides a `count.CountOptions` field (e.g. `--set new_lifted_height=2.0`, repeatable).
+--set overrides a `count.CountOptions` field, dotted (e.g. `--set new.lifted_height=2.0`,
+repeatable; `track.options.with_changes`).
 """
 
 from __future__ import annotations
@@ -84,15 +85,17 @@ def main(argv=None) -> int:
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.sim.presets import SYNTHETIC_CONFIG
     from rhythmjax.sim.scene import render_scene
+    from rhythmjax.track.options import with_changes
 
     p = argparse.ArgumentParser()
     p.add_argument("--seed", type=int, default=SEED)
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--only", default="")
     p.add_argument("--set", action="append", default=[], metavar="KEY=JSON",
-                   help="a CountOptions field, e.g. new_lifted_height=2.0 (repeatable)")
+                   help="a CountOptions field, e.g. new.lifted_height=2.0 (repeatable)")
     a = p.parse_args(argv)
-    opt = CountOptions(**{k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
+    opt = with_changes(CountOptions(),
+                       {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
     only = {int(x) for x in a.only.split(",") if x}
     cfg = config_from_dict(SYNTHETIC_CONFIG)
     tot = {"true": 0, "counted": 0, "missed": 0, "over": 0, "extra": 0}

@@ -84,7 +84,9 @@ def track(cfg, path, fps, overlay=None, max_objects=MAX_OBJECTS):
 
     src = open_video(str(path), fps=fps)
     with overlay_writer(overlay, fps, (src.width, src.height)) as w:
-        draw = None if w is None else (lambda f, i, snap: w.write(draw_frame(f, snap, i)))
+        hpw = cfg.width.height_per_width()
+        draw = None if w is None else (lambda f, i, snap: w.write(
+            draw_frame(f, snap, i, height_per_width=hpw)))
         tracks, verdicts, _, _ = track_frames(cfg, src, on_frame=draw, progress=False,
                                               options=TrackerOptions(max_objects=max_objects))
     return tracks, verdicts

@@ -12,13 +12,14 @@ import pytest
 
 from rhythmjax.cli.main import main
 from rhythmjax.count import CountOptions, count_frames
+from rhythmjax.count.options import StitchOptions
 from rhythmjax.io import BadInput, read_table
 from rhythmjax.io.mot import MOT_COLUMNS, read_mot, write_mot
 from rhythmjax.model.params import config_from_dict
 from rhythmjax.sim.scene import SceneSpec, render_scene, walker
 from rhythmjax.track.rows import TrackRow
 
-from .test_pedestrians import SMALL
+from .test_pedestrians import FAST, QUIET, SMALL
 
 
 CFG = config_from_dict(SMALL)
@@ -194,8 +195,7 @@ def test_help_explains(capsys):
 def test_missing_frames_predict_only():
     frames = _crossing_frames(40)
     items = [(k, k / 15.0, None if k in (20, 21) else f) for k, f in enumerate(frames)]
-    res = count_frames(CFG, iter(items), options=CountOptions(classify=False,
-                                                              online_verdicts=False))
+    res = count_frames(CFG, iter(items), options=FAST)
     assert res.summary["missing_frames"] == 2
     assert res.counts["tracks"] == 2
     at = np.isin(res.mot["frame"], [21, 22])
@@ -272,10 +272,9 @@ def test_stitch_links_a_track_that_continues_another():
     back = _piece(45, 80, (130, 150, -30, 0), (60, 150, -30, 0))  # walking back
     early = _piece(25, 80, (100, 150, 30, 0), (210, 150, 30, 0))  # overlaps a in time
     late = _piece(111, 150, (265, 150, 30, 0), (340, 150, 30, 0))  # 5.4 s later, on its line
-    o = CountOptions()
-    assert STITCH == {"max_gap_s": o.stitch_max_gap_s, "gate_w": o.stitch_gate_w,
-                      "gate_h": o.stitch_gate_h, "gate_per_s": o.stitch_gate_per_s,
-                      "max_dv_w": o.stitch_max_dv_w}
+    o = StitchOptions()
+    assert STITCH == {"max_gap_s": o.max_gap_s, "gate_w": o.gate_w, "gate_h": o.gate_h,
+                      "gate_per_s": o.gate_per_s, "max_dv_w": o.max_dv_w}
     assert stitch_pieces([a, b], **STITCH) == [1, -1]
     for other in (bike, far, back, early, late):
         assert stitch_pieces([a, other], **STITCH) == [-1, -1]
@@ -334,7 +333,7 @@ def _hidden_walker_items():
 @pytest.mark.parametrize("dynamics", ["3d", "2d"])
 def test_a_walker_hidden_longer_than_it_coasts_keeps_its_id(dynamics):
     items = _hidden_walker_items()
-    opt = CountOptions(dynamics=dynamics, classify=False, online_verdicts=False)
+    opt = CountOptions(dynamics=dynamics, verdicts=QUIET)
     res = count_frames(CFG, iter(items), options=opt)
     assert res.counts["tracks"] == 1 and res.counts["walkers"] == 1
     assert res.summary["stitched"] == 1
@@ -342,7 +341,8 @@ def test_a_walker_hidden_longer_than_it_coasts_keeps_its_id(dynamics):
     f = res.mot["frame"]
     assert f.min() <= 6 and f.max() == 72 and not np.isin(f, np.arange(27, 46)).any()
     # without stitching: two tracks, two walkers
-    off = count_frames(CFG, iter(items), options=dataclasses_replace(opt, stitch=False))
+    off = count_frames(CFG, iter(items), options=dataclasses_replace(
+        opt, stitch=StitchOptions(enabled=False)))
     assert off.counts["tracks"] == 2 and off.summary["stitched"] == 0
 
 
@@ -425,7 +425,7 @@ def test_deferred_filter_results_give_the_same_tracks():
 
     frames, out = _crossing_frames(60), []
     for defer in (False, True):
-        level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False), defer)
+        level = PedestrianLevel(CFG, FAST, defer)
         for k, f in enumerate(frames):
             level.update(k, k / 15.0, f)
         out.append(finish_count(level))

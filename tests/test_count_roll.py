@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from rhythmjax.count import CountOptions, count_frames
+from rhythmjax.count.options import VerdictOptions
 from rhythmjax.count.patches import ShapeModel, ground_point
 from rhythmjax.model.camera_np import project_3d, upright_size
 from rhythmjax.model.params import config_from_dict
@@ -28,7 +29,7 @@ from .test_pedestrians import SMALL
 
 ROLL_DEG = 4.0
 T = 60
-FAST = CountOptions(classify=False, online_verdicts=False)
+FAST = CountOptions(verdicts=VerdictOptions(classify=False, online=False))
 
 
 def _config(roll_deg: float):

@@ -15,7 +15,7 @@ from rhythmjax.io.mot import MOT_COLUMNS, VELOCITY_COLUMNS, read_mot, write_mot
 from rhythmjax.model.camera_np import camera_tuple, project_3d
 from rhythmjax.sim.scene import SceneSpec, render_scene, walker
 
-from .test_pedestrians import CFG
+from .test_pedestrians import CFG, QUIET
 
 
 def test_image_velocity_is_the_projection_derivative():
@@ -69,7 +69,7 @@ def walker_counts():
     a = walker(-3.0, 8.0, 0.0, start_frame=2, phase=0.2)
     frames = render_scene(3, SceneSpec(n_frames=60, actors=(a,), camera=CFG.camera)).frames
     items = [(k, k / 15.0, f) for k, f in enumerate(frames)]
-    opt = {dyn: CountOptions(dynamics=dyn, classify=False, online_verdicts=False)
+    opt = {dyn: CountOptions(dynamics=dyn, verdicts=QUIET)
            for dyn in ("3d", "2d")}
     return {dyn: count_frames(CFG, iter(items), options=o) for dyn, o in opt.items()}
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from rhythmjax.count import CountOptions, count_frames
+from rhythmjax.count.options import NewPedestrianOptions, VerdictOptions
 from rhythmjax.count.patches import (
     ShapeModel,
     SlotFilter,
@@ -32,7 +33,8 @@ SMALL = {"camera": {"f_m": 0.008, "h_m": 3.0, "theta_deg": 25.0, "a_px_per_m": 2
          "thresholds": {"range_min_m": 3.0, "range_max_m": 15.0},
          "noise": {"r_std_px": [3.0, 3.0]}, "width": {"std_m": 0.2}}
 CFG = config_from_dict(SMALL)
-FAST = CountOptions(classify=False, online_verdicts=False)
+QUIET = VerdictOptions(classify=False, online=False)  # no judging, no compile
+FAST = CountOptions(verdicts=QUIET)
 
 
 def _ground_ref(camera, u: float, v: float) -> tuple[float, float]:
@@ -196,7 +198,7 @@ def _truth_switches(res, scene):
 def _run(actors, dynamics="3d"):
     spec = SceneSpec(n_frames=72, actors=actors, camera=CFG.camera)
     scene = render_scene(1, spec)
-    opt = CountOptions(dynamics=dynamics, classify=False, online_verdicts=False)
+    opt = CountOptions(dynamics=dynamics, verdicts=QUIET)
     res = count_frames(CFG, ((i, i / 15.0, f) for i, f in enumerate(scene.frames)), options=opt)
     return res, scene
 
@@ -233,7 +235,7 @@ def test_new_pedestrians_start_only_in_the_detection_range():
     near = config_from_dict({**SMALL, "thresholds": {"range_min_m": 3.0, "range_max_m": 6.0}})
     items = lambda: ((i, i / 15.0, f) for i, f in enumerate(frames))
     assert count_frames(near, items(), options=FAST).counts["tracks"] == 0
-    off = CountOptions(classify=False, online_verdicts=False, new_in_range=False)
+    off = CountOptions(verdicts=QUIET, new=NewPedestrianOptions(in_range=False))
     assert count_frames(near, items(), options=off).counts["tracks"] == 1
     assert count_frames(CFG, items(), options=FAST).counts["tracks"] == 1
 
@@ -248,8 +250,8 @@ def _g(ground: list[tuple]) -> list:
 def test_a_track_whose_ground_velocity_jumps_ends_before_the_jump():
     from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
 
-    level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False))
-    k = round(0.5 * 15)  # dv_window_s = 0.5 s at 15 fps
+    level = PedestrianLevel(CFG, FAST)
+    k = round(0.5 * 15)  # life.dv_window_s = 0.5 s at 15 fps
     p = Pedestrian(slot=0, born=0)
     # 2 s walking at 1.4 m/s, then the velocity swings by 3 m/s within 0.3 s (the patch slid
     # down a merged blob onto a nearer person)
@@ -264,8 +266,7 @@ def test_a_track_whose_ground_velocity_jumps_ends_before_the_jump():
     p.ground = _g([(0.0, 8.0, 0.0, 0.0)] * 3 + [(0.1, 8.0, 4.0, 0.0)] * 5)
     assert level._velocity_jump(p) == 0
     # the 2-D dynamics have no ground velocity: never
-    level2 = PedestrianLevel(CFG, CountOptions(dynamics="2d", classify=False,
-                                               online_verdicts=False))
+    level2 = PedestrianLevel(CFG, CountOptions(dynamics="2d", verdicts=QUIET))
     p.ground = _g([(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)] + [(3.0, 8.0, 1.4, -4.0)] * 4)
     assert level2._velocity_jump(p) == 0
     assert level._velocity_jump(p) == k
@@ -279,8 +280,8 @@ def test_a_swap_between_crossing_walkers_ends_the_track():
     is not lost."""
     from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
 
-    level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False))
-    assert level.opt.max_dv_mps == 1.5
+    level = PedestrianLevel(CFG, FAST)
+    assert level.opt.life.max_dv_mps == 1.5
     k = round(0.5 * 15)
     p = Pedestrian(slot=0, born=0)
     walk = _g([(0.1 * i, 8.0, 1.4, 0.0) for i in range(30)])
@@ -375,11 +376,11 @@ def test_a_walker_merged_above_a_nearer_one_starts_a_pedestrian(span_frac, lifte
                                                                  starts):
     from rhythmjax.count.pedestrian_level import PedestrianLevel
 
-    level = PedestrianLevel(CFG, CountOptions(classify=False, online_verdicts=False,
-                                              new_lifted_height=lifted_height))
-    assert level.opt.new_min_height == 0.5 and CountOptions().new_lifted_height == 0.55
+    level = PedestrianLevel(CFG, CountOptions(verdicts=QUIET, new=NewPedestrianOptions(
+        lifted_height=lifted_height)))
+    assert level.opt.new.min_height == 0.5 and CountOptions().new.lifted_height == 0.55
     blobs, lab, u2, h, h2 = _lifted_scene(level, span_frac)
-    assert 110 < 170 - level.opt.new_max_lift * h  # lifted: above the blob's bottom band
+    assert 110 < 170 - level.opt.new.max_lift * h  # lifted: above the blob's bottom band
     assert level._in_range((u2, 110.0))
     new = level._new_pedestrians(blobs, lab)
     if starts:
@@ -396,7 +397,7 @@ def test_online_verdict_windows_start_every_hop_samples():
     from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
 
     cfg = config_from_dict({"thresholds": {"n_samples": 32}})
-    level = PedestrianLevel(cfg, CountOptions(classify=False))
+    level = PedestrianLevel(cfg, CountOptions(verdicts=VerdictOptions(classify=False)))
     p = Pedestrian(slot=0, born=0)
     judged_at = []
     for k in range(70):  # (index, t, u, v, width, intensity, x, y, state)

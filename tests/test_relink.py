@@ -12,8 +12,9 @@ from rhythmjax.model.params import Config
 from rhythmjax.model.status import TrackState
 from rhythmjax.sim import scene as synth
 from rhythmjax.track import relink
+from rhythmjax.track.options import RelinkOptions, TrackerOptions
 from rhythmjax.track.rows import TrackRow, Velocity
-from rhythmjax.track.tracker import OnlineTracker, TrackerOptions
+from rhythmjax.track.tracker import OnlineTracker
 
 
 CFG = Config()
@@ -87,7 +88,7 @@ def test_hidden_walker_keeps_its_id_when_relinking(hidden_walker, relink_s):
     later. With relinking one track spans the whole walk, the frames between its time-out and
     the reappearance as state-NONE rows without measurements, and is judged Pedestrian;
     without it, two tracks, each too short (< N = 64 frames) to be judged."""
-    tr = OnlineTracker(CFG, TrackerOptions(relink_s=relink_s))
+    tr = OnlineTracker(CFG, TrackerOptions(relink=RelinkOptions(within_s=relink_s)))
     for k, f in enumerate(hidden_walker):
         tr.update(k, k / 15.0, f)
     tracks, verdicts, _ = tr.finish()

@@ -154,11 +154,11 @@ def test_rhythm_window_restarts_after_missing_run():
 def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
     """The rhythm signal is sampled in window B at the filter's foot point (its ground estimate
     projected), not at the measured one, which scatters by more than window B's W/5 rows;
-    `sample_estimate=False` keeps the measured one."""
+    `body.sample_estimate=False` keeps the measured one."""
     import jax.numpy as jnp
 
     from rhythmjax.model.camera import project
-    from rhythmjax.track.tracker import TrackerOptions
+    from rhythmjax.track.options import BodyOptions, TrackerOptions
     from rhythmjax.vision import detect
 
     at, real = [], detect.window_b_intensity
@@ -166,7 +166,7 @@ def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
                         lambda D, u, v, W, **kw: at.append((u, v)) or real(D, u, v, W, **kw))
     for estimate in (True, False):
         at.clear()
-        tr = OnlineTracker(CFG, TrackerOptions(sample_estimate=estimate))
+        tr = OnlineTracker(CFG, TrackerOptions(body=BodyOptions(sample_estimate=estimate)))
         for i, f in enumerate(walker_scene.frames[:40]):
             tr.update(i, i / 15.0, f)
         tracks, _, _ = tr.finish()
@@ -186,16 +186,17 @@ def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
 
 def test_body_parts_measured_together():
     """A walker crossing at 8 m: its motion splits into parts (torso outlines, legs), and with
-    the body's parts within body_widths W joined the measured width is the body's (median ratio
-    to the true width ~0.9), not a part's (0.78 with body_widths=0, which also broke the walker
+    the body's parts within parts_widths W joined the measured width is the body's (median ratio
+    to the true width ~0.9), not a part's (0.78 with parts_widths=0, which also broke the walker
     into more tracks). The high-foot drop is off here: it also removes a part's measurement."""
-    from rhythmjax.track.tracker import TrackerOptions
+    from rhythmjax.track.options import BodyOptions, TrackerOptions
 
     scene = _walker_scene(y=8.0)
     truth = scene.truth[0]
     ratio, n_tracks = {}, {}
-    for bw in (0.0, TrackerOptions().body_widths):
-        tr = OnlineTracker(CFG, TrackerOptions(body_widths=bw, high_foot_widths=0.0))
+    for bw in (0.0, BodyOptions().parts_widths):
+        tr = OnlineTracker(CFG, TrackerOptions(body=BodyOptions(parts_widths=bw,
+                                                                high_foot_widths=0.0)))
         for i, f in enumerate(scene.frames):
             tr.update(i, i / 15.0, f)
         tracks, _, _ = tr.finish()
@@ -212,11 +213,11 @@ def test_foot_point_far_above_the_prediction_is_dropped(walker_scene, monkeypatc
     predicted one is no measurement (u, v NaN, the slot predicts without running down its
     time-out), for at most high_foot_frames frames in a row; the rule by hand: frames 30-31 and
     40-42 dropped, 43-45 (the 4th-6th high frames in a row) kept, everything else as measured."""
-    from rhythmjax.track.tracker import TrackerOptions
+    from rhythmjax.track.options import BodyOptions, TrackerOptions
     from rhythmjax.vision import detect
 
-    opt = TrackerOptions(high_foot_widths=0.25)  # the synthetic scenes' setting (off by default)
-    assert opt.high_foot_frames == 3
+    opt = TrackerOptions(body=BodyOptions(high_foot_widths=0.25))  # the synthetic scenes'
+    assert opt.body.high_foot_frames == 3  # setting (off by default)
     high = {30, 31, *range(40, 46)}
     real, frame = detect.detect_in_window, [0]
 
@@ -238,32 +239,3 @@ def test_foot_point_far_above_the_prediction_is_dropped(walker_scene, monkeypatc
     assert all(math.isfinite(rows[k].v) for k in (29, 32, 39, 43, 44, 45, 46))
     assert rows[42].state == TrackState.PREDICT and rows[32].state == TrackState.OBSERVE
     assert objs[0].predict_time == 0.0
-
-
-def test_velocity_jump_ends_the_track():
-    """max_dv_mps 1.8 within dv_window_s 1.0 at 15 fps: k = 15 frames. By hand: 30 rows at
-    (vx, vy) = (1.0, 0.0) m/s, then a 31st at (1.0, 1.9): |dv| against row 16 (15 back) is
-    1.9 > 1.8, the track is 31 > 2k = 30 rows old, so its last 15 rows go and it ends with 16;
-    at (1.0, 1.7) (|dv| 1.7) or with the rule off (0) it goes on with 31."""
-    from rhythmjax.track.rows import TrackRow, Velocity
-    from rhythmjax.track.tracker import TrackerOptions, _Object
-
-    def run(vy, max_dv):
-        tr = OnlineTracker(CFG, TrackerOptions(max_dv_mps=max_dv, dv_window_s=1.0))
-        obj = _Object(track_id=1, state=TrackState.OBSERVE)
-        for i in range(30):
-            obj.rows.append(TrackRow(i, i / 15.0, 100.0, 300.0, 30.0, 1.0, 0.0, 10.0, 1))
-            obj.vel.append(Velocity(1.0, 0.0))
-        tr._slots[0] = obj
-        tr._after_step(0, obj, 30, 2.0, 1 / 15.0, np.array([100.0, 300.0]), 30.0, True, True,
-                       np.array([0.0, 1.0, 10.0, vy]), np.array([100.0, 300.0]), 30.0, None,
-                       True)
-        return tr, obj
-
-    tr, obj = run(1.9, 1.8)
-    assert tr._slots[0] is None and tr.finished == [obj] and len(obj.rows) == 16
-    assert [r.frame for r in obj.rows] == list(range(16))
-    for vy, max_dv in ((1.7, 1.8), (1.9, 0.0)):
-        tr, obj = run(vy, max_dv)
-        assert tr._slots[0] is obj and len(obj.rows) == 31
-    assert TrackerOptions().max_dv_mps == 0.0  # off by default

@@ -8,7 +8,7 @@ import os
 import sys
 
 from ..count.counting import count_frames
-from ..count.options import CountOptions
+from ..count.options import CountOptions, VerdictOptions
 from ..io import atomic_write, check_writable, dumps_json, make_output_dir, write_table
 from ..io.mot import VELOCITY_COLUMNS, write_mot
 from ..model.params import ConfigError
@@ -58,7 +58,8 @@ def cmd_count(args) -> int:
     make_output_dir(args.output)
     check_writable(os.path.join(args.output, "counts.json"))
     cfg = load_config(args.config)
-    opt = CountOptions(dynamics=args.dynamics, min_track_frames=args.min_frames)
+    opt = CountOptions(dynamics=args.dynamics,
+                       verdicts=VerdictOptions(min_track_frames=args.min_frames))
     with open_source(args, cfg) as src, overlay_writer(
             args.overlay, src.fps, (src.width, src.height)) as overlay:
         draw = None if overlay is None else \

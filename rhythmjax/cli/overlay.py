@@ -11,7 +11,7 @@ import numpy as np
 
 from ..io.files import atomic_path
 from ..model import mem
-from ..model.params import Config
+from ..model.params import Config, WidthModel
 from ..model.rhythm import N_FREQS, fill_gaps, normalise_window
 
 
@@ -19,10 +19,15 @@ _COLOURS = {"pedestrian": (60, 200, 60), "non-pedestrian": (40, 40, 230),
             "unclassified": (200, 200, 200)}
 
 
-def draw_frame(gray: np.ndarray, objects: list[dict], index: int) -> np.ndarray:
+def draw_frame(gray: np.ndarray, objects: list[dict], index: int, *,
+               height_per_width: float | None = None) -> np.ndarray:
     """BGR copy of a grey frame with each object's foot point, window, id, state and verdict.
 
-    `objects`: dicts with track_id, u, v, width (px), state, verdict (label or None)."""
+    `objects`: dicts with track_id, u, v, width (px), state, verdict (label or None); each box
+    is `height_per_width` times its width tall (the config's `width.height_per_width()`; None:
+    the default config's, 1.7 m / 0.5 m)."""
+    if height_per_width is None:
+        height_per_width = WidthModel().height_per_width()
     img = cv2.cvtColor(gray, cv2.COLOR_GRAY2BGR)
     for o in objects:
         if not (math.isfinite(o["u"]) and math.isfinite(o["v"])):
@@ -30,7 +35,7 @@ def draw_frame(gray: np.ndarray, objects: list[dict], index: int) -> np.ndarray:
         verdict = o.get("verdict") or "unclassified"
         c = _COLOURS.get(verdict, (200, 200, 200))
         W = o["width"] if math.isfinite(o["width"]) else 20.0
-        H = W * 1.7 / 0.5
+        H = W * height_per_width
         u, v = int(round(o["u"])), int(round(o["v"]))
         cv2.rectangle(img, (int(u - W / 2), int(v - H)), (int(u + W / 2), v), c, 1)
         cv2.circle(img, (u, v), 3, c, -1)

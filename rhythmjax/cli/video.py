@@ -26,11 +26,13 @@ from .common import (
 from .overlay import draw_frame, spectrum_figure
 
 
-def _drawer(overlay):
+def _drawer(overlay, cfg):
     """The on_frame callback that writes the tracker's snapshot drawn on each frame."""
     if overlay is None:
         return None
-    return lambda frame, index, snapshot: overlay.write(draw_frame(frame, snapshot, index))
+    hpw = cfg.width.height_per_width()
+    return lambda frame, index, snapshot: overlay.write(
+        draw_frame(frame, snapshot, index, height_per_width=hpw))
 
 
 def _write_outputs(out_dir, cfg, tracks, verdicts, objs, *, tracks_name="tracks.parquet"):
@@ -69,7 +71,7 @@ def cmd_track(args) -> int:
     with open_source(args, cfg) as src, overlay_writer(
             args.overlay, src.fps, (src.width, src.height)) as overlay:
         tracks, verdicts, objs, tracker = track_frames(
-            cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay),
+            cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
             progress=not (args.quiet or args.json))
         write_table(args.output, tracks, TRACK_ORDER)
     _report(args, _summary(tracker, verdicts, src), verdicts)
@@ -86,7 +88,7 @@ def cmd_run(args) -> int:
     with open_source(args, cfg) as src, overlay_writer(path, src.fps,
                                                         (src.width, src.height)) as overlay:
         tracks, verdicts, objs, tracker = track_frames(
-            cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay),
+            cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
             progress=not (args.quiet or args.json))
         _write_outputs(args.output, cfg, tracks, verdicts, objs)
     _report(args, _summary(tracker, verdicts, src), verdicts)
@@ -110,7 +112,7 @@ def cmd_demo(args) -> int:
     path = None if args.no_overlay else os.path.join(args.output, "overlay.mp4")
     with overlay_writer(path, scene.fps, size) as overlay:
         tracks, verdicts, objs, tracker = track_frames(
-            cfg, frames, n_frames=len(scene.frames), on_frame=_drawer(overlay),
+            cfg, frames, n_frames=len(scene.frames), on_frame=_drawer(overlay, cfg),
             progress=not (args.quiet or args.json), options=synthetic_options())
         _write_outputs(args.output, cfg, tracks, verdicts, objs)
         write_table(os.path.join(args.output, "truth.csv"), truth_cols,

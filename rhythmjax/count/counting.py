@@ -6,14 +6,14 @@ Stitching (`stitch_pieces`): a walker hidden behind another or behind a bicycle 
 its coasting time, or lost by its patch at a crossing (a track whose ground velocity jumps ends
 there: `track.toolkit.velocity_jump`), comes back as a new track. At the end of the video
 every track's end (its last measured frame: the EKF ground state (x, y, vx, vy) for the "3d"
-dynamics, a line fit over its last `stitch_fit_s` s of measured foot points otherwise) is
-compared with every later track's start (a line fit over its first `stitch_fit_s` s of
+dynamics, a line fit over its last `stitch.fit_s` s of measured foot points otherwise) is
+compared with every later track's start (a line fit over its first `stitch.fit_s` s of
 measured foot points): B continues A when B starts after A's last measured frame, within
-`stitch_max_gap_s` s, and the two meet halfway: A predicted on for half the gap (on the ground
+`stitch.max_gap_s` s, and the two meet halfway: A predicted on for half the gap (on the ground
 plane with its EKF state for "3d", projected through the camera; in the image otherwise) and B
-taken back for half the gap at its own velocity lie within `stitch_gate_w` W across and
-`stitch_gate_h` H up or down (growing by `stitch_gate_per_s` per second of gap; W, H: B's
-patch), with image velocities within `stitch_max_dv_w` W/s. The gate is in the image, in units
+taken back for half the gap at its own velocity lie within `stitch.gate_w` W across and
+`stitch.gate_h` H up or down (growing by `stitch.gate_per_s` per second of gap; W, H: B's
+patch), with image velocities within `stitch.max_dv_w` W/s. The gate is in the image, in units
 of the patch, because the foot row's pixel noise is what limits both: a ground gate in metres
 is far too tight near the camera or far too loose 20 m away. Pairs are taken cheapest first,
 each track with at most one predecessor and one successor; a chain of pieces becomes one track
@@ -28,7 +28,7 @@ paper's method and is counted, unless its ground speed (`track_speed`) exceeds t
 walking model's test (14) accepts for any rhythm (`walking_top_speed`: pace and stride both at
 +k_sigma3, 2.57 m/s with Table 1): any window of it would be judged non-pedestrian, so it is
 not counted (`too_fast`: short bicycle tracks). A track judged pedestrian is counted; a
-non-pedestrian verdict removes one. Tracks shorter than `min_track_frames` frames (after
+non-pedestrian verdict removes one. Tracks shorter than `verdicts.min_track_frames` frames (after
 stitching) are dropped from every output and count first. `CountResult.counts` holds the six
 numbers (tracks, pedestrians, non_pedestrians, unclassified, too_fast, walkers), the verdicts
 say per track `too_fast` and `counted`, and `COUNT_RULE` says the rule in words (written to
@@ -107,8 +107,8 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     walkers = tracks - non_pedestrians - too_fast (`COUNT_RULE`: unclassified tracks count
     unless too fast to walk)."""
     opt = options or CountOptions()
-    if on_frame is None and opt.online_verdicts:
-        opt = dataclasses.replace(opt, online_verdicts=False)
+    if on_frame is None and opt.verdicts.online:
+        opt = dataclasses.replace(opt, verdicts=dataclasses.replace(opt.verdicts, online=False))
     level = PedestrianLevel(cfg, opt, defer=on_frame is None)  # no snapshot drawn: defer
     draw = None if on_frame is None else \
         (lambda frame, index: on_frame(frame, index, level.snapshot()))
@@ -119,9 +119,10 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
 
 def finish_count(level: PedestrianLevel) -> CountResult:
     """End every pedestrian of `level`; the `CountResult` of its tracks, stitched, those shorter
-    than `min_track_frames` dropped, judged."""
+    than `verdicts.min_track_frames` dropped, judged."""
     peds = stitch_level(level, level.end_all())
-    return build_result(level, [p for p in peds if len(p.rows) >= level.opt.min_track_frames])
+    shortest = level.opt.verdicts.min_track_frames
+    return build_result(level, [p for p in peds if len(p.rows) >= shortest])
 
 
 def walking_top_speed(cfg: Config) -> float:
@@ -185,7 +186,7 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
         p.track_id = k
     tracks = tracks_table(peds)
     n = cfg.thresholds.n
-    if peds and level.opt.classify:
+    if peds and level.opt.verdicts.classify:
         tr = Tracks(path="<count>", track_id=tracks["track_id"].astype(str).astype(object),
                     frame=tracks["frame"], t=tracks["t"], u=tracks["u"], v=tracks["v"],
                     width_px=tracks["width_px"], intensity=tracks["intensity"],
@@ -215,7 +216,7 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
     if level.crowd_frames:
         summary["notes"].append(
             f"{len(level.crowd_frames)} frame(s) had one blob covering >= "
-            f"{level.opt.crowd_fraction:.0%} of the image (dense crowd or camera jump): no "
+            f"{level.opt.blobs.crowd_fraction:.0%} of the image (dense crowd or camera jump): no "
             f"detection there, pedestrians predicted (first: frame {level.crowd_frames[0]})")
     if level.full_frames:
         summary["notes"].append(f"all {level.filter.slots} pedestrian slots were in use in "

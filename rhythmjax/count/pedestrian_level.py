@@ -3,9 +3,10 @@ the three levels, then refinement; `count.count_frames` drives it and judges the
 
 Per frame (`PedestrianLevel.update`):
 1. Images: `blobs.BackgroundModel` (running average, selective update) gives the 0/1 mask.
-2. Blobs: `blobs.find_blobs`, then `blobgraph.blob_graph` between frames i-1 and i. A frame whose
-   blob box covers `crowd_fraction` of the image (`blobs.is_crowd`: a dense crowd, a camera jump)
-   is not used for detection: every pedestrian predicts, the frame is listed in `crowd_frames`.
+2. Blobs: `blobs.find_blobs`, then `blobgraph.blob_graph` between frames i-1 and i. A frame
+   whose blob box covers `blobs.crowd_fraction` of the image (`blobs.is_crowd`: a dense crowd, a
+   camera jump) is not used for detection: every pedestrian predicts, the frame is listed in
+   `crowd_frames`.
 3. Pedestrians (`pedestrians`): relations are propagated through the blob graph (a pedestrian
    related to blob i of frame i-1 becomes related to i's children; when a blob shared by several
    pedestrians splits, they are assigned to its children by the Hungarian method on the distance
@@ -13,27 +14,25 @@ Per frame (`PedestrianLevel.update`):
    related blob takes the blobs its predicted patch overlaps (re-acquisition after occlusion).
    Each pedestrian's patch is placed (`patches.place_patch`), older pedestrians first, each
    claiming the pixels it covers from those after it (groups). Pedestrians sharing a blob too
-   narrow to hold them side by side (< `merge_widths` x their summed patch widths: walking past
-   each other) are not measured: they keep their predicted positions, so identities survive the
-   merge. One jitted call advances every filter (`patches.SlotFilter`).
-4. Refinement: blob columns no pedestrian explains (a pedestrian explains `walker_widths` W
+   narrow to hold them side by side (< `placement.merge_widths` x their summed patch widths:
+   walking past each other) are not measured: they keep their predicted positions, so identities
+   survive the merge. One jitted call advances every filter (`patches.SlotFilter`).
+4. Refinement: blob columns no pedestrian explains (a pedestrian explains `new.walker_widths` W
    around its foot point: a walker's blob spans its stance foot to its leading arm), at least
-   `new_min_widths` W wide, holding enough pixels and reaching the blob's bottom (feet, not
-   arms) or, lifted above it, standing `new_lifted_height` of its patch height tall (clipped at
+   `new.min_widths` W wide, holding enough pixels and reaching the blob's bottom (feet, not
+   arms) or, lifted above it, standing `new.lifted_height` of its patch height tall (clipped at
    the image top; a farther walker merged with a nearer object: an arm is shorter), with the
    foot point's ground point in the config's detection range (range_min to range_max m: where
-   `rhythmjax track` detects; `new_in_range`), start new pedestrians, one per `walker_widths`
-   W of the run, side by side (groups);
-   a new pedestrian gets an id after `confirm_hits` measured frames (dropped if it misses
-   `tentative_misses` before); a pedestrian without measurement predicts for
-   `coast_s` s (default: the config's predict_timeout_s), then ends; with the "3d" dynamics
-   one whose ground velocity changes by more than `max_dv_mps` within `dv_window_s` s has lost
-   its walker (its patch slid onto another object or down a merged blob: no walker or cyclist
-   turns or brakes that fast) and ends without those frames (`track.toolkit.velocity_jump`),
-   so neither the wrong stretch nor its wrong stride reaches the track, and stitching sees a
-   clean end;
-   two whose foot points are
-   within `duplicate_widths` W with the same image velocity for `duplicate_frames` frames are
+   `rhythmjax track` detects; `new.in_range`), start new pedestrians, one per
+   `new.walker_widths` W of the run, side by side (groups); a new pedestrian gets an id after
+   `life.confirm_hits` measured frames (dropped if it misses `life.tentative_misses` before); a
+   pedestrian without measurement predicts for the config's predict_timeout_s, then ends; with
+   the "3d" dynamics one whose ground velocity changes by more than `life.max_dv_mps` within
+   `life.dv_window_s` s has lost its walker (its patch slid onto another object or down a merged
+   blob: no walker or cyclist turns or brakes that fast) and ends without those frames
+   (`track.toolkit.velocity_jump`), so neither the wrong stretch nor its wrong stride reaches
+   the track, and stitching sees a clean end; two whose foot points are within
+   `life.duplicate_widths` W with the same image velocity for `life.duplicate_frames` frames are
    one: the younger ends. Relations for the next frame: the blobs the placed patch overlaps.
 Every frame each pedestrian samples the rhythm signal I(k) in window B at its foot point
 (`detect.window_b_intensity` on the frame difference, W = its patch width) and keeps its ground
@@ -50,7 +49,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..model.params import Config
+from ..model.params import Config, host_float
 from ..model.status import TrackState
 from ..track.rows import TrackRow
 from ..track.toolkit import PendingStep, dv_frames, match_window, velocity_jump
@@ -110,10 +109,9 @@ class PedestrianLevel:
 
     def __init__(self, cfg: Config, opt: CountOptions, defer: bool = False):
         self.cfg, self.opt = cfg, opt
-        self.shape = ShapeModel.from_config(cfg, opt.dynamics, opt.height_m)
+        self.shape = ShapeModel.from_config(cfg, opt.dynamics, host_float(cfg.width.height))
         self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
-        self.coast_s = float(cfg.thresholds.predict_timeout) if opt.coast_s is None else \
-            float(opt.coast_s)
+        self.coast_s = float(cfg.thresholds.predict_timeout)
         self.peds: list[Pedestrian] = []
         self.finished: list[Pedestrian] = []
         self.bg = None
@@ -128,7 +126,7 @@ class PedestrianLevel:
         self.stitched = 0  # tracks joined onto an earlier one at the end (count.stitch_level)
         self.detections: list[BlobRow] = []
         self.image_shape: tuple[int, int] | None = None
-        self._dv_frames = dv_frames(opt.dv_window_s, float(cfg.camera.fps))
+        self._dv_frames = dv_frames(opt.life.dv_window_s, float(cfg.camera.fps))
         self.defer, self._pending = defer, PendingStep(FILTER_OUT, np.float64)
 
     # ------------------------------------------------------------------------------------------
@@ -140,8 +138,9 @@ class PedestrianLevel:
         self.n_frames += 1
         opt = self.opt
         if gray is not None and self.bg is None:
-            self.bg = BackgroundModel(gray, alpha=opt.bg_alpha, threshold=opt.bg_threshold,
-                                      open_px=opt.open_px, close_px=opt.close_px)
+            b = opt.blobs
+            self.bg = BackgroundModel(gray, alpha=b.bg_alpha, threshold=b.bg_threshold,
+                                      open_px=b.open_px, close_px=b.close_px)
             self.prev, self.last_t, self.image_shape = gray, t, gray.shape
             return
         if self.last_t is None:
@@ -153,8 +152,8 @@ class PedestrianLevel:
         else:
             mask = self.bg.apply(gray)
             D, self.prev = frame_difference(self.prev, gray), gray
-            blobs, labels = find_blobs(mask, min_area=opt.min_blob_area)
-            if is_crowd(blobs, mask.shape, fraction=opt.crowd_fraction):
+            blobs, labels = find_blobs(mask, min_area=opt.blobs.min_area)
+            if is_crowd(blobs, mask.shape, fraction=opt.blobs.crowd_fraction):
                 self.crowd_frames.append(index)
                 blobs, labels = [], None
             else:
@@ -247,9 +246,10 @@ class PedestrianLevel:
             if k > 1:
                 boxes = [blobs[j].box for j in mine if users[j] > 1]
                 width = max(b[2] for b in boxes) - min(b[0] for b in boxes)
-                if width < opt.merge_widths * k * w0:
+                if width < opt.placement.merge_widths * k * w0:
                     continue  # walking past each other: keep the prediction
-            radius = (opt.shared_search_widths if k > 1 else opt.search_widths) * w0
+            radius = w0 * (opt.placement.shared_search_widths if k > 1
+                           else opt.placement.search_widths)
             lab = np.asarray([blobs[j].label for j in mine])
             # a new pedestrian alone on its blobs stands on their bottom, however far its first
             # prediction is; a confirmed one looks within `band` H of its prediction (so it does
@@ -260,7 +260,7 @@ class PedestrianLevel:
             bbox = (min(b[0] for b in bx), min(b[1] for b in bx), max(b[2] for b in bx),
                     max(b[3] for b in bx))
             pl = place_patch(labels, lab, claimed, self.shape, *p.next_uv, radius_px=radius,
-                             v_max=v_max, min_cover=opt.min_cover, bbox=bbox)
+                             v_max=v_max, min_cover=opt.placement.min_cover, bbox=bbox)
             if pl is None:
                 continue
             p.z = (pl.u, pl.v)  # the object's width: its blob's run, a patch width around
@@ -279,7 +279,7 @@ class PedestrianLevel:
         cover = []
         for p in self.peds:
             b = self._box(p.z if _finite(p.z) else p.next_uv)
-            half = 0.5 * opt.walker_widths * (b[2] - b[0])
+            half = 0.5 * opt.new.walker_widths * (b[2] - b[0])
             cover.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3]))
         free_slots = sorted(set(range(self.filter.slots)) - {p.slot for p in self.peds})
         new: list[Pedestrian] = []
@@ -304,13 +304,13 @@ class PedestrianLevel:
                 w, h = (float(q) for q in self.shape.size(x0 + 0.5 * (c0 + c1 - 1), vb))
                 if not (math.isfinite(w) and w > 0):
                     continue
-                n = max(1, int(round((c1 - c0) / (opt.walker_widths * w))))
+                n = max(1, int(round((c1 - c0) / (opt.new.walker_widths * w))))
                 span = rows[-1] - rows[0] + 1
-                lifted = vb < y1 - 1 - opt.new_max_lift * hb  # above the blob's bottom: an arm,
+                lifted = vb < y1 - 1 - opt.new.max_lift * hb  # above the blob's bottom: an arm,
                 # or a farther walker merged with a nearer object (it stands taller than an arm)
-                if ((c1 - c0) < opt.new_min_widths * w or sub.sum() < opt.new_min_fill * w * h * n
-                        or span < opt.new_min_height * h
-                        or (lifted and span < opt.new_lifted_height * min(h, vb + 1.0))):
+                if ((c1 - c0) < opt.new.min_widths * w or sub.sum() < opt.new.min_fill * w * h * n
+                        or span < opt.new.min_height * h
+                        or (lifted and span < opt.new.lifted_height * min(h, vb + 1.0))):
                     continue
                 for k in range(n):
                     a0, a1 = c0 + (c1 - c0) * k // n, c0 + (c1 - c0) * (k + 1) // n
@@ -329,7 +329,7 @@ class PedestrianLevel:
     def _in_range(self, uv) -> bool:
         """The foot point's ground point lies in the config's detection range (range_min to
         range_max m ahead): where `rhythmjax track` detects, and where a new pedestrian starts."""
-        if not self.opt.new_in_range:
+        if not self.opt.new.in_range:
             return True
         _, y, ok = ground_point(self.shape.camera, *uv)
         thr = self.cfg.thresholds
@@ -364,12 +364,12 @@ class PedestrianLevel:
         p.ground.append(GroundRow(gx, gy, vx, vy, *out.image_velocity[s]))
         p.blobs = meeting(self._box(p.est_uv), boxes, 0.1)
         if p.track_id == 0:
-            if p.hits >= self.opt.confirm_hits:
+            if p.hits >= self.opt.life.confirm_hits:
                 p.track_id, self.next_id = self.next_id, self.next_id + 1
-            elif p.misses >= self.opt.tentative_misses:
+            elif p.misses >= self.opt.life.tentative_misses:
                 self.peds.remove(p)
                 return
-        elif self.opt.online_verdicts:
+        elif self.opt.verdicts.online:
             self._match(p)
         H, Wi = self.image_shape
         u, v = p.est_uv
@@ -382,10 +382,10 @@ class PedestrianLevel:
 
     def _velocity_jump(self, p: Pedestrian) -> int:
         """"3d": the rows to drop when its EKF ground velocity changed by more than
-        `max_dv_mps` within `dv_window_s` s (`track.toolkit.velocity_jump`), else 0."""
+        `life.max_dv_mps` within `life.dv_window_s` s (`track.toolkit.velocity_jump`), else 0."""
         if self.opt.dynamics != "3d":
             return 0
-        return velocity_jump(p.ground, self._dv_frames, self.opt.max_dv_mps)
+        return velocity_jump(p.ground, self._dv_frames, self.opt.life.max_dv_mps)
 
     def _match(self, p: Pedestrian) -> None:
         """Online verdict (drawn on the overlay): `track.toolkit.match_window` on its windows
@@ -396,13 +396,13 @@ class PedestrianLevel:
         for i, a in enumerate(self.peds):
             for b in self.peds[i + 1:]:
                 near = math.hypot(a.est_uv[0] - b.est_uv[0], a.est_uv[1] - b.est_uv[1]) \
-                    < self.opt.duplicate_widths * max(1.0, a.size[0])
+                    < self.opt.life.duplicate_widths * max(1.0, a.size[0])
                 same = math.hypot(a.step_uv[0] - b.step_uv[0], a.step_uv[1] - b.step_uv[1]) \
                     < 0.15 * max(1.0, a.size[0])
                 young = b if (b.hits, -b.born) < (a.hits, -a.born) else a
                 young.close = young.close + 1 if near and same else 0
         for p in list(self.peds):
-            if p.close >= self.opt.duplicate_frames:
+            if p.close >= self.opt.life.duplicate_frames:
                 self._end(p)
 
     def _end(self, p: Pedestrian) -> None:

@@ -126,12 +126,12 @@ def stitch_level(level: PedestrianLevel, peds: list[Pedestrian]) -> list[Pedestr
     """Join the chains `stitch_pieces` finds among the ended tracks (`peds`, in id order) into
     one track each (the first piece's id); the rest unchanged."""
     opt = level.opt
-    if not opt.stitch or len(peds) < 2:
+    if not opt.stitch.enabled or len(peds) < 2:
         return peds
-    pieces = [piece_of(p, level.shape, opt.dynamics, opt.stitch_fit_s) for p in peds]
-    succ = stitch_pieces(pieces, max_gap_s=opt.stitch_max_gap_s, gate_w=opt.stitch_gate_w,
-                         gate_h=opt.stitch_gate_h, gate_per_s=opt.stitch_gate_per_s,
-                         max_dv_w=opt.stitch_max_dv_w, camera=level.shape.camera)
+    pieces = [piece_of(p, level.shape, opt.dynamics, opt.stitch.fit_s) for p in peds]
+    succ = stitch_pieces(pieces, max_gap_s=opt.stitch.max_gap_s, gate_w=opt.stitch.gate_w,
+                         gate_h=opt.stitch.gate_h, gate_per_s=opt.stitch.gate_per_s,
+                         max_dv_w=opt.stitch.max_dv_w, camera=level.shape.camera)
     has_pred = {b for b in succ if b >= 0}
     out = []
     for a, p in enumerate(peds):

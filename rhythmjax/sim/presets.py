@@ -3,7 +3,7 @@ scene options the demo and `benchmarks/eval_synthetic.py` use."""
 
 from __future__ import annotations
 
-from ..track.options import TrackerOptions
+from ..track.options import TrackerOptions, with_changes
 
 
 __all__ = ["SCENE_OPTIONS", "SYNTHETIC_CONFIG", "SYNTHETIC_OPTIONS", "synthetic_options"]
@@ -17,10 +17,11 @@ __all__ = ["SCENE_OPTIONS", "SYNTHETIC_CONFIG", "SYNTHETIC_OPTIONS", "synthetic_
 SYNTHETIC_CONFIG = {"noise": {"r_std_px": [4.0, 4.0]}, "width": {"std_m": 0.2}}
 # The tracker options for the synthetic scenes: the renderer's legs are plain polygons whose
 # inside does not change, so when the feet stand still the motion's bottom is a knee or the
-# torso; dropping such foot points (tracker.TrackerOptions.high_foot_widths, chosen on training
-# seeds 5555 and 6666) halves the stride error there. Off by default: on PETS09 (7 fps, textured
-# people seen from 7 m up) it cost coverage (71 -> 66 % of person-frames).
-SYNTHETIC_OPTIONS = {"high_foot_widths": 0.25}
+# torso; dropping such foot points (track.options.BodyOptions.high_foot_widths, chosen on
+# training seeds 5555 and 6666) halves the stride error there. Off by default: on PETS09 (7 fps,
+# textured people seen from 7 m up) it cost coverage (71 -> 66 % of person-frames). The changes
+# to the default `TrackerOptions`, by group (`track.options.with_changes`).
+SYNTHETIC_OPTIONS = {"body": {"high_foot_widths": 0.25}}
 
 
 # The synthetic scenes of the demo and of benchmarks/eval_synthetic.py (synth.random_spec): each
@@ -32,4 +33,4 @@ SCENE_OPTIONS = {"min_life": 110, "max_life": 150, "bicycle_speed": (3.0, 3.2),
 
 def synthetic_options() -> TrackerOptions:
     """The `TrackerOptions` of the synthetic scenes (`SYNTHETIC_OPTIONS`)."""
-    return TrackerOptions(**SYNTHETIC_OPTIONS)
+    return with_changes(TrackerOptions(), SYNTHETIC_OPTIONS)

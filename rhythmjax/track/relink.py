@@ -1,6 +1,6 @@
 """Re-acquisition for the online tracker: a track that timed out in PREDICT (its object hidden
 behind another, or its detections refused for longer than the Fig. 3 time-out) is kept for
-`relink_s` seconds; a new object that appears where that track's last observed ground motion
+`relink.within_s` seconds; a new object that appears where that track's last observed ground motion
 puts it continues the old track (same id, its rows, its rhythm-window position) instead of
 starting a new one. The frames in between become rows with no measurement and no rhythm sample
 (NaN), which the window rules of `track.toolkit.match_window` treat as missing (at most a

@@ -11,7 +11,8 @@ signal I(k) in window B at the foot point; each completed window of N frames (on
 `thresholds.hop_samples` frames) is matched with `rhythm.classify_window` until one says
 Pedestrian (then matching stops, tracking goes on), the same windows `rhythm.classify_track`
 uses on stored tracks, so `rhythmjax classify` re-judges the written tracks alike. A track that
-times out is kept for `relink_s` s, and a new object where it would be continues it (relink.py).
+times out is kept for `relink.within_s` s, and a new object where it would be continues it
+(relink.py).
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from . import relink
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
 from .rows import NAN_VELOCITY, Layout, TrackRow, Velocity
-from .toolkit import PendingStep, SlotSteps, dv_frames, match_window, velocity_jump
+from .toolkit import PendingStep, SlotSteps, match_window
 
 
 class FrameIn(NamedTuple):
@@ -83,7 +84,7 @@ class _Object:
 
 
 class _Lost(NamedTuple):
-    """A track that timed out in PREDICT, kept for `relink_s` s (`_relink`)."""
+    """A track that timed out in PREDICT, kept for `relink.within_s` s (`_relink`)."""
 
     obj: _Object
     anchor: relink.Anchor  # its last observed ground state
@@ -129,11 +130,10 @@ class OnlineTracker:
         thr = cfg.thresholds  # host copies: a float() of a device scalar costs ~0.1 ms a frame
         self._range = (float(thr.range_min), float(thr.range_max))
         self._timeout = float(thr.predict_timeout)
-        self._height_per_W = 1.7 / float(cfg.width.mean)
+        self._height_per_W = cfg.width.height_per_width()  # walker height / W (1.7 / 0.5 m)
         self._finished: list[_Object] = []
         self._lost: list[_Lost] = []  # timed-out tracks a new object may continue
         self._pending = PendingStep(STEP_OUT)  # the last frame's step, not yet read
-        self._dv_frames = dv_frames(self.opt.dv_window_s, float(cfg.camera.fps))
         self.glitch_frames: list[int] = []
         self.relinked = 0  # tracks continued by `_relink`
         self._camera = camera_tuple(cfg.camera)
@@ -160,13 +160,13 @@ class OnlineTracker:
         glitch = frame is None
         if frame is not None:
             M, D, changed = detect.motion_image_changed(self._prev, frame,
-                                                        diff_threshold=opt.diff_threshold)
+                                                        diff_threshold=opt.motion.diff_threshold)
             self._prev = frame
             if changed == 0 and detect.is_duplicate(D):
                 self.duplicate_frames.append(index)
                 glitch = True
-            elif detect.is_global_change(D, opt.diff_threshold, opt.global_change_fraction,
-                                         changed=changed):
+            elif detect.is_global_change(D, opt.motion.diff_threshold,
+                                         opt.motion.global_change_fraction, changed=changed):
                 self.glitch_frames.append(index)
                 glitch = True
         self._flush()  # the previous frame's step ran meanwhile (XLA dispatch is asynchronous)
@@ -177,22 +177,23 @@ class OnlineTracker:
             present[s] = True
             uv = self._next_uv[s]
             box_w, box_h, Wp = self._window_size(uv, self._next_W[s])
-            centre = (uv[0], uv[1] - opt.window_raise * box_h / opt.window_heights)
+            centre = (uv[0], uv[1] - opt.window.raise_heights * box_h / opt.window.heights)
             if math.isfinite(Wp):
-                near.append((uv[0], uv[1], opt.near_widths * Wp))
+                near.append((uv[0], uv[1], opt.new.near_widths * Wp))
             if not np.all(np.isfinite(uv)) or not math.isfinite(Wp):
                 continue
-            core_h = opt.core_heights * box_h / opt.window_heights
-            cores[s] = _box((uv[0], uv[1] - 0.45 * core_h), opt.core_widths * Wp, core_h)
+            core_h = opt.body.core_heights * box_h / opt.window.heights
+            cores[s] = _box((uv[0], uv[1] - 0.45 * core_h), opt.body.core_widths * Wp, core_h)
             boxes.append(cores[s])
             if glitch:
                 continue
-            det = detect.detect_in_window(M, centre, (box_w, box_h), fraction=opt.fraction,
-                                          core=cores[s], body_px=opt.body_widths * Wp
-                                          if opt.body_widths > 0 else None)
+            det = detect.detect_in_window(M, centre, (box_w, box_h),
+                                          fraction=opt.body.slice_fraction, core=cores[s],
+                                          body_px=opt.body.parts_widths * Wp
+                                          if opt.body.parts_widths > 0 else None)
             if det is not None:
                 dets[s] = det
-        shared = detect.shared_detections(dets, opt.shared_overlap)
+        shared = detect.shared_detections(dets, opt.body.shared_overlap)
         shared -= self._nearest_claims(dets, shared)
         held = set()  # slots whose object was seen, its foot point unusable: no time-out
         for s, det in dets.items():
@@ -201,11 +202,13 @@ class OnlineTracker:
             elif s not in shared:
                 z[s], width[s] = (det.u, det.v), det.width
             boxes.append(det.box)
-        if not glitch and detect.motion_outside(M, boxes, opt.outside_margin_px) >= opt.min_area:
+        outside = 0 if glitch else detect.motion_outside(M, boxes, opt.new.outside_margin_px)
+        if not glitch and outside >= opt.new.min_area:
             free = [s for s, o in enumerate(self._slots) if o is None]
-            found = detect.find_objects(M, min_area=opt.min_area, exclude_boxes=boxes,
+            found = detect.find_objects(M, min_area=opt.new.min_area, exclude_boxes=boxes,
                                         max_objects=len(free) + len(near),
-                                        fraction=opt.fraction, downscale=opt.downscale)
+                                        fraction=opt.body.slice_fraction,
+                                        downscale=opt.new.downscale)
             found = [d for d in found
                      if not any(math.hypot(d.u - nu, d.v - nv) < r for nu, nv, r in near)]
             for det in found[:len(free)]:
@@ -234,15 +237,15 @@ class OnlineTracker:
         self._merge(out.est_uv, out.W, out.mean)
 
     def _foot_too_high(self, s: int, det) -> bool:
-        """A settled track's detection whose foot point lies more than `high_foot_widths` W
+        """A settled track's detection whose foot point lies more than `body.high_foot_widths` W
         above the predicted one: the feet did not move (the motion's bottom is a knee or the
         torso), so it is no foot point; the slot predicts instead."""
-        obj, r = self._slots[s], self.opt.high_foot_widths
-        if r <= 0 or obj is None or len(obj.rows) < self.opt.merge_young:
+        obj, r = self._slots[s], self.opt.body.high_foot_widths
+        if r <= 0 or obj is None or len(obj.rows) < self.opt.settled_frames:
             return False
         high = bool(det.v < self._next_uv[s][1] - r * float(self._next_W[s]))
         obj.high_run = obj.high_run + 1 if high else 0
-        return high and obj.high_run <= self.opt.high_foot_frames
+        return high and obj.high_run <= self.opt.body.high_foot_frames
 
     def _nearest_claims(self, dets: dict, shared: set) -> set:
         """Of the slots sharing a blob, those whose predicted foot point is at most half as far
@@ -268,20 +271,20 @@ class OnlineTracker:
         close = set()
         for i, a in enumerate(live):
             for b in live[i + 1:]:
-                r = self.opt.merge_widths * float(W[a])
+                r = self.opt.merge.widths * float(W[a])
                 if math.isfinite(r) and math.hypot(*(est_uv[a] - est_uv[b])) < r:
                     oa, ob = self._slots[a], self._slots[b]
                     young = b if len(ob.rows) < len(oa.rows) else a
                     dv = math.hypot(mean[a][1] - mean[b][1], mean[a][3] - mean[b][3])
-                    if (dv < self.opt.merge_speed_mps
-                            or len(self._slots[young].rows) < self.opt.merge_young):
+                    if (dv < self.opt.merge.speed_mps
+                            or len(self._slots[young].rows) < self.opt.settled_frames):
                         close.add(young)
         for s in live:
             obj = self._slots[s]
             if obj is None:
                 continue
             obj.close_frames = obj.close_frames + 1 if s in close else 0
-            if obj.close_frames >= self.opt.merge_frames:
+            if obj.close_frames >= self.opt.merge.frames:
                 if len(obj.rows) < self.cfg.thresholds.n and obj.result is None:
                     self._slots[s] = None
                 else:
@@ -294,7 +297,7 @@ class OnlineTracker:
         if not np.all(np.isfinite(uv)) or not math.isfinite(Wp) or Wp <= 0:
             return 0.0, 0.0, math.nan
         height_px = Wp * self._height_per_W
-        return self.opt.window_widths * Wp, self.opt.window_heights * height_px, Wp
+        return self.opt.window.widths * Wp, self.opt.window.heights * height_px, Wp
 
     def _after_step(self, s, obj, index, t, dt, z, width, valid, started, mean, est_uv, W, D,
                     no_sample, held=False):
@@ -311,19 +314,12 @@ class OnlineTracker:
             obj.state = TrackState.PREDICT
             obj.predict_time += 0.0 if held else dt
         measured = bool(np.all(np.isfinite(z)))
-        fu, fv = (z if measured and not self.opt.sample_estimate else est_uv)
+        fu, fv = (z if measured and not self.opt.body.sample_estimate else est_uv)
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         intensity = math.nan if no_sample or D is None else detect.window_b_intensity(D, fu, fv, W)
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
                                  float(mean[0]), float(mean[2]), int(obj.state)))
         obj.vel.append(Velocity(float(mean[1]), float(mean[3])))
-        jump = 0 if self.opt.max_dv_mps <= 0 else \
-            velocity_jump(obj.vel, self._dv_frames, self.opt.max_dv_mps)
-        if jump:  # lost its object: the implausible frames go, the track ends before them
-            del obj.rows[-jump:], obj.vel[-jump:]
-            obj.win_start = min(obj.win_start, len(obj.rows))
-            self._end(s)
-            return
         match_window(self.cfg, obj)
         out_of_range = not (self._range[0] <= mean[2] <= self._range[1])
         if out_of_range or obj.predict_time > self._timeout:
@@ -349,7 +345,7 @@ class OnlineTracker:
 
     def _end(self, s: int, lost: bool = False) -> None:
         obj = self._slots[s]
-        if lost and self.opt.relink_s > 0 and len(obj.rows) >= self.opt.merge_young:
+        if lost and self.opt.relink.within_s > 0 and len(obj.rows) >= self.opt.settled_frames:
             anchor = relink.last_observed(obj.rows, obj.vel)
             if anchor is not None:
                 self._lost.append(_Lost(obj, anchor, (obj.win_start, obj.result, obj.decided,
@@ -362,12 +358,12 @@ class OnlineTracker:
         """A new object (its first frame: foot point z, W px, ground estimate `mean`) that
         continues a recently lost track takes over its id, rows and rhythm windows
         (`relink.py`); False when none fits."""
-        self._lost = [e for e in self._lost if t - e.anchor.t <= self.opt.relink_s]
+        self._lost = [e for e in self._lost if t - e.anchor.t <= self.opt.relink.within_s]
         if not self._lost or not np.all(np.isfinite(z)):
             return False
         i = relink.best_match([e.anchor for e in self._lost], self._camera, t, z, W,
-                              gate_w=self.opt.relink_gate_w, gate_h=self.opt.relink_gate_h,
-                              gate_per_s=self.opt.relink_gate_per_s,
+                              gate_w=self.opt.relink.gate_w, gate_h=self.opt.relink.gate_h,
+                              gate_per_s=self.opt.relink.gate_per_s,
                               height_per_W=self._height_per_W)
         if i < 0:
             return False

@@ -1,0 +1,164 @@
+"""The grouped, frozen options of the tracker and of counting: every default of the flat classes
+they replace kept at its new place (the table below is the old classes' source, by hand), the
+removed knobs gone, `with_changes`, and the synthetic preset."""
+
+import dataclasses
+
+import pytest
+
+from rhythmjax.count.options import CountOptions, StitchOptions, VerdictOptions
+from rhythmjax.sim.presets import SYNTHETIC_OPTIONS, synthetic_options
+from rhythmjax.track.options import BodyOptions, TrackerOptions, with_changes
+
+
+# (old flat name, new dotted place, the old default)
+TRACKER_DEFAULTS = [
+    ("diff_threshold", "motion.diff_threshold", 15.0),
+    ("global_change_fraction", "motion.global_change_fraction", 0.5),
+    ("window_widths", "window.widths", 2.5),
+    ("window_heights", "window.heights", 1.45),
+    ("window_raise", "window.raise_heights", 0.42),
+    ("core_widths", "body.core_widths", 1.2),
+    ("core_heights", "body.core_heights", 1.1),
+    ("body_widths", "body.parts_widths", 1.8),
+    ("fraction", "body.slice_fraction", 0.1),
+    ("shared_overlap", "body.shared_overlap", 0.5),
+    ("sample_estimate", "body.sample_estimate", True),
+    ("high_foot_widths", "body.high_foot_widths", 0.0),
+    ("high_foot_frames", "body.high_foot_frames", 3),
+    ("min_area", "new.min_area", 40),
+    ("outside_margin_px", "new.outside_margin_px", 8),
+    ("near_widths", "new.near_widths", 1.0),
+    ("downscale", "new.downscale", 4),
+    ("merge_widths", "merge.widths", 0.5),
+    ("merge_frames", "merge.frames", 2),
+    ("merge_speed_mps", "merge.speed_mps", 0.6),
+    ("merge_young", "settled_frames", 10),
+    ("relink_s", "relink.within_s", 3.0),
+    ("relink_gate_w", "relink.gate_w", 1.0),
+    ("relink_gate_h", "relink.gate_h", 0.25),
+    ("relink_gate_per_s", "relink.gate_per_s", 0.5),
+    ("max_objects", "max_objects", 8),
+]
+TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]
+
+COUNT_DEFAULTS = [
+    ("dynamics", "dynamics", "3d"),
+    ("max_pedestrians", "max_pedestrians", 32),
+    ("bg_alpha", "blobs.bg_alpha", 0.05),
+    ("bg_threshold", "blobs.bg_threshold", 20.0),
+    ("open_px", "blobs.open_px", 1),
+    ("close_px", "blobs.close_px", 2),
+    ("min_blob_area", "blobs.min_area", 30),
+    ("crowd_fraction", "blobs.crowd_fraction", 0.5),
+    ("search_widths", "placement.search_widths", 0.75),
+    ("shared_search_widths", "placement.shared_search_widths", 0.3),
+    ("merge_widths", "placement.merge_widths", 0.75),
+    ("min_cover", "placement.min_cover", 0.08),
+    ("walker_widths", "new.walker_widths", 1.8),
+    ("new_min_widths", "new.min_widths", 0.6),
+    ("new_min_fill", "new.min_fill", 0.15),
+    ("new_min_height", "new.min_height", 0.5),
+    ("new_max_lift", "new.max_lift", 0.25),
+    ("new_lifted_height", "new.lifted_height", 0.55),
+    ("new_in_range", "new.in_range", True),
+    ("confirm_hits", "life.confirm_hits", 3),
+    ("tentative_misses", "life.tentative_misses", 2),
+    ("duplicate_widths", "life.duplicate_widths", 0.6),
+    ("duplicate_frames", "life.duplicate_frames", 3),
+    ("max_dv_mps", "life.max_dv_mps", 1.5),
+    ("dv_window_s", "life.dv_window_s", 0.5),
+    ("stitch", "stitch.enabled", True),
+    ("stitch_max_gap_s", "stitch.max_gap_s", 5.0),
+    ("stitch_gate_w", "stitch.gate_w", 0.9),
+    ("stitch_gate_h", "stitch.gate_h", 0.45),
+    ("stitch_gate_per_s", "stitch.gate_per_s", 0.5),
+    ("stitch_max_dv_w", "stitch.max_dv_w", 2.0),
+    ("stitch_fit_s", "stitch.fit_s", 1.0),
+    ("min_track_frames", "verdicts.min_track_frames", 10),
+    ("online_verdicts", "verdicts.online", True),
+    ("classify", "verdicts.classify", True),
+]
+COUNT_REMOVED = ["height_m", "coast_s"]  # the config's width.height_m, thresholds.predict_timeout_s
+
+
+def _get(options, dotted: str):
+    for name in dotted.split("."):
+        options = getattr(options, name)
+    return options
+
+
+def _leaves(options, prefix=""):
+    """Every dotted leaf field of a grouped options record."""
+    out = []
+    for f in dataclasses.fields(options):
+        value = getattr(options, f.name)
+        if dataclasses.is_dataclass(value):
+            out += _leaves(value, f"{prefix}{f.name}.")
+        else:
+            out.append(prefix + f.name)
+    return out
+
+
+@pytest.mark.parametrize("options, table, removed", [
+    (TrackerOptions(), TRACKER_DEFAULTS, TRACKER_REMOVED),
+    (CountOptions(), COUNT_DEFAULTS, COUNT_REMOVED),
+])
+def test_every_old_default_kept_at_its_new_place(options, table, removed):
+    assert sorted(_leaves(options)) == sorted(new for _, new, _ in table)
+    for old, new, value in table:
+        got = _get(options, new)
+        assert got == value and type(got) is type(value), (old, new, got)
+    for name in removed:
+        assert name not in _leaves(options) and not hasattr(options, name)
+
+
+@pytest.mark.parametrize("options", [TrackerOptions(), CountOptions()])
+def test_options_and_their_groups_are_frozen(options):
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        options.max_objects = 3  # type: ignore[misc]
+    group = next(getattr(options, f.name) for f in dataclasses.fields(options)
+                 if dataclasses.is_dataclass(getattr(options, f.name)))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        setattr(group, dataclasses.fields(group)[0].name, 0)
+    assert hash(options) == hash(type(options)())  # usable as a cache key; equal by value
+
+
+def test_with_changes_nested_dotted_and_top_level():
+    base = TrackerOptions()
+    a = with_changes(base, {"max_objects": 24, "body": {"high_foot_widths": 0.25}})
+    b = with_changes(base, {"body.high_foot_widths": 0.25, "max_objects": 24})
+    c = dataclasses.replace(base, max_objects=24,
+                            body=dataclasses.replace(base.body, high_foot_widths=0.25))
+    assert a == b == c and a.body.high_foot_frames == 3 and base.body.high_foot_widths == 0.0
+    assert a.relink is base.relink  # untouched groups are shared, not copied
+    whole = with_changes(base, {"body": BodyOptions(sample_estimate=False)})
+    assert whole.body == BodyOptions(sample_estimate=False)
+    cnt = with_changes(CountOptions(), {"stitch.enabled": False, "verdicts.classify": False})
+    assert cnt == CountOptions(stitch=StitchOptions(enabled=False),
+                               verdicts=VerdictOptions(classify=False))
+
+
+@pytest.mark.parametrize("changes, match", [
+    ({"high_foot_widths": 0.25}, "TrackerOptions has no field 'high_foot_widths'"),
+    ({"body.high_foot": 0.25}, "BodyOptions has no field 'high_foot'"),
+    ({"max_dv_mps": 1.8}, "no field 'max_dv_mps'"),
+])
+def test_with_changes_names_an_unknown_field(changes, match):
+    with pytest.raises(KeyError, match=match):
+        with_changes(TrackerOptions(), changes)
+
+
+def test_count_dynamics_checked():
+    with pytest.raises(ValueError, match="dynamics must be one of"):
+        CountOptions(dynamics="4d")
+    with pytest.raises(ValueError, match="dynamics must be one of"):
+        with_changes(CountOptions(), {"dynamics": "4d"})
+
+
+def test_synthetic_preset_changes_only_the_high_foot_rule():
+    opt = synthetic_options()
+    assert SYNTHETIC_OPTIONS == {"body": {"high_foot_widths": 0.25}}
+    assert opt.body.high_foot_widths == 0.25
+    assert dataclasses.replace(opt, body=dataclasses.replace(
+        opt.body, high_foot_widths=0.0)) == TrackerOptions()
