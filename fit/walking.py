@@ -311,7 +311,8 @@ def fit_walking(cfg: Config, batch, *, test_fraction: float = 0.3, seed: int = 0
     b_0 = balanced_accuracy(v0, positive, labelled & test)
     speed = np.asarray(f.speed)[:, 0]
     new_cfg = dataclasses.replace(cfg, walking=walking, thresholds=thr,
-                                  width=WidthModel(gw["mean"], gw["std"]))
+                                  width=WidthModel(gw["mean"], gw["std"],
+                                                  cfg.width.height))
     notes = _edge_notes(axes, ba_tr, (i, j, k))
     reasons = [] if settled else [f"walking model still moving after {max_iter} iterations"]
     for name, g in (("pace", gp), ("stride", gs), ("width", gw)):

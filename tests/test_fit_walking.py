@@ -30,7 +30,7 @@ from fit.walking import (
 )
 from rhythmjax.io import read_config, write_config, write_table
 from rhythmjax.model import mem
-from rhythmjax.model.params import Config
+from rhythmjax.model.params import config_from_dict
 from rhythmjax.model.rhythm import classify_batch, match
 from rhythmjax.model.status import Verdict
 
@@ -40,7 +40,7 @@ COLS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "label", "x
 
 @pytest.fixture(scope="module")
 def pop(tmp_path_factory):
-    cfg = Config()
+    cfg = config_from_dict({"width": {"height_m": 1.8}})  # not fitted: must pass through
     cols, truth = make_labelled(n_walkers=200, n_bicycles=20, n_dogs=20, n_cars=10, seed=11,
                                 min_frames=72, max_frames=72)
     d = tmp_path_factory.mktemp("walking")
@@ -69,6 +69,7 @@ def test_gaussians_match_numpy(pop):
     w = pop["fit"].config.walking
     assert float(w.pace_mean) == pytest.approx(r.estimates["pace"]["mean"], rel=1e-6)
     assert float(w.stride_std) == pytest.approx(r.estimates["stride"]["std"], rel=1e-6)
+    assert float(pop["fit"].config.width.height) == pytest.approx(1.8)  # kept, not reset
 
 
 def test_width_against_inverse_perspective_by_hand(pop):

@@ -73,13 +73,13 @@ def test_2d_shape_is_the_size_at_the_middle_of_the_scene():
     u, v = middle_foot_point(CFG)
     _, y = _ground_ref(CFG.camera, u, v)
     assert abs(y - 9.0) < 1e-5  # (range_min + range_max) / 2
-    want = patch_size_3d(CFG.camera, u, v, 0.5)[:2]
+    want = patch_size_3d(CFG.camera, u, v, 0.5, 1.7)[:2]
     np.testing.assert_allclose(shape2.size(10.0, 180.0), want, rtol=1e-12)
     np.testing.assert_allclose(shape2.size(200.0, 50.0), want, rtol=1e-12)
 
 
 def test_above_the_horizon_has_no_patch():
-    w, h, ok = patch_size_3d(CFG.camera, 100.0, -300.0, 0.5)
+    w, h, ok = patch_size_3d(CFG.camera, 100.0, -300.0, 0.5, 1.7)
     assert not ok and math.isnan(w) and math.isnan(h)
 
 

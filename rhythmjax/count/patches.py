@@ -60,13 +60,12 @@ from ..model.ekf import (
     select,
     step,
 )
-from ..model.params import Camera, Config, Noise
+from ..model.params import Camera, Config, Noise, host_float
 from ..track.rows import Layout
 from ..track.toolkit import SlotSteps
 
 
 DYNAMICS = ("2d", "3d-shape", "3d")
-PEDESTRIAN_HEIGHT_M = 1.7  # average pedestrian height (m); width: cfg.width.mean (0.5 m)
 _SCALARS = (float, int, np.float64)  # ShapeModel.size: types taken as scalars without np.ndim
 
 
@@ -80,9 +79,9 @@ def ground_point(camera: Camera | tuple, u, v):
     return ground_of_pixels(camera, u, v)
 
 
-def patch_size_3d(camera: Camera | tuple, u, v, width_m: float,
-                  height_m: float = PEDESTRIAN_HEIGHT_M):
-    """3-D shape: (w, h) px of an average pedestrian standing at the foot point (u, v) px, and
+def patch_size_3d(camera: Camera | tuple, u, v, width_m: float, height_m: float):
+    """3-D shape: (w, h) px of a pedestrian `width_m` wide and `height_m` tall (m; the config's
+    `width.mean`, `width.height`) standing at the foot point (u, v) px, and
     `ok`; NaN where the foot point has no ground point or the head is behind the camera. w is
     the width at the feet along the rows, h = v - the head's row (`camera.upright_size_with`)."""
     return upright_size(camera, u, v, width_m, height_m)
@@ -105,10 +104,12 @@ class ShapeModel:
     fixed: tuple[float, float] | None = None  # (w, h) px for the 2-D shape
 
     @classmethod
-    def from_config(cls, cfg: Config, dynamics: str, height_m: float = PEDESTRIAN_HEIGHT_M):
+    def from_config(cls, cfg: Config, dynamics: str):
+        """The patch model of `dynamics` for the config's camera and pedestrian size (width
+        `width.mean`, height `width.height`, m)."""
         if dynamics not in DYNAMICS:
             raise ValueError(f"dynamics must be one of {DYNAMICS}, got {dynamics!r}")
-        width_m = float(cfg.width.mean)
+        width_m, height_m = host_float(cfg.width.mean), host_float(cfg.width.height)
         fixed = None
         if dynamics == "2d":
             w, h, _ = patch_size_3d(cfg.camera, *middle_foot_point(cfg), width_m, height_m)

@@ -49,7 +49,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..model.params import Config, host_float
+from ..model.params import Config
 from ..model.status import TrackState
 from ..track.rows import TrackRow
 from ..track.toolkit import PendingStep, dv_frames, match_window, velocity_jump
@@ -109,7 +109,7 @@ class PedestrianLevel:
 
     def __init__(self, cfg: Config, opt: CountOptions, defer: bool = False):
         self.cfg, self.opt = cfg, opt
-        self.shape = ShapeModel.from_config(cfg, opt.dynamics, host_float(cfg.width.height))
+        self.shape = ShapeModel.from_config(cfg, opt.dynamics)
         self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
         self.coast_s = float(cfg.thresholds.predict_timeout)
         self.peds: list[Pedestrian] = []
