@@ -47,6 +47,7 @@ from ..model.camera_np import (
     camera_tuple,
     ground_of_pixels,
     host_terms,
+    image_width_of,
     project_3d,
     upright_size,
 )
@@ -190,8 +191,7 @@ def image_noise(cfg: Config) -> Noise:
     """Image-plane noise for the 2-D dynamics: the ground q and initial speed spread times the
     px per m at the middle of the detection range; R as the config's (px)."""
     _, y, _ = ground_point(cfg.camera, *middle_foot_point(cfg))
-    f, hc, th, a, *_ = camera_tuple(cfg.camera)
-    px_per_m = a * f / (f + float(y) * math.cos(th) + hc * math.sin(th))
+    px_per_m = float(image_width_of(cfg.camera, 1.0, float(y)))  # (3) with roll, px per m
     R = np.asarray(cfg.noise.R(), np.float64)
     r = np.sqrt(np.diag(R))
     return Noise(q_std=tuple(np.asarray(cfg.noise.q_std(), np.float64) * px_per_m), r_std=r,
