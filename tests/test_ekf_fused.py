@@ -115,3 +115,24 @@ def test_same_public_signatures():
         fa, fb = getattr(fa, "__wrapped__", fa), getattr(fb, "__wrapped__", fb)
         assert inspect.signature(fa) == inspect.signature(fb), name
     assert eqx.is_array(ekf.empty_carry().state.mean)
+
+
+def test_predict_equals_readable_and_the_matrix_form():
+    """`ekf_fused.predict` (the online trackers' prediction) against `ekf.predict` and against
+    (5), (8) written with NumPy float64 matrices: F X, F P F^T + Q, Q = diag(0, qx^2, 0, qy^2) dt."""
+    rng = np.random.default_rng(3)
+    noise = Noise(q_std=(0.4, 0.7))
+    for _ in range(5):
+        a = rng.normal(size=(4, 4))
+        state = ekf.Gaussian(jnp.asarray(rng.normal(size=4), jnp.float32),
+                             jnp.asarray(a @ a.T + np.eye(4), jnp.float32))
+        dt = float(rng.uniform(0.03, 0.5))
+        fused = ekf_fused.predict(noise, state, jnp.float32(dt))
+        readable = ekf.predict(noise, state, jnp.float32(dt))
+        F = np.array([[1, dt, 0, 0], [0, 1, 0, 0], [0, 0, 1, dt], [0, 0, 0, 1]], np.float64)
+        Q = np.diag([0.0, 0.4 ** 2, 0.0, 0.7 ** 2]) * dt
+        m, P = np.asarray(state.mean, np.float64), np.asarray(state.cov, np.float64)
+        for got in (fused, readable):
+            np.testing.assert_allclose(np.asarray(got.mean), F @ m, rtol=1e-6, atol=1e-6)
+            np.testing.assert_allclose(np.asarray(got.cov), F @ P @ F.T + Q, rtol=1e-5,
+                                       atol=1e-5)

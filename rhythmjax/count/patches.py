@@ -14,10 +14,10 @@ its foot point (u, v) px (bottom centre). Its size is the image of an average pe
 
 Dynamics, equation (1) with zero-mean Gaussian acceleration noise, one of three variants:
     "2d", "3d-shape": constant velocity in the image, state (u, du/dt, v, dv/dt) (px, px/s),
-        a linear Kalman filter: the core's `ekf.predict` (F, Q of (1)) with a px/s noise and a
+        a linear Kalman filter: the core's `ekf_fused.predict` (F, Q of (1)) with a px/s noise and a
         linear update (H picks u and v; Joseph form);
     "3d" (default): constant velocity on the ground plane, state (x, vx, y, vy) (m, m/s), the
-        core's EKF (`ekf.step`, measurement (3)) with `ekf.FromAnnotations` validity: the
+        core's EKF (`ekf_fused.step`, measurement (3)) with `ekf.FromAnnotations` validity: the
         pedestrians level does its own association, so every measurement it gives is used.
 All slots advance in ONE jitted, vmapped call per frame (`SlotFilter`), compiled once per
 (variant, slot count), through `track.toolkit.SlotSteps` as the online tracker's filters.
@@ -51,16 +51,8 @@ from ..model.camera_np import (
     project_3d,
     upright_size,
 )
-from ..model.ekf import (
-    Carry,
-    FromAnnotations,
-    Gaussian,
-    empty_carry,
-    inverse_2x2,
-    predict,
-    select,
-    step,
-)
+from ..model.ekf import Carry, FromAnnotations, Gaussian, empty_carry, inverse_2x2, select
+from ..model.ekf_fused import predict, step
 from ..model.params import Camera, Config, Noise, host_float
 from ..track.rows import Layout
 from ..track.toolkit import SlotSteps
@@ -200,7 +192,7 @@ def image_noise(cfg: Config) -> Noise:
 
 
 def _linear_step(noise: Noise, carry: Carry, z, dt, present) -> Carry:
-    """Constant-velocity Kalman step in the image: (1)-(2) prediction by `ekf.predict`, linear
+    """Constant-velocity Kalman step in the image: (1)-(2) prediction by `ekf_fused.predict`, linear
     update with H = [[1,0,0,0],[0,0,1,0]] (Joseph form), start on the first measurement."""
     available = present & jnp.all(jnp.isfinite(z))
     zs = jnp.where(available, z, 0.0)

@@ -87,6 +87,11 @@ def _predict_entries(q2, m, p, dt):
     return mean, cov
 
 
+def predict(noise: Noise, state: Gaussian, dt: Float[Array, ""]) -> Gaussian:
+    """`ekf.predict` ((5), (8)), entry by entry."""
+    return _pack(*_predict_entries(jnp.exp(2.0 * noise.log_q), *_unpack(state), dt))
+
+
 class _Cand(NamedTuple):
     """The temporary update, unpacked: see `Update`."""
 

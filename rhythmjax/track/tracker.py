@@ -3,10 +3,11 @@
 Per frame (norfair's readable loop, STYLE R11): the motion image of Sec. 2; for each tracked
 object a detection inside a small window centred on its predicted foot point; connected regions
 elsewhere start new objects (DETECT). Then ONE jitted call advances every object slot with the
-core's `ekf.step` and the paper's gates (10) and (11) (`gates.PaperGates`), so the per-frame cost
-is arithmetic, not tracing. A DETECT becomes OBSERVE when the first measurement lies in the
-detection range, else NONE; OBSERVE/PREDICT follow the gate decision; PREDICT ends (NONE) after
-`predict_timeout_s` or when the estimate leaves the range. Each tracked frame samples the rhythm
+core's EKF step (`ekf_fused.step`: `ekf.step` entry by entry) and the paper's gates (10) and
+(11) (`gates.PaperGates`), so the per-frame cost is arithmetic, not tracing. A DETECT becomes
+OBSERVE when the first measurement lies in the detection range, else NONE; OBSERVE/PREDICT
+follow the gate decision; PREDICT ends (NONE) after `predict_timeout_s` or when the estimate
+leaves the range. Each tracked frame samples the rhythm
 signal I(k) in window B at the foot point; each completed window of N frames (one starts every
 `thresholds.hop_samples` frames) is matched with `rhythm.classify_window` until one says
 Pedestrian (then matching stops, tracking goes on), the same windows `rhythm.classify_track`
@@ -27,7 +28,8 @@ import numpy as np
 
 from ..model.camera import image_width, measure
 from ..model.camera_np import camera_tuple
-from ..model.ekf import Carry, empty_carry, predict, step
+from ..model.ekf import Carry, empty_carry
+from ..model.ekf_fused import predict, step
 from ..model.gates import PaperGates
 from ..model.params import Config
 from ..model.status import VERDICT_LABELS, TrackState
@@ -92,7 +94,7 @@ class _Lost(NamedTuple):
 
 
 def _advance(cfg: Config, carry: Carry, frame_in):
-    """Every slot one frame (`FrameIn` packed): reset new slots, `ekf.step` with the paper's
+    """Every slot one frame (`FrameIn` packed): reset new slots, `ekf_fused.step` with the paper's
     gates, and what the next frame needs (predicted foot point) and this frame's window-B size
     W (px), packed as `StepOut`."""
     fin = FRAME_IN.unpack(frame_in)
