@@ -16,7 +16,7 @@ is replaced by the predicted measurement *before* it is used (double where), so 
 prediction step with finite gradients.
 
 `ekf_fused` is this filter unrolled entry by entry, with the same `step`, `filter_track` and
-`filter_batch` (tested equal): 3-8x faster over batches of tracks on CPU (docs/design_ekf.md),
+`filter_batch` (tested equal): 3-8x faster over batches of tracks on CPU (docs/design.md, The EKF),
 the batch paths use it.
 """
 
@@ -40,7 +40,7 @@ _LOG_2PI = math.log(2.0 * math.pi)
 def _mm(a: Array, b: Array) -> Array:
     """a @ b for the 4x4, 4x2, 2x4 and 2x2 matrices (or a vector b) of the filter, as a sum of
     outer products: under vmap these are elementwise vector loops, 7-9x faster on CPU than
-    batched 4x4 dot products (docs/design_ekf.md)."""
+    batched 4x4 dot products (docs/design.md, The EKF)."""
     if b.ndim == 1:
         return sum(a[:, k] * b[k] for k in range(a.shape[1]))
     return sum(a[:, k, None] * b[None, k, :] for k in range(a.shape[1]))

@@ -9,7 +9,7 @@ Under vmap every entry becomes one contiguous (B,) vector and XLA fuses a whole 
 elementwise loops; with (B, 4, 4) arrays the same step is a chain of small products over minor
 axes of length 4. H of (9) has non-zeros only in the position columns (h depends on x_p and y_p
 alone), and the products below skip the structural zeros of F, H and I - K H. Measured on 2 CPU
-cores, jax 0.10 (docs/design_ekf.md): 3-10x the track-steps per second of `ekf.filter_batch`.
+cores, jax 0.10 (docs/design.md, The EKF): 3-10x the track-steps per second of `ekf.filter_batch`.
 """
 
 from __future__ import annotations
