@@ -291,6 +291,15 @@ def filter_track(
     """Run one (padded) track: the start (the first measurement `step` would start on) is found
     for all frames at once, then `lax.scan` runs the tracked steps; dt[k] = t[k] - t[k-1] (s).
     Same results as scanning `step`, without the start logic inside the sequential loop."""
+    return scan_track(camera, noise, validity, z, width, dt, present, _tracked_step, _output)
+
+
+def scan_track(camera, noise, validity, z, width, dt, present, tracked_step, output,
+               to_state=lambda g: g) -> FilterOutput:
+    """The scan of `filter_track` over any state representation: `tracked_step(camera, noise,
+    validity, state, z, width, dt, available)` -> (prior, cand, valid, tracked) and `output(state,
+    prior, cand, valid, available, started_before, started)` -> `StepOutput` of one step on
+    states `to_state` makes from a `Gaussian` (`ekf_fused` passes its entry-by-entry forms)."""
     z, width, dt = (jnp.asarray(a, jnp.result_type(float)) for a in (z, width, dt))
     present = jnp.asarray(present)
     available = present & jnp.all(jnp.isfinite(z), axis=-1)
@@ -299,20 +308,21 @@ def filter_track(
                                                              available)
     k0 = jnp.argmax(can)
     has_start = can[k0]
-    init, _ = initial_state(camera, noise, z0[k0])
+    init = to_state(initial_state(camera, noise, z0[k0])[0])
 
     def body(state, inp):
         k, zk, wk, dtk, ak = inp
         before = has_start & (k > k0)
-        prior, cand, valid, tracked = _tracked_step(camera, noise, validity, state, zk, wk, dtk,
-                                                    ak)
+        prior, cand, valid, tracked = tracked_step(camera, noise, validity, state, zk, wk, dtk,
+                                                   ak)
         valid = valid & before
         now = has_start & (k == k0)
         new = select(now, init, select(before, tracked, state))
-        return new, _output(new, prior, cand, valid, ak, before, before | now)
+        return new, output(new, prior, cand, valid, ak, before, before | now)
 
     ks = jnp.arange(z.shape[0])
-    _, out = jax.lax.scan(body, empty_carry(z.dtype).state, (ks, z, width, dt, available))
+    first = to_state(empty_carry(z.dtype).state)
+    _, out = jax.lax.scan(body, first, (ks, z, width, dt, available))
     return FilterOutput(out, jnp.sum(out.loglik))
 
 

@@ -31,8 +31,8 @@ from .ekf import (
     StepOutput,
     Update,
     can_start,
-    empty_carry,
     initial_state,
+    scan_track,
     select,
     vmap_in_chunks,
 )
@@ -229,33 +229,11 @@ def filter_track(
     dt: Float[Array, " T"],
     present: Bool[Array, " T"],
 ) -> FilterOutput:
-    """Run one (padded) track: the start (the first measurement `step` would start on) is found
-    for all frames at once, then `lax.scan` runs the tracked steps; dt[k] = t[k] - t[k-1] (s).
-    Same results as scanning `step`, without the start logic inside the sequential loop."""
-    z, width, dt = (jnp.asarray(a, jnp.result_type(float)) for a in (z, width, dt))
-    present = jnp.asarray(present)
-    available = present & jnp.all(jnp.isfinite(z), axis=-1)
-    z0 = jnp.where(available[:, None], z, 0.0)
-    can = jax.vmap(can_start, in_axes=(None, None, 0, 0, 0))(camera, validity, z0, width,
-                                                             available)
-    k0 = jnp.argmax(can)
-    has_start = can[k0]
-    init = _unpack(initial_state(camera, noise, z0[k0])[0])
-    first = _unpack(empty_carry(z.dtype).state)
-
-    def body(state, inp):
-        k, zk, wk, dtk, ak = inp
-        before = has_start & (k > k0)
-        prior, cand, valid, tracked = _tracked_step(camera, noise, validity, *state, zk, wk, dtk,
-                                                    ak)
-        valid = valid & before
-        now = has_start & (k == k0)
-        new = select(now, init, select(before, tracked, state))
-        return new, _output(new, prior, cand, valid, ak, before, before | now)
-
-    ks = jnp.arange(z.shape[0])
-    _, out = jax.lax.scan(body, first, (ks, z, width, dt, available))
-    return FilterOutput(out, jnp.sum(out.loglik))
+    """`ekf.filter_track` (the same scan, `ekf.scan_track`) on this module's entry-by-entry
+    state: the 4 mean and 10 upper-triangle covariance entries."""
+    return scan_track(camera, noise, validity, z, width, dt, present,
+                      lambda c, n, v, state, *rest: _tracked_step(c, n, v, *state, *rest),
+                      _output, _unpack)
 
 
 @eqx.filter_jit
