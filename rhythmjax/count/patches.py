@@ -142,14 +142,25 @@ class ShapeModel:
         several times per pedestrian and frame)."""
         if self.fixed is not None:
             return self.fixed
-        w, h, _ = upright_size_with(SCALAR, self._terms, u, v, self.width_m, self.height_m)
-        return w, h
+        memo = self._memo  # a foot point is sized several times a frame (placement, boxes)
+        size = memo.get((u, v))
+        if size is None:
+            if len(memo) >= _MEMO_SIZE:
+                memo.clear()
+            w, h, _ = upright_size_with(SCALAR, self._terms, u, v, self.width_m, self.height_m)
+            size = memo[u, v] = (w, h)
+        return size
 
     @functools.cached_property
     def _terms(self) -> Terms:
         return host_terms(self.camera)  # the camera's constants, once per model
 
+    @functools.cached_property
+    def _memo(self) -> dict[tuple[float, float], tuple[float, float]]:
+        return {}  # (u, v) px -> (w, h) px of `_size_scalar`, at most _MEMO_SIZE entries
 
+
+_MEMO_SIZE = 4096  # foot points remembered by a ShapeModel (then forgotten at once)
 _AB_ADD = np.array([[0.5], [0.5], [1.5]])  # place_patch: rounding of a0, a1 and b0
 
 
