@@ -33,6 +33,7 @@ from .params import Config
 # than" a 1 s time-out, as the online tracker's float64 clock says.
 TIME_TOLERANCE_S = 1e-5
 
+
 def first_segment_end(cfg: Config, started, valid, y, dt, length) -> np.ndarray:
     """Per track (B,), the last row (inclusive) of the first segment, -1 when it runs to the end.
 
