@@ -147,3 +147,20 @@ def test_bad_files_name_the_file(tmp_path):
         D.pets_tsai(tmp_path / "nowhere")
     with pytest.raises(ValueError, match="unknown ETH"):
         D.eth_sequence("seq_zara", tmp_path)
+
+
+def test_default_data_root_is_beside_the_checkout(monkeypatch):
+    """Without RHYTHMJAX_DATA the loaders look in ../shared/data/real beside the checkout (a
+    module moved one folder deeper once pointed inside the checkout, and every real-data test
+    skipped without a word)."""
+    import importlib
+    from pathlib import Path
+
+    monkeypatch.delenv("RHYTHMJAX_DATA", raising=False)
+    fresh = importlib.reload(D)
+    try:
+        want = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+        assert fresh.DATA_ROOT == want
+    finally:
+        monkeypatch.undo()
+        importlib.reload(D)

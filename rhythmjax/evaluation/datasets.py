@@ -25,7 +25,7 @@ from ..model.params import Camera
 
 
 DATA_ROOT: Path = Path(os.environ.get("RHYTHMJAX_DATA")
-                       or Path(__file__).resolve().parents[2] / "shared" / "data" / "real")
+                       or Path(__file__).resolve().parents[3] / "shared" / "data" / "real")
 PETS_FPS = 7.0  # MOTChallenge frameRate (the container's 10 fps is wrong; SOURCE.md)
 PETS_SCALE = 0.625  # 768x576 -> 480x360
 PETS_SIZE = (480, 360)
