@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from ..model.params import Config, ConfigError, config_from_dict, config_to_dict
+from ..model.config_setup import config_for
+from ..model.params import Config, ConfigError, config_to_dict
 from .tables import (
     BadInput as BadInput,
     PathLike,
@@ -331,9 +332,9 @@ def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def read_config(path: PathLike) -> Config:
-    """Read a config JSON (partial configs take the defaults). Raises `BadInput` naming the file
-    and the line/col (syntax), the token (NaN, Infinity), the duplicate key or the config key."""
+def read_config_dict(path: PathLike) -> dict:
+    """The JSON object of a config file as written (keys not filled in). Raises `BadInput`
+    naming the file and the line/col (syntax), the token (NaN, Infinity) or the duplicate key."""
     p = os.fspath(path)
     if os.path.isdir(p):
         raise BadInput(p, "is a directory, not a config file")
@@ -363,10 +364,25 @@ def read_config(path: PathLike) -> Config:
             loc = {"line": line, "column": m.start() - text.rfind("\n", 0, m.start())}
         raise BadInput(p, f"{what} is not valid JSON (give a number, or omit the key for the "
                        "default)", **loc) from None
+    if not isinstance(d, dict):
+        raise BadInput(p, "config: expected a JSON object at the top level", key="config")
+    return d
+
+
+def read_config(path: PathLike, *, image_size=None, fps=None) -> Config:
+    """Read a config JSON; what it leaves out takes the defaults, or the video's facts
+    (`image_size` (w, h) px, `fps`) where given (`model.config_setup.config_for`). Raises
+    `BadInput` naming the file and the line/col, the token, the duplicate key or the config key."""
+    return config_or_bad_input(read_config_dict(path), os.fspath(path), image_size=image_size,
+                               fps=fps)
+
+
+def config_or_bad_input(d, path, *, image_size=None, fps=None) -> Config:
+    """`config_for(d, ...)`, a `ConfigError` raised as `BadInput` naming `path` and the key."""
     try:
-        return config_from_dict(d)
+        return config_for(d, image_size=image_size, fps=fps)
     except ConfigError as e:
-        raise BadInput(p, str(e), key=e.key) from None
+        raise BadInput(path, str(e), key=e.key) from None
 
 
 def write_config(path: PathLike, cfg: Config) -> None:
@@ -398,6 +414,7 @@ def dumps_json(obj: Any, **kwargs: Any) -> str:
 
 __all__: Sequence[str] = (
     "BadInput", "Table", "Tracks", "TrackBatch", "atomic_path", "atomic_write", "check_writable",
-    "dumps_json", "make_output_dir", "read_config", "read_footprints", "read_table",
+    "config_or_bad_input", "dumps_json", "make_output_dir", "read_config", "read_config_dict",
+    "read_footprints", "read_table",
     "read_tracks", "to_batch", "write_config", "write_table",
 )

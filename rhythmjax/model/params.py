@@ -223,7 +223,8 @@ _WIDTH_KEYS = ("mean_m", "std_m", "height_m")
 _WALKING_KEYS = ("pace_mean_hz", "pace_std_hz", "stride_mean_m", "stride_std_m")
 _THRESHOLD_KEYS = ("p_thr", "r_thr", "k_sigma1", "k_sigma2", "k_sigma3", "n_samples", "ar_order",
                    "range_min_m", "range_max_m", "predict_timeout_s", "window_hop_samples",
-                   "harmonic_max_ratio")
+                   "harmonic_max_ratio", "window_s")
+WINDOW_S = 64 / 15  # s: the rhythm window of Table 1, N = 64 samples at 15 fps
 SECTIONS = {"camera": _CAMERA_KEYS, "noise": _NOISE_KEYS, "width": _WIDTH_KEYS,
             "walking": _WALKING_KEYS, "thresholds": _THRESHOLD_KEYS}
 
@@ -299,6 +300,18 @@ def config_from_dict(d: Any) -> Config:
     for sec, body in d.items():
         full[sec].update(body)
     c, n, w, k, t = (full[s] for s in SECTIONS)
+    given_c, given_t = d.get("camera", {}), d.get("thresholds", {})
+    # The principal point defaults to the centre of the image (256, 256 for the default 512 x 512).
+    for key, size in (("uc_px", "image_width_px"), ("vc_px", "image_height_px")):
+        if key not in given_c:
+            c[key] = _num("camera", size, c[size], lo=0, integer=True) / 2.0
+    # The rhythm window is a duration: N = round(window_s * fps) unless n_samples is given.
+    if "window_s" in given_t and "n_samples" in given_t:
+        raise ConfigError("thresholds.window_s", "give the rhythm window as window_s or as "
+                          "n_samples, not both")
+    if "n_samples" not in given_t:
+        window_s = _num("thresholds", "window_s", given_t.get("window_s", WINDOW_S), lo=0.0)
+        t["n_samples"] = max(4, round(window_s * _num("camera", "fps", c["fps"], lo=0.0)))
 
     theta_deg = _num("camera", "theta_deg", c["theta_deg"], lo=0.0, hi=90.0)
     if "theta_deg" in d.get("camera", {}) and theta_deg < 0.6:
