@@ -24,8 +24,23 @@ from ..io.errors import BadInput
 from ..model.params import Camera
 
 
-DATA_ROOT: Path = Path(os.environ.get("RHYTHMJAX_DATA")
-                       or Path(__file__).resolve().parents[3] / "shared" / "data" / "real")
+def default_data_root() -> Path:
+    """Where the real data sets are: $RHYTHMJAX_DATA when set; else the first existing
+    ``shared/data/real`` beside the checkout this module runs from (an editable install), in
+    the working directory, or in its parent (a checkout's root, after a plain ``pip install .``
+    whose module lies in the environment); else the parent's, which the messages name."""
+    env = os.environ.get("RHYTHMJAX_DATA")
+    if env:
+        return Path(env)
+    tail = Path("shared") / "data" / "real"
+    cwd = Path.cwd()
+    for base in (Path(__file__).resolve().parents[3], cwd, cwd.parent):
+        if (base / tail).is_dir():
+            return base / tail
+    return cwd.parent / tail
+
+
+DATA_ROOT: Path = default_data_root()
 PETS_FPS = 7.0  # MOTChallenge frameRate (the container's 10 fps is wrong; SOURCE.md)
 PETS_SCALE = 0.625  # 768x576 -> 480x360
 PETS_SIZE = (480, 360)
@@ -42,7 +57,8 @@ def _root(name: str, root) -> Path | None:
 def _need(name: str, root) -> Path:
     p = _root(name, root)
     if p is None:
-        raise FileNotFoundError(f"data folder {Path(root) if root else DATA_ROOT / name} absent")
+        raise FileNotFoundError(f"data folder {Path(root) if root else DATA_ROOT / name} absent "
+                                "(set RHYTHMJAX_DATA to the folder that holds the data sets)")
     return p
 
 
