@@ -77,11 +77,18 @@ def test_missing_and_empty_videos_exit_2_naming_the_file(verb, tmp_path, capsys)
 def test_fps_zero_and_a_camera_that_misses_the_image_exit_2(walker_avi, tmp_path, capsys):
     assert main(["run", walker_avi, "-o", str(tmp_path / "a"), "--fps", "0"]) == 2
     assert "fps" in _one_line(capsys)
-    cfg = tmp_path / "up.json"  # looking up: the 3-20 m range projects above the image
-    cfg.write_text(json.dumps({"camera": {"vc_px": -2000}}))
+    cfg = tmp_path / "up.json"  # looking up: the given 3-20 m range projects above the image
+    cfg.write_text(json.dumps({"camera": {"vc_px": -2000},
+                               "thresholds": {"range_min_m": 3, "range_max_m": 20}}))
     assert main(["run", walker_avi, "-o", str(tmp_path / "b"), "--config", str(cfg)]) == 2
     assert "detection range" in _one_line(capsys)
     assert not (tmp_path / "b" / "verdicts.csv").exists()
+    # the horizon below the image: no range can be derived; the line names the key and the fix
+    cfg.write_text(json.dumps({"camera": {"vc_px": 2000}}))
+    assert main(["run", walker_avi, "-o", str(tmp_path / "c"), "--config", str(cfg)]) == 2
+    line = _one_line(capsys)
+    assert "up.json" in line and "range_min_m" in line and "rhythmjax camera" in line, line
+    assert not (tmp_path / "c").exists() or not (tmp_path / "c" / "verdicts.csv").exists()
 
 
 def test_unwritable_output_exits_2(walker_avi, tmp_path, capsys):
@@ -91,3 +98,38 @@ def test_unwritable_output_exits_2(walker_avi, tmp_path, capsys):
     assert "sub" in _one_line(capsys)
     assert main(["track", walker_avi, "-o", str(blocker / "t.csv")]) == 2
     assert "t.csv" in _one_line(capsys)
+
+
+def test_one_fps_rule_and_the_image_size_follow_the_video(walker_avi, tmp_path, capsys):
+    """--fps > the config's camera.fps > the container's (15 here), with a note when they
+    disagree; the config's image size, when it differs from the video's, is replaced by it with
+    a warning; the tracks' times follow the rate used."""
+    import pandas as pd
+
+    cfg = tmp_path / "c.json"
+    cfg.write_text(json.dumps({"camera": {"fps": 10}}))
+    out = tmp_path / "t.csv"
+    assert main(["track", walker_avi, "-o", str(out), "--config", str(cfg), "--json"]) == 0
+    err = capsys.readouterr().err
+    assert "fps 10 used (the config's camera.fps); the file says 15" in err, err
+    t = pd.read_csv(out).groupby("track_id")["t"].apply(lambda s: s.diff().median())
+    assert np.allclose(t, 0.1)
+    assert main(["track", walker_avi, "-o", str(out), "--config", str(cfg), "--fps", "20",
+                 "--json"]) == 0
+    err = capsys.readouterr().err
+    assert "--fps 20 overrides the config's camera.fps 10" in err, err
+    t = pd.read_csv(out).groupby("track_id")["t"].apply(lambda s: s.diff().median())
+    assert np.allclose(t, 0.05)
+    cfg.write_text(json.dumps({"camera": {"image_width_px": 320, "image_height_px": 240},
+                               "thresholds": {"range_min_m": 3, "range_max_m": 20}}))
+    assert main(["track", walker_avi, "-o", str(out), "--config", str(cfg), "--json"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: the config's image size 320x240 is not the video's 512x512" in err, err
+
+
+def test_max_objects_is_settable(walker_avi, tmp_path, capsys):
+    out = tmp_path / "t.csv"
+    assert main(["track", walker_avi, "-o", str(out), "--max-objects", "0"]) == 2
+    assert "--max-objects" in _one_line(capsys)
+    assert main(["track", walker_avi, "-o", str(out), "--max-objects", "2", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["n_tracks"] >= 1

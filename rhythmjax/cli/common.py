@@ -9,13 +9,13 @@ import sys
 
 import numpy as np
 
-from ..io import BadInput, dumps_json, read_config
+from ..io import BadInput, config_or_bad_input, dumps_json, read_config_dict
 from ..model.params import Config, ConfigError
 
 
 __all__ = ["EPILOG", "TRACK_ORDER", "VERDICT_ORDER", "Formatter", "add_common",
-           "check_config_fits_image", "emit_json", "load_config", "open_source",
-           "overlay_writer", "print_verdicts", "say"]
+           "check_config_fits_image", "emit_json", "load_config", "load_config_dict",
+           "open_source", "overlay_writer", "print_verdicts", "say"]
 
 EPILOG = """\
 exit codes: 0 success, 1 internal or I/O error, 2 bad input (the message names the file
@@ -44,9 +44,16 @@ def add_common(p: argparse.ArgumentParser, *, config: bool = True) -> None:
     p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
 
 
+def load_config_dict(path) -> dict:
+    """The config file at `path` as written (an empty dict for None: every key defaults)."""
+    return {} if path is None else read_config_dict(path)
+
+
 def load_config(path) -> Config:
-    """The config at `path` merged over the defaults; the defaults for None."""
-    return Config() if path is None else read_config(path)
+    """The config at `path` merged over the defaults (`model.config_setup.config_for`: the
+    principal point at the image's centre, N from window_s and the fps, the range from the
+    camera); the defaults for None."""
+    return config_or_bad_input(load_config_dict(path), path or "config")
 
 
 def say(args, msg: str) -> None:
@@ -105,13 +112,42 @@ def overlay_writer(path, fps, size):
     writer.close()
 
 
-def open_source(args, cfg: Config):
-    """The video (file or frame folder) of `args.video` at `args.fps` (None: the file's),
-    checked against the config's detection range."""
+def open_source(args, d: dict):
+    """The video of `args.video` (file or frame folder) and the Config of the config dict `d`
+    for it, and the notes to show. One rule for the frame rate in every verb: `--fps` > the
+    config's `camera.fps` > the container's, with a note when they disagree. The image size and
+    fps the config leaves out are the video's, a config image size that differs from the
+    video's is replaced by it with a warning (the camera's pixels are kept as given). Checks
+    that some of the detection range is in the image."""
     from ..vision.video import open_video
 
-    src = open_video(args.video, fps=args.fps)
-    if not np.isfinite(src.fps):
-        raise BadInput(args.video, "no frame rate; give --fps")
-    check_config_fits_image(cfg, src.width, src.height)
-    return src
+    config_or_bad_input(d, args.config or "config")  # every key checked before the video opens
+    cam = d.get("camera", {}) if isinstance(d.get("camera", {}), dict) else {}
+    conf_fps = cam.get("fps")
+    fps = args.fps if args.fps is not None else conf_fps
+    src = open_video(args.video, fps=fps)
+    try:
+        notes = []
+        if args.fps is not None and conf_fps is not None and conf_fps != args.fps:
+            notes.append(f"--fps {args.fps:g} overrides the config's camera.fps {conf_fps:g}")
+        elif args.fps is None and conf_fps is not None:
+            src.notes = [n.replace(" used;", " used (the config's camera.fps);")
+                         for n in src.notes]
+        if not np.isfinite(src.fps):
+            raise BadInput(args.video, "no frame rate; give --fps")
+        size = (src.width, src.height)
+        given = (cam.get("image_width_px"), cam.get("image_height_px"))
+        d = {**d, "camera": {**cam, "fps": float(src.fps)}}
+        if any(g is not None for g in given) and tuple(given) != size:
+            notes.append(f"warning: the config's image size {given[0]}x{given[1]} is not the "
+                         f"video's {size[0]}x{size[1]}; the video's is used, the camera's "
+                         "focal length and principal point as given (describe the camera for "
+                         "this video with `rhythmjax camera --video`)")
+            d["camera"].update(image_width_px=size[0], image_height_px=size[1])
+        cfg = config_or_bad_input(d, args.config or "config", image_size=size, fps=src.fps)
+        check_config_fits_image(cfg, *size)
+        notes = list(src.notes) + notes
+    except BaseException:
+        src.close()
+        raise
+    return src, cfg, notes

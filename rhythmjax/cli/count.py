@@ -16,7 +16,7 @@ from .common import (
     TRACK_ORDER,
     VERDICT_ORDER,
     add_common,
-    load_config,
+    load_config_dict,
     open_source,
     overlay_writer,
     say,
@@ -57,16 +57,20 @@ def cmd_count(args) -> int:
         raise ConfigError("--min-frames", f"must be >= 1, got {args.min_frames}")
     make_output_dir(args.output)
     check_writable(os.path.join(args.output, "counts.json"))
-    cfg = load_config(args.config)
-    opt = CountOptions(dynamics=args.dynamics,
+    if args.max_pedestrians < 1:
+        raise ConfigError("--max-pedestrians", f"must be >= 1, got {args.max_pedestrians}")
+    opt = CountOptions(dynamics=args.dynamics, max_pedestrians=args.max_pedestrians,
                        verdicts=VerdictOptions(min_track_frames=args.min_frames))
-    with open_source(args, cfg) as src, overlay_writer(
-            args.overlay, src.fps, (src.width, src.height)) as overlay:
+    src, cfg, setup_notes = open_source(args, load_config_dict(args.config))
+    for note in setup_notes:
+        say(args, note if note.startswith("warning") else f"note: {note}")
+    with src, overlay_writer(args.overlay, src.fps, (src.width, src.height)) as overlay:
         draw = None if overlay is None else \
             (lambda frame, index, snapshot: overlay.write(draw_count_frame(frame, snapshot, index)))
         res = count_frames(cfg, src, options=opt, n_frames=src.n_frames, on_frame=draw,
                            progress=not (args.quiet or args.json))
-        notes = list(src.notes) + res.summary.get("notes", [])
+        notes = setup_notes + [n for n in src.notes if n not in setup_notes] + \
+            res.summary.get("notes", [])
         summary = {"video": args.video, "output": args.output, "counts": res.counts,
                    **{k: v for k, v in res.summary.items() if k != "notes"},
                    "bad_frames": len(src.bad_frames), "notes": notes}
@@ -86,7 +90,7 @@ def cmd_count(args) -> int:
           f"{c['non_pedestrians']} non-pedestrian - {c['too_fast']} unclassified too fast "
           f"({c['pedestrians']} judged pedestrian, {c['unclassified']} unclassified); wrote "
           f"{args.output}/", file=sys.stderr)
-    for note in notes:
+    for note in notes[len(setup_notes):]:  # the setup's were shown before the run
         say(args, f"note: {note}")
     return 0
 
@@ -102,8 +106,12 @@ def register(sub, formatter=None) -> None:
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--overlay", metavar="OUT.mp4", help="also write an annotated video (boxes, "
                    "ids, online verdicts)")
-    p.add_argument("--fps", type=float, help="frame rate (overrides the file's; needed for "
-                   "frame folders)")
+    p.add_argument("--fps", type=float, help="frame rate (frames/s); the rule in every verb: "
+                   "--fps, else the config's camera.fps, else the file's (a note says when they "
+                   "disagree); needed for a frame folder without camera.fps")
+    p.add_argument("--max-pedestrians", type=int, default=CountOptions().max_pedestrians,
+                   metavar="K", help="pedestrian slots tracked at once (a full frame's extra "
+                   "pedestrians wait, and the summary says so)")
     p.add_argument("--dynamics", choices=("3d", "3d-shape", "2d"), default="3d",
                    help="pedestrian model: 3d = 3-D shape + ground-plane EKF; 3d-shape = 3-D "
                    "shape + image constant velocity; 2d = fixed size + image constant velocity")

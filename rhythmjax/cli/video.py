@@ -8,20 +8,22 @@ import sys
 import numpy as np
 
 from ..io import check_writable, make_output_dir, write_table
-from ..model.params import config_from_dict
+from ..model.params import ConfigError, config_from_dict
 from ..sim.evaluate import deciding_windows, score
 from ..sim.presets import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
 from ..sim.scene import random_spec, render_scene, scene_to_tracks_truth
 from ..track.driver import track_frames
+from ..track.options import TrackerOptions
 from .common import (
     TRACK_ORDER,
     VERDICT_ORDER,
     add_common,
     emit_json,
-    load_config,
+    load_config_dict,
     open_source,
     overlay_writer,
     print_verdicts,
+    say,
 )
 from .overlay import draw_frame, spectrum_figure
 
@@ -33,6 +35,18 @@ def _drawer(overlay, cfg):
     hpw = cfg.width.height_per_width()
     return lambda frame, index, snapshot: overlay.write(
         draw_frame(frame, snapshot, index, height_per_width=hpw))
+
+
+def _notes(args, notes) -> None:
+    """The setup's notes (frame rate, image size), one line each, before the long run."""
+    for note in notes:
+        say(args, note if note.startswith("warning") else f"note: {note}")
+
+
+def _options(args) -> TrackerOptions:
+    if args.max_objects < 1:
+        raise ConfigError("--max-objects", f"must be >= 1, got {args.max_objects}")
+    return TrackerOptions(max_objects=args.max_objects)
 
 
 def _write_outputs(out_dir, cfg, tracks, verdicts, objs, *, tracks_name="tracks.parquet"):
@@ -67,12 +81,12 @@ def cmd_track(args) -> int:
     """Track the moving objects of a video (Fig. 3 state machine, EKF + gates (10)(11)) and
     write the tracks file; classification happens as in `run` and is in the summary."""
     check_writable(args.output)
-    cfg = load_config(args.config)
-    with open_source(args, cfg) as src, overlay_writer(
-            args.overlay, src.fps, (src.width, src.height)) as overlay:
+    src, cfg, notes = open_source(args, load_config_dict(args.config))
+    _notes(args, notes)
+    with src, overlay_writer(args.overlay, src.fps, (src.width, src.height)) as overlay:
         tracks, verdicts, objs, tracker = track_frames(
             cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
-            progress=not (args.quiet or args.json))
+            progress=not (args.quiet or args.json), options=_options(args))
         write_table(args.output, tracks, TRACK_ORDER)
     _report(args, _summary(tracker, verdicts, src), verdicts)
     return 0
@@ -83,13 +97,13 @@ def cmd_run(args) -> int:
     DIR/verdicts.csv, DIR/spectra.png and DIR/overlay.mp4 (annotated video)."""
     make_output_dir(args.output)
     check_writable(os.path.join(args.output, "verdicts.csv"))
-    cfg = load_config(args.config)
+    src, cfg, notes = open_source(args, load_config_dict(args.config))
+    _notes(args, notes)
     path = None if args.no_overlay else os.path.join(args.output, "overlay.mp4")
-    with open_source(args, cfg) as src, overlay_writer(path, src.fps,
-                                                        (src.width, src.height)) as overlay:
+    with src, overlay_writer(path, src.fps, (src.width, src.height)) as overlay:
         tracks, verdicts, objs, tracker = track_frames(
             cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
-            progress=not (args.quiet or args.json))
+            progress=not (args.quiet or args.json), options=_options(args))
         _write_outputs(args.output, cfg, tracks, verdicts, objs)
     _report(args, _summary(tracker, verdicts, src), verdicts)
     return 0
@@ -161,8 +175,7 @@ def register(sub, formatter=None) -> None:
     p.add_argument("-o", "--output", required=True, metavar="TRACKS",
                    help="tracks file (.parquet or .csv)")
     p.add_argument("--overlay", metavar="OUT.mp4", help="also write an annotated video")
-    p.add_argument("--fps", type=float, help="frame rate (overrides the file's; needed for "
-                   "frame folders)")
+    _video_flags(p)
     add_common(p)
     p.set_defaults(func=cmd_track)
 
@@ -170,7 +183,19 @@ def register(sub, formatter=None) -> None:
                        "objects of a video", description=cmd_run.__doc__)
     p.add_argument("video", metavar="VIDEO", help="video file, or a folder of numbered frames")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
-    p.add_argument("--fps", type=float, help="frame rate (overrides the file's)")
+    _video_flags(p)
     p.add_argument("--no-overlay", action="store_true", help="skip the annotated video")
     add_common(p)
     p.set_defaults(func=cmd_run)
+
+
+FPS_HELP = ("frame rate (frames/s); the rule in every verb: --fps, else the config's camera.fps, "
+            "else the file's (a note says when they disagree); needed for a frame folder "
+            "without camera.fps")
+
+
+def _video_flags(p) -> None:
+    p.add_argument("--fps", type=float, help=FPS_HELP)
+    p.add_argument("--max-objects", type=int, default=TrackerOptions().max_objects, metavar="K",
+                   help="object slots tracked at once (more cost time per frame; 24 for a "
+                   "crowd such as PETS09)")
