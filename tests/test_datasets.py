@@ -164,3 +164,22 @@ def test_default_data_root_is_beside_the_checkout(monkeypatch):
     finally:
         monkeypatch.undo()
         importlib.reload(D)
+
+
+def test_data_root_after_a_plain_install(monkeypatch, tmp_path):
+    """After `pip install .` the module lies in the environment, not beside the data: the root is
+    then $RHYTHMJAX_DATA, else shared/data/real in the working directory or its parent."""
+    monkeypatch.setattr(D, "__file__", str(tmp_path / "venv" / "lib" / "py" / "site" / "x.py"))
+    monkeypatch.delenv("RHYTHMJAX_DATA", raising=False)
+    checkout = tmp_path / "work" / "main"
+    checkout.mkdir(parents=True)
+    data = tmp_path / "work" / "shared" / "data" / "real"
+    data.mkdir(parents=True)
+    monkeypatch.chdir(checkout)
+    assert D.default_data_root() == data  # the checkout's parent
+    monkeypatch.chdir(tmp_path / "work")
+    assert D.default_data_root() == data  # the working directory
+    monkeypatch.setenv("RHYTHMJAX_DATA", str(tmp_path / "elsewhere"))
+    assert D.default_data_root() == tmp_path / "elsewhere"
+    with pytest.raises(FileNotFoundError, match="RHYTHMJAX_DATA"):
+        D.pets_tsai(tmp_path / "none")
