@@ -12,7 +12,6 @@ Nothing here is copied into the repository; every loader takes an optional `root
 from __future__ import annotations
 
 import csv
-import math
 import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -20,7 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.calibration import read_tsai
 from ..io.errors import BadInput
+from ..model.camera_from import camera_from_tsai
+from ..model.lens import TsaiCalibration
 from ..model.params import Camera
 
 
@@ -131,121 +133,43 @@ def _read_floats(path: Path, ncol: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class TsaiCamera:
-    """Tsai (1987) camera as in PETS' View_001.xml: world (mm) -> camera x_c = R X + T with
-    R = Rz Ry Rx; undistorted sensor (mm) X_u = f x_c / z_c; X_u = X_d (1 + kappa1 r_d^2);
-    pixels u = Cx + sx X_d / dpx, v = Cy + Y_d / dy at the 768x576 geometry. Methods take
-    metres and a pixel `scale` (0.625 for the 480x360 video)."""
-
-    focal: float  # mm
-    kappa1: float  # mm^-2
-    cx: float
-    cy: float  # px (768x576)
-    sx: float
-    dpx: float
-    dy: float  # mm/px
-    T: tuple[float, float, float]  # mm
-    Rxyz: tuple[float, float, float]  # rad
-
-    @property
-    def R(self) -> np.ndarray:
-        a, b, g = self.Rxyz
-        Rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
-        Ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
-        Rz = np.array([[math.cos(g), -math.sin(g), 0], [math.sin(g), math.cos(g), 0], [0, 0, 1]])
-        return Rz @ Ry @ Rx
-
-    @property
-    def centre_m(self) -> np.ndarray:
-        """Camera centre (m, world), -R^T T."""
-        return -self.R.T @ np.asarray(self.T) / 1000.0
-
-    @property
-    def h_m(self) -> float:
-        return float(self.centre_m[2])
-
-    @property
-    def theta_rad(self) -> float:
-        """Depression of the optical axis below the horizontal."""
-        return float(math.asin(-self.R[2, 2]))
-
-    @property
-    def roll_rad(self) -> float:
-        """Roll in the convention of `rhythmjax.camera` (image rotated by +roll about the
-        principal point, u right, v down): sin(roll) = (camera x axis)_z / cos(theta)."""
-        return float(math.asin(self.R[0, 2] / math.cos(self.theta_rad)))
-
-    @property
-    def yaw_rad(self) -> float:
-        """Heading of the optical axis on the ground: atan2(axis_y, axis_x) (world)."""
-        return float(math.atan2(self.R[2, 1], self.R[2, 0]))
+class TsaiCamera(TsaiCalibration):
+    """PETS' View_001.xml: the library's Tsai model (`model.lens.TsaiCalibration`, world m,
+    R = Rz Ry Rx, radial kappa1) with the pixel `scale` defaulting to 0.625, the 480x360 video."""
 
     def focal_px(self, scale: float = PETS_SCALE) -> tuple[float, float]:
-        """(horizontal f sx / dpx, vertical f / dy) in px at the scaled size."""
-        return (self.focal * self.sx / self.dpx * scale, self.focal / self.dy * scale)
+        return super().focal_px(scale)
 
     def world_to_image(self, x, y, z=0.0, scale: float = PETS_SCALE):
-        """(u, v) px of world points (m), radial distortion included."""
-        X = np.stack(np.broadcast_arrays(*(np.asarray(t, np.float64) for t in (x, y, z))), -1)
-        pc = X * 1000.0 @ self.R.T + np.asarray(self.T)
-        xu, yu = self.focal * pc[..., 0] / pc[..., 2], self.focal * pc[..., 1] / pc[..., 2]
-        ru = np.hypot(xu, yu)
-        rd = ru.copy()
-        for _ in range(20):  # Newton on rd (1 + k rd^2) = ru
-            rd = rd - (rd * (1 + self.kappa1 * rd**2) - ru) / (1 + 3 * self.kappa1 * rd**2)
-        s = np.where(ru > 0, rd / np.where(ru > 0, ru, 1.0), 1.0)
-        return ((self.cx + self.sx * xu * s / self.dpx) * scale,
-                (self.cy + yu * s / self.dy) * scale)
+        return super().world_to_image(x, y, z, scale)
 
     def ground_of_image(self, u, v, scale: float = PETS_SCALE):
-        """(x, y) m on the ground z = 0 of image points (px); NaN above the horizon."""
-        xd = (np.asarray(u, np.float64) / scale - self.cx) * self.dpx / self.sx
-        yd = (np.asarray(v, np.float64) / scale - self.cy) * self.dy
-        k = 1 + self.kappa1 * (xd**2 + yd**2)
-        ray = np.stack([xd * k, yd * k, np.full_like(xd, self.focal)], -1) @ self.R  # R^T ray
-        c = self.centre_m
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(ray[..., 2] < 0, -c[2] / ray[..., 2], np.nan)
-        return c[0] + t * ray[..., 0], c[1] + t * ray[..., 1]
+        return super().ground_of_image(u, v, scale)
 
 
 def pets_tsai(root=None) -> TsaiCamera:
-    """The Tsai calibration of View 001 (calibration/View_001.xml)."""
+    """The Tsai calibration of View 001 (calibration/View_001.xml, `io.calibration.read_tsai`)."""
     path = _need("pets2009_s2l1", root) / "calibration" / "View_001.xml"
-    try:
-        cam = ET.parse(path).getroot()
-        g, i, e = cam.find("Geometry"), cam.find("Intrinsic"), cam.find("Extrinsic")
-        num = lambda el, k: float(el.get(k))  # noqa: E731
-        return TsaiCamera(
-            focal=num(i, "focal"), kappa1=num(i, "kappa1"), cx=num(i, "cx"), cy=num(i, "cy"),
-            sx=num(i, "sx"), dpx=num(g, "dpx"), dy=num(g, "dy"),
-            T=(num(e, "tx"), num(e, "ty"), num(e, "tz")),
-            Rxyz=(num(e, "rx"), num(e, "ry"), num(e, "rz")))
-    except (ET.ParseError, AttributeError, TypeError, ValueError) as err:
-        raise BadInput(path, f"unreadable Tsai calibration ({err})") from None
+    return TsaiCamera(**read_tsai(path).__dict__)
 
 
 def pets_camera(root=None, *, scale: float = PETS_SCALE) -> Camera:
-    """The camera of (3) (with roll) nearest to the Tsai calibration, for the 480x360 video at
-    7 fps: h, theta, roll from the Tsai pose, a f and b f from its focal lengths in px, the
-    principal point scaled, f = the Tsai focal length. An approximation: (3) has no lens
-    distortion (2-3 % at the corners here), and its ground frame is the camera's (origin at
-    the camera's foot, y along the optical axis); map world points with `pets_ground`."""
+    """The camera of (3) of the Tsai calibration (`model.camera_from.camera_from_tsai`, what
+    `rhythmjax camera --tsai` writes) for the 480x360 video at 7 fps: exact but for the lens
+    distortion (2-3 % at the corners) and a f != b f with roll; its ground frame is the
+    camera's (y along the optical axis), so map world points with `pets_ground`."""
+    return _pets_from(root, scale).camera()
+
+
+def _pets_from(root, scale: float):
     t = pets_tsai(root)
-    f = t.focal / 1000.0
-    fu, fv = t.focal_px(scale)
-    return Camera(f=f, h=t.h_m, theta=t.theta_rad, roll=t.roll_rad, a=fu / f, b=fv / f,
-                  uc=t.cx * scale, vc=t.cy * scale, fps=PETS_FPS, image_width=PETS_SIZE[0],
-                  image_height=PETS_SIZE[1])
+    size = PETS_SIZE if scale == PETS_SCALE else (round(t.width * scale), round(t.height * scale))
+    return camera_from_tsai(t, image_size=size, fps=PETS_FPS)
 
 
 def pets_ground(x, y, root=None) -> tuple[np.ndarray, np.ndarray]:
     """World (TrajNet/Tsai, m) -> the ground frame of `pets_camera` (m): x right, y ahead."""
-    t = pets_tsai(root)
-    c, yaw = t.centre_m, t.yaw_rad
-    dx, dy = np.asarray(x, np.float64) - c[0], np.asarray(y, np.float64) - c[1]
-    fx, fy = math.cos(yaw), math.sin(yaw)
-    return dx * fy - dy * fx, dx * fx + dy * fy
+    return _pets_from(root, PETS_SCALE).transform.apply(x, y)
 
 
 # ----------------------------------------------------------------------------------------------
