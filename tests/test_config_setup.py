@@ -115,3 +115,16 @@ def test_report_names_the_facts():
         assert word in text
     sky = camera_report(Camera(vc=2000.0))
     assert sky["detection_range_m"] is None and "BELOW" in format_report(sky)
+
+
+def test_range_of_a_high_camera_looking_down():
+    """Seen from 30 m up, a person's image height first grows with distance, then falls: the
+    far end is where it falls below MIN_PERSON_PX, not the first distance where it is small."""
+    cam = Camera(f=0.008, a=700 / 0.008, b=700 / 0.008, h=30.0, theta=math.radians(20.0),
+                 uc=320.0, vc=240.0, image_width=640, image_height=480)
+    near, far = visible_range(cam)
+    assert near == pytest.approx(ground_distance_at_row(cam, 480.0), rel=1e-9)  # 37.1 m
+    assert ground_distance_at_row(cam, 0.0) > 1000.0  # the top row sees the far distance
+    assert far > near and person_height_px(cam, far) == pytest.approx(MIN_PERSON_PX, rel=1e-6)
+    ys = np.linspace(far * 1.001, 3 * far, 50)
+    assert all(person_height_px(cam, float(y)) < MIN_PERSON_PX for y in ys)

@@ -61,16 +61,21 @@ def person_height_px(camera: Camera, y_m: float | int, height_m: float = PERSON_
 
 
 def distance_of_person_px(camera: Camera, px: float, height_m: float = PERSON_HEIGHT_M) -> float:
-    """The ground distance (m) at which a person height_m tall is `px` px tall (bisection on
-    `person_height_px`, which falls with distance beyond the camera's foot); inf when even
-    1 km away the person is taller."""
-    lo, hi = 1e-3, 1000.0
-    if person_height_px(camera, hi, height_m) >= px:
+    """The farthest ground distance (m) at which a person height_m tall is still `px` px tall;
+    inf when even 1 km away the person is taller, 0 when nowhere. Near the foot of a high camera
+    a person's image height first grows with distance (seen from above), then falls: a scan on
+    a log grid finds the last distance at or above `px`, and bisection refines it."""
+    grid = np.geomspace(1e-2, 1000.0, 400)
+    tall = np.array([person_height_px(camera, float(y), height_m) >= px for y in grid])
+    if tall[-1]:
         return math.inf
-    for _ in range(80):
+    if not tall.any():
+        return 0.0
+    k = int(np.flatnonzero(tall)[-1])
+    lo, hi = float(grid[k]), float(grid[k + 1])
+    for _ in range(60):
         mid = math.sqrt(lo * hi)
-        h = person_height_px(camera, mid, height_m)
-        if math.isfinite(h) and h >= px:
+        if person_height_px(camera, mid, height_m) >= px:
             lo = mid
         else:
             hi = mid
