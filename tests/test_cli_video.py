@@ -133,3 +133,29 @@ def test_max_objects_is_settable(walker_avi, tmp_path, capsys):
     assert "--max-objects" in _one_line(capsys)
     assert main(["track", walker_avi, "-o", str(out), "--max-objects", "2", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["n_tracks"] >= 1
+
+
+def test_a_camera_wrong_for_the_video_is_said_before_the_run(walker_avi, tmp_path, capsys):
+    """The walker crosses 10 m ahead of the paper's camera; a detection range of 3-6 m misses
+    it: one warning line naming the fixing command, before the run, which goes on."""
+    out = tmp_path / "t.csv"
+    assert main(["track", walker_avi, "-o", str(out), "--json"]) == 0
+    assert "warning" not in capsys.readouterr().err
+    cfg = tmp_path / "near.json"
+    cfg.write_text(json.dumps({"thresholds": {"range_min_m": 3.0, "range_max_m": 6.0}}))
+    assert main(["track", walker_avi, "-o", str(out), "-c", str(cfg), "--json"]) == 0
+    warn = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning")]
+    assert len(warn) == 1 and "camera check" in warn[0] and "rhythmjax camera" in warn[0]
+    assert "outside the detection range 3.0-6.0 m" in warn[0], warn[0]
+    assert main(["track", walker_avi, "-o", str(out), "-c", str(cfg), "--json",
+                 "--no-camera-check"]) == 0
+    assert "camera check" not in capsys.readouterr().err
+
+
+def test_all_tracks_too_short_gives_the_window_hint(walker_avi, tmp_path, capsys):
+    cfg = tmp_path / "long.json"
+    cfg.write_text(json.dumps({"thresholds": {"window_s": 10.0}}))  # 150 samples > 70 frames
+    assert main(["run", walker_avi, "-o", str(tmp_path / "o"), "-c", str(cfg), "--no-overlay",
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert any("window_s" in n and "N = 150" in n for n in summary["notes"]), summary["notes"]

@@ -13,7 +13,7 @@ from ..io import BadInput, config_or_bad_input, dumps_json, read_config_dict
 from ..model.params import Config, ConfigError
 
 
-__all__ = ["EPILOG", "TRACK_ORDER", "VERDICT_ORDER", "Formatter", "add_common",
+__all__ = ["EPILOG", "TRACK_ORDER", "VERDICT_ORDER", "Formatter", "add_camera_check", "add_common",
            "check_config_fits_image", "emit_json", "load_config", "load_config_dict",
            "open_source", "overlay_writer", "print_verdicts", "say"]
 
@@ -31,6 +31,13 @@ VERDICT_ORDER = ["track_id", "verdict", "reason", "pace_hz", "stride_m", "ratio"
 
 class Formatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
     """Help text as written, with the defaults shown."""
+
+
+def add_camera_check(p: argparse.ArgumentParser) -> None:
+    """--no-camera-check, for the verbs that read a video."""
+    p.add_argument("--no-camera-check", action="store_true", help="skip the check of the camera "
+                   "against the first 80 frames' motion (moving things outside the detection "
+                   "range, or implausibly tall or small by the camera; about 5 ms a frame)")
 
 
 def add_common(p: argparse.ArgumentParser, *, config: bool = True) -> None:
@@ -118,7 +125,8 @@ def open_source(args, d: dict):
     config's `camera.fps` > the container's, with a note when they disagree. The image size and
     fps the config leaves out are the video's, a config image size that differs from the
     video's is replaced by it with a warning (the camera's pixels are kept as given). Checks
-    that some of the detection range is in the image."""
+    that some of the detection range is in the image, then (unless --no-camera-check) the
+    camera against the first frames' motion (`vision.camera_check`): its warnings are notes."""
     from ..vision.video import open_video
 
     config_or_bad_input(d, args.config or "config")  # every key checked before the video opens
@@ -147,6 +155,11 @@ def open_source(args, d: dict):
         cfg = config_or_bad_input(d, args.config or "config", image_size=size, fps=src.fps)
         check_config_fits_image(cfg, *size)
         notes = list(src.notes) + notes
+        if not getattr(args, "no_camera_check", False):
+            from ..vision.camera_check import check_camera
+
+            check = check_camera(cfg, src, video=args.video)
+            notes += [f"warning: {w}" for w in check.warnings] + list(check.notes)
     except BaseException:
         src.close()
         raise

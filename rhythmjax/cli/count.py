@@ -15,6 +15,7 @@ from ..model.params import ConfigError
 from .common import (
     TRACK_ORDER,
     VERDICT_ORDER,
+    add_camera_check,
     add_common,
     load_config_dict,
     open_source,
@@ -109,6 +110,7 @@ def register(sub, formatter=None) -> None:
     p.add_argument("--fps", type=float, help="frame rate (frames/s); the rule in every verb: "
                    "--fps, else the config's camera.fps, else the file's (a note says when they "
                    "disagree); needed for a frame folder without camera.fps")
+    add_camera_check(p)
     p.add_argument("--max-pedestrians", type=int, default=CountOptions().max_pedestrians,
                    metavar="K", help="pedestrian slots tracked at once (a full frame's extra "
                    "pedestrians wait, and the summary says so)")

@@ -17,6 +17,7 @@ from ..track.options import TrackerOptions
 from .common import (
     TRACK_ORDER,
     VERDICT_ORDER,
+    add_camera_check,
     add_common,
     emit_json,
     load_config_dict,
@@ -66,7 +67,23 @@ def _summary(tracker, verdicts, src=None) -> dict:
     return s
 
 
-def _report(args, summary, verdicts) -> None:
+def window_note(cfg, verdicts) -> str | None:
+    """A one-line hint when every track was too short for the rhythm window (the window is a
+    duration: N = window_s x fps samples)."""
+    reasons = list(verdicts["reason"])
+    if not reasons or any(r != "too-short" for r in reasons):
+        return None
+    n, fps = cfg.thresholds.n, cfg.camera.fps
+    return (f"every track is shorter than the rhythm window (N = {n} samples, {n / fps:.1f} s at "
+            f"{fps:g} fps): give a shorter thresholds.window_s (s) if people are in view for "
+            "less")
+
+
+def _report(args, summary, verdicts, cfg=None) -> None:
+    hint = None if cfg is None else window_note(cfg, verdicts)
+    if hint:
+        summary.setdefault("notes", []).append(hint)
+        say(args, f"note: {hint}")
     if args.json:
         emit_json(summary)
         return
@@ -88,7 +105,7 @@ def cmd_track(args) -> int:
             cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
             progress=not (args.quiet or args.json), options=_options(args))
         write_table(args.output, tracks, TRACK_ORDER)
-    _report(args, _summary(tracker, verdicts, src), verdicts)
+    _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
     return 0
 
 
@@ -105,7 +122,7 @@ def cmd_run(args) -> int:
             cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
             progress=not (args.quiet or args.json), options=_options(args))
         _write_outputs(args.output, cfg, tracks, verdicts, objs)
-    _report(args, _summary(tracker, verdicts, src), verdicts)
+    _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
     return 0
 
 
@@ -196,6 +213,7 @@ FPS_HELP = ("frame rate (frames/s); the rule in every verb: --fps, else the conf
 
 def _video_flags(p) -> None:
     p.add_argument("--fps", type=float, help=FPS_HELP)
+    add_camera_check(p)
     p.add_argument("--max-objects", type=int, default=TrackerOptions().max_objects, metavar="K",
                    help="object slots tracked at once (more cost time per frame; 24 for a "
                    "crowd such as PETS09)")
