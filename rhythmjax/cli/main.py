@@ -26,6 +26,7 @@ from ..io import (
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
 from ..model.params import ConfigError, config_to_dict
 from ..sim.tracks import make_tracks
+from .camera import register as register_camera
 from .common import EPILOG, Formatter, add_common, emit_json, load_config, print_verdicts, say
 from .count import register as register_count
 from .video import register as register_video
@@ -140,6 +141,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     register_video(sub, Formatter)
     register_count(sub, Formatter)
+    register_camera(sub, Formatter)
     return parser
 
 

@@ -29,7 +29,6 @@ import numpy as np
 from .camera_np import HostCamera, project_3d
 from .lens import Pinhole, TsaiCalibration, opencv_distortion
 from .params import Camera, ConfigError, config_from_dict
-from .view import horizon_row
 
 
 MAX_GROUND_M = 200.0  # m: ground points farther from the camera's foot are left out of residuals
@@ -129,6 +128,13 @@ def host_camera(section: dict) -> HostCamera:
                       math.radians(s.get("roll_deg", 0.0)))
 
 
+def horizon_of(section: dict) -> float:
+    """The horizon's row (px) at the principal point's column, Vc - b f tan(theta) / cos(roll)
+    (`view.horizon_row` of the section's camera, in float64)."""
+    c = host_camera(section)
+    return c.vc - c.b * c.f * math.tan(c.theta) / math.cos(c.roll)
+
+
 # ----------------------------------------------------------------------------------------------
 # a pin-hole -> (3)
 
@@ -187,8 +193,9 @@ def visible_samples(section: dict, transform: GroundTransform, image_size, proje
     """World ground points the source images inside the image, and their source pixels:
     (x, y, u, v) arrays. `ground(u, v) -> (x, y, ok)` gives the ground points (world units) of a
     `GRID` of pixels, `project(x, y) -> (u, v, in_front)` the source's pixels of them; kept are
-    those in front, inside the image and within `MAX_GROUND_M` of the camera's foot (by
-    `transform`). Raises `CameraError` when none are (`section` names the horizon's row)."""
+    those in front, inside the image (half a pixel of slack for rounding at its edges) and
+    within `MAX_GROUND_M` of the camera's foot (by `transform`). Raises `CameraError` when none
+    are (naming the horizon's row of `section`)."""
     w, h = image_size
     uu, vv = np.meshgrid(np.linspace(0, w, GRID[0]), np.linspace(0, h, GRID[1]))
     x, y, ok = ground(uu.ravel(), vv.ravel())
@@ -197,10 +204,10 @@ def visible_samples(section: dict, transform: GroundTransform, image_size, proje
     ok = ok & (np.hypot(gx, gy + transform.back_m) <= MAX_GROUND_M)
     with np.errstate(all="ignore"):
         us, vs, front = project(x, y)
-    ok = ok & front & (us >= 0) & (us <= w) & (vs >= 0) & (vs <= h)
+    ok = ok & front & (us > -0.5) & (us < w + 0.5) & (vs > -0.5) & (vs < h + 0.5)
     if not np.any(ok):
         raise CameraError("camera", f"the image sees no ground within {MAX_GROUND_M:g} m (the "
-                          f"horizon is at row {horizon_row(host_camera(section)):.0f})")
+                          f"horizon is at row {horizon_of(section):.0f})")
     return x[ok], y[ok], us[ok], vs[ok]
 
 
@@ -294,8 +301,7 @@ def camera_from_intrinsics(*, h_m: float, tilt_deg: float, image_size,
         section["uc_px"], section["vc_px"] = (float(q) for q in principal_point)
     if fps is not None:
         section["fps"] = float(fps)
-    if not math.isfinite(horizon_row(host_camera(section))) or not (
-            horizon_row(host_camera(section)) < hh):
+    if not horizon_of(section) < hh:
         raise CameraError("tilt_deg", "the horizon is below the image: it sees no ground")
     return CameraFrom(section)
 
