@@ -199,7 +199,14 @@ def cmd_camera(args) -> int:
     notes += list(r.notes)
     d = _config(args, r, notes)
     size = (r.section["image_width_px"], r.section["image_height_px"])
-    cfg = config_for(d, image_size=size, fps=fps)
+    try:
+        cfg = config_for(d, image_size=size, fps=fps)
+    except ConfigError as e:
+        if not e.key.startswith("thresholds.range"):
+            raise
+        raise ConfigError(e.key, f"{str(e).split(': ', 1)[1]}, from the ground this camera's "
+                          "image sees; give thresholds.range_min_m and range_max_m in --config "
+                          "BASE") from None
     report = camera_report(cfg.camera)
     if fps is None:
         notes.append("no fps given: the config leaves it to the video (--fps or --video to fix)")
