@@ -46,7 +46,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from fit.homography import dlt_homography as dlt_homography, pose_from_homography
+from fit.homography import dlt_homography as dlt_homography, grid_starts, pose_from_homography
 from rhythmjax.model.camera import project
 from rhythmjax.model.params import Camera
 
@@ -134,12 +134,31 @@ class CameraFit:
         X, Ym = np.asarray(X, np.float64), self.mirror * np.asarray(Y, np.float64)
         return c * X - s * Ym + self.values["tx"], s * X + c * Ym + self.values["ty"]
 
+    def determination(self) -> dict[str, str]:
+        """Per fitted parameter: "determined" (standard error at most a tenth of `se_limits`:
+        5 % of a f, b f, h; 1 deg of theta, roll; 20 px of Uc, Vc; 5 m, 2 deg of the world
+        transform), "weak" (up to the limit) or "not determined" (beyond it, non-finite, or in
+        the singular direction of a Jacobian with condition number above 1e8)."""
+        lim = se_limits(self.values)
+        singular = self.weak_direction.split()[1::2] if self.cond > 1e8 else []
+        return {k: "not determined" if not self.se[k] <= lim[k] or k in singular else
+                "determined" if self.se[k] <= 0.1 * lim[k] else "weak" for k in self.fitted}
+
     def summary(self) -> str:
         lines = [f"{k:6s} = {self.values[k]:11.4f} +- {self.se[k]:.4f} {UNITS[k]}"
                  for k in self.fitted]
+        det = self.determination()
+        for what, head in (("determined", "determined by the data"), ("weak", "weakly "
+                           "determined (SE over 1/10 of its limit)"), ("not determined",
+                                                                       "NOT determined")):
+            names = [f"{k}" + (f" (SE {self.se[k]:.3g} {UNITS[k]})" if what != "determined"
+                               else "") for k in self.fitted if det[k] == what]
+            if names or what == "determined":
+                lines.append(f"{head}: {', '.join(names) or '-'}")
         lines.append(f"reprojection RMS {self.rms_px:.3f} px over {self.n_points} points, "
                      f"loss {self.loss}")
-        lines.append(f"condition number {self.cond:.3g}; weakly determined: {self.weak_direction}")
+        lines.append(f"condition number {self.cond:.3g}; least determined combination: "
+                     f"{self.weak_direction}")
         lines.append(f"solver: {self.result or 'successful'} after {self.num_steps} steps")
         if self.ill_determined:
             lines.append("ILL-DETERMINED: " + "; ".join(self.reasons))
@@ -152,7 +171,8 @@ class CameraFit:
                 "weak_direction": self.weak_direction, "result": self.result or "successful",
                 "success": self.success, "num_steps": self.num_steps,
                 "ill_determined": self.ill_determined, "reasons": self.reasons,
-                "n_points": self.n_points, "loss": self.loss, "mirror": self.mirror}
+                "n_points": self.n_points, "loss": self.loss, "mirror": self.mirror,
+                "determination": self.determination()}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -188,36 +208,6 @@ def _solve(dynamic, args, rtol, atol, max_steps):
     return sol.value, sol.result, sol.stats["num_steps"]
 
 
-@jax.jit
-def _grid_starts(f, u, v, x, y, uc0, vc0, fit_center):
-    """Profile SSE over a (h, theta) grid, (a f, Uc), (b f, Vc) solved linearly at each point."""
-    hs = jnp.exp(jnp.linspace(math.log(0.2), math.log(50.0), 40))
-    ths = jnp.deg2rad(jnp.linspace(0.5, 75.0, 60))
-    H, TH = jnp.meshgrid(hs, ths, indexing="ij")
-
-    def one(h, th):
-        s, c = jnp.sin(th), jnp.cos(th)
-        d = f + y * c + h * s
-        d = jnp.where(jnp.abs(d) > 1e-3, d, 1e-3)
-        gu, gv = x / d, -(y * s - h * c) / d
-
-        def lin(g, obs, c0):
-            gm, om = jnp.mean(g), jnp.mean(obs)  # obs = c + k g, by (centred) normal equations
-            k_c = jnp.sum((g - gm) * (obs - om)) / jnp.maximum(jnp.sum((g - gm) ** 2), 1e-30)
-            k_nc = jnp.sum(g * (obs - c0)) / jnp.maximum(jnp.sum(g * g), 1e-30)
-            k = jnp.where(fit_center, k_c, k_nc)
-            c_ = jnp.where(fit_center, om - k_c * gm, c0)
-            return k, c_, jnp.sum((obs - c_ - k * g) ** 2)
-
-        af, uc, su = lin(gu, u, uc0)
-        bf, vc, sv = lin(gv, v, vc0)
-        ok = (af > 0) & (bf > 0) & jnp.all(d > 1e-3)
-        return jnp.where(ok, su + sv, jnp.inf), jnp.stack([af, bf, h, jnp.rad2deg(th), uc, vc])
-
-    sse, par = jax.vmap(jax.vmap(one))(H, TH)
-    return sse.reshape(-1), par.reshape(-1, 6)
-
-
 # ----------------------------------------------------------------------------------------------
 
 def _check_input(u, v, x, y, n_par, world=False):
@@ -238,7 +228,10 @@ def _check_input(u, v, x, y, n_par, world=False):
         raise ValueError("all footprints lie on one line on the ground: the camera is not "
                          "determined (annotate walkers spread across the view)")
     if not world and np.any(arrs[3] <= 0):
-        raise ValueError("ground y (distance ahead, m) must be > 0 for every footprint")
+        i = int(np.flatnonzero(arrs[3] <= 0)[0])
+        raise ValueError(f"ground y (distance ahead of the camera's foot, m) must be > 0 for every "
+                         f"footprint (index {i}: y = {arrs[3][i]:.6g}); for x, y in a world frame "
+                         "of the data's own use --world (world=True)")
     return arrs
 
 
@@ -296,7 +289,7 @@ def fit_camera(
         starts = [c0]
         if not world:
             sub = np.linspace(0, len(u) - 1, min(len(u), 512)).astype(int)  # starts need no more
-            sse, par = (np.asarray(a) for a in _grid_starts(
+            sse, par = (np.asarray(a) for a in grid_starts(
                 jnp.float64(f), *(a[sub] for a in data), c0["uc"], c0["vc"], jnp.asarray(fc)))
             order = np.argsort(sse)[:max(n_starts - 1, 0)]
             starts += [{**c0, **dict(zip(NAMES[:6], par[i], strict=True))} for i in order
@@ -343,6 +336,13 @@ def _camera(values: dict[str, float], f: float, like: Camera) -> Camera:
                   b=values["bf"] / f, uc=values["uc"], vc=values["vc"],
                   roll=math.radians(values["roll"]), fps=like.fps,
                   image_width=like.image_width, image_height=like.image_height)
+
+
+def se_limits(values: dict[str, float]) -> dict[str, float]:
+    """The standard error (`UNITS`) beyond which a fitted parameter is not determined."""
+    return {"h": 0.5 * values["h"], "theta": 10.0, "af": 0.5 * values["af"],
+            "bf": 0.5 * values["bf"], "uc": 200.0, "vc": 200.0, "roll": 10.0, "tx": 50.0,
+            "ty": 50.0, "yaw": 20.0}
 
 
 GTOL = 1e-8  # the orthogonality test of MINPACK's gtol: a stationary point of the squared sum
@@ -399,9 +399,7 @@ def _report(best, fit, loss, n) -> CameraFit:
         reasons.append(f"h {values['h']:.3g} m at the edge of its domain")
     if not np.all(np.isfinite(se_arr)) or cond > 1e8:
         reasons.append(f"singular Jacobian (condition number {cond:.3g})")
-    huge = {"h": 0.5 * values["h"], "theta": 10.0, "af": 0.5 * values["af"],
-            "bf": 0.5 * values["bf"], "uc": 200.0, "vc": 200.0, "roll": 10.0, "tx": 50.0,
-            "ty": 50.0, "yaw": 20.0}
+    huge = se_limits(values)
     if "roll" in fit and abs(values["roll"]) > 45.0:
         reasons.append(f"roll {values['roll']:.3g} deg beyond +-45 deg")
     reasons += [f"standard error of {k} {se[k]:.3g} {UNITS[k]} is huge" for k in fit

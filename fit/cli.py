@@ -1,5 +1,7 @@
 """`rhythmjax-fit`: calibrate the camera of (3) from footprints, Q and R of the EKF (4)-(9) from
 tracks, or the walking and width models and thresholds from labelled tracks; write the config.
+`rhythmjax-fit footprints` makes the footprints file from boxes + world positions or from image
+points + an image-to-ground homography.
 
 Exit codes: 0 fitted and written; 1 the solver failed or the fit is ill-determined (the result
 code and the best point are printed, the output config is not written); 2 bad input (one line
@@ -9,7 +11,10 @@ naming the file).
 from __future__ import annotations
 
 import argparse
+import copy
+import math
 import sys
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -17,6 +22,18 @@ import numpy as np
 EPILOG = """\
 exit codes: 0 fitted and written, 1 solver failure or ill-determined fit (nothing written),
 2 bad input (one line naming the file)."""
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+PLAUSIBLE_H_M, PLAUSIBLE_SPAN_M = 30.0, 1000.0  # beyond these the units check warns
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(s) for s in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not WxH (e.g. 640x480)") from None
+    if w <= 0 or h <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: width and height must be > 0")
+    return w, h
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -24,18 +41,27 @@ def _parser() -> argparse.ArgumentParser:
                                 epilog=EPILOG,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="cmd", required=True)
-    c = sub.add_parser("camera", help="fit a f, b f, h, theta (and Uc, Vc) from footprints")
-    c.add_argument("footprints", help="footprints .csv/.parquet: tracks columns plus x, y (m)")
+    c = sub.add_parser("camera", help="fit a f, b f, h, theta (and Uc, Vc, roll) from footprints")
+    c.add_argument("footprints", help="footprints .csv/.parquet: columns u, v (px), x, y (m); "
+                   "track_id, frame optional")
+    c.add_argument("--image-size", type=_size, metavar="WxH",
+                   help="the image size (px; wins over the config's): needed when the config "
+                   "does not give the principal point, whose start is the image centre")
     c.add_argument("--fit-center", action="store_true",
-                   help="also fit Uc, Vc; b/a is then held at the config's (ground footprints "
-                   "determine only five combinations)")
+                   help="fit Uc, Vc even when the config gives them (they are fitted anyway "
+                   "when it does not); b/a is then held at the config's")
+    c.add_argument("--image-center", action="store_true",
+                   help="hold the principal point at the image centre when the config does not "
+                   "give it (instead of fitting it; needed with --world)")
     c.add_argument("--fit-roll", action="store_true",
-                   help="also fit the roll angle (an extension of (3): a tilted horizon); "
-                   "written as camera.roll_deg")
+                   help="fit the roll angle even when the config gives camera.roll_deg (it is "
+                   "fitted anyway when the config does not)")
     c.add_argument("--world", action="store_true",
                    help="x, y are in the data's own world frame: fit a planar rigid transform "
                    "(tx, ty, yaw; reported, not written) to the ground frame of (3) with the "
                    "camera; b/a is then held at the config's")
+    c.add_argument("--units", choices=tuple(UNITS), default="m",
+                   help="units of x, y in the file (scaled to metres on reading)")
     c.add_argument("--loss", choices=("l2", "huber", "cauchy"), default="l2")
     c.add_argument("--max-steps", type=int, default=256)
     n = sub.add_parser("noise", help="fit Q and R by the EKF's innovation likelihood")
@@ -58,37 +84,211 @@ def _parser() -> argparse.ArgumentParser:
         s.add_argument("--config", "-c", metavar="C", help="config JSON (default: Table 1)")
         s.add_argument("-o", "--output", required=True, metavar="C2", help="config to write")
         s.add_argument("--json", action="store_true", help="machine-readable summary on stdout")
+    _footprints_parser(sub)
     return p
 
 
-def _camera(args, cfg):
-    from fit.camera import fit_camera
-    from rhythmjax.io import BadInput, read_footprints
+def _footprints_parser(sub) -> None:
+    f = sub.add_parser("footprints", help="make a footprints file (u, v, x, y, track_id, frame) "
+                       "from boxes + world positions, or image points + a homography",
+                       description="Sources: --boxes with --positions (or a MOT file whose "
+                       "x, y columns hold the world position); --boxes, --points or --grid with "
+                       "--homography.")
+    f.add_argument("--boxes", metavar="B", help="boxes: MOTChallenge text (frame, id, left, "
+                   "top, width, height, ...) or CVML .xml (PETS); foot point = bottom centre")
+    f.add_argument("--points", metavar="P", help="image foot points: .csv/.parquet with u, v "
+                   "(px) [, track_id, frame], or a MOT file")
+    f.add_argument("--grid", type=int, metavar="N", help="image points on an N x N grid over "
+                   "the image (with --image-size and --homography)")
+    f.add_argument("--image-size", type=_size, metavar="WxH", help="image size for --grid")
+    f.add_argument("--positions", metavar="W", help="world positions per frame and id, the "
+                   "TrajNet layout: 'frame id x y' per line")
+    f.add_argument("--homography", metavar="H", help="3x3 image-to-ground homography (one row "
+                   "per line), to metres (or --units)")
+    f.add_argument("--homography-order", choices=("rowcol", "uv"), default="rowcol",
+                   help="H maps [row, col, 1] (ETH's H.txt) or [u, v, 1]")
+    f.add_argument("--box-scale", type=float, default=1.0, help="multiply box and point "
+                   "coordinates (boxes at another resolution: 0.625 for PETS' 768x576 boxes on "
+                   "its 480x360 video)")
+    f.add_argument("--frame-offset", type=int, default=0, help="world frame = box frame + K "
+                   "(1-based MOT frames against 0-based TrajNet frames: -1)")
+    f.add_argument("--match", choices=("auto", "id", "geometry"), default="auto",
+                   help="pair boxes and positions by id and frame, or by geometry (RANSAC "
+                   "homography, then per frame the nearest within --gate-px); auto: id when "
+                   "half the positions find a box of their id")
+    f.add_argument("--gate-px", type=float, default=12.0, help="largest distance (px) of a "
+                   "geometric match")
+    f.add_argument("--depth-ratio", type=float, default=10.0, help="--grid keeps points up to "
+                   "this many times as deep as the nearest")
+    f.add_argument("--units", choices=tuple(UNITS), default="m",
+                   help="units of the positions or of the homography's ground (scaled to m)")
+    f.add_argument("-o", "--output", required=True, metavar="F", help=".csv or .parquet to write")
+    f.add_argument("--json", action="store_true", help="machine-readable summary on stdout")
 
-    tr = read_footprints(args.footprints, fps=cfg.camera.fps)
-    ok = np.isfinite(tr.u) & np.isfinite(tr.v) & np.isfinite(tr.x) & np.isfinite(tr.y)
+
+# ----------------------------------------------------------------------------------------------
+# camera
+
+@dataclass
+class CameraRun:
+    """What `fit_footprints` did: the fit, the config to write (None when the fit failed),
+    the fitted camera's report (`rhythmjax.model.view.camera_report`), why each parameter not
+    fitted was held (`held`), what the user is told (`notes`) and warned about (`warnings`)."""
+
+    fit: object
+    config: object
+    report: dict
+    principal_point: str
+    held: dict[str, str] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return {**self.fit.to_dict(), "principal_point": self.principal_point,
+                "held": self.held, "notes": self.notes, "warnings": self.warnings,
+                "camera_report": self.report}
+
+
+def units_warning(x, y, h_m: float) -> str | None:
+    """One line when x, y look like centimetres or millimetres (a fitted h above 30 m, or a
+    ground span above 1000), naming the likely unit and the fix; else None."""
+    span = float(max(np.ptp(x), np.ptp(y))) if np.size(x) else 0.0
+    if h_m > PLAUSIBLE_H_M:  # the likelier unit: h nearer a typical 4 m (log scale)
+        names = {"cm": "centimetres", "mm": "millimetres"}
+        ok = sorted((u for u in names if 0.5 <= h_m * UNITS[u] <= PLAUSIBLE_H_M),
+                    key=lambda u: abs(math.log(h_m * UNITS[u] / 4.0)))
+        what = " or ".join(f"{names[u]} (h {h_m * UNITS[u]:.3g} m)" for u in ok)
+        return (f"fitted h {h_m:.4g} m over a ground span of {span:.4g}: " + (
+            f"x, y look like {what}; rerun with --units {ok[0]}" if ok else
+            "if x, y are not in metres, rerun with --units cm or --units mm"))
+    if span > PLAUSIBLE_SPAN_M:
+        return (f"the footprints span {span:.4g} m on the ground: if x, y are in centimetres or "
+                "millimetres, rerun with --units cm or --units mm")
+    return None
+
+
+def fit_footprints(u, v, x, y, d: dict, *, path: str = "footprints",
+                   config_path: str | None = None,
+                   image_size=None, fit_center: bool = False, image_center: bool = False,
+                   fit_roll: bool = False, world: bool = False, loss: str = "l2",
+                   max_steps: int = 256) -> CameraRun:
+    """`rhythmjax-fit camera` on arrays: footprints (u, v px; x, y m) and the config FILE's dict
+    `d` ({} for none). What the config gives is held, what it leaves out is fitted: the principal
+    point (uc_px, vc_px; its start the image centre, so the image size must be known: the
+    config's or `image_size` (w, h px), which wins) unless `image_center` holds it there; the roll
+    (roll_deg). a f, h, theta are always fitted, b f too unless the principal point is (b/a held)
+    or `world`. The output config keeps the rest of `d`, with the detection range derived again
+    from the fitted camera unless `d` gives it. Raises `BadInput` (the config or the data)."""
+    from fit.camera import fit_camera
+    from rhythmjax.io import BadInput, config_or_bad_input
+    from rhythmjax.model.params import Config, config_to_dict
+    from rhythmjax.model.view import camera_report
+
+    d = copy.deepcopy(d)
+    cam = d.setdefault("camera", {})
+    cpath = config_path or "config"
+    if not isinstance(cam, dict):
+        raise BadInput(cpath, "expected an object", key="camera")
+    notes, held = [], {}
+    if image_size is not None:
+        old = (cam.get("image_width_px"), cam.get("image_height_px"))
+        if None not in old and tuple(old) != tuple(image_size):
+            notes.append(f"--image-size {image_size[0]}x{image_size[1]} replaces the config's "
+                         f"{old[0]}x{old[1]}")
+        cam["image_width_px"], cam["image_height_px"] = int(image_size[0]), int(image_size[1])
+    given = [k for k in ("uc_px", "vc_px") if k in cam]
+    if len(given) == 1:
+        raise BadInput(cpath, "give both uc_px and vc_px, or neither (then the principal "
+                       "point is fitted)", key=f"camera.{given[0]}")
+    size_known = "image_width_px" in cam and "image_height_px" in cam
+    pp = ("fitted" if fit_center or not (given or image_center) else
+          "config" if given else "image centre")
+    if pp != "config" and not size_known:
+        raise BadInput(config_path or path, "the principal point is not in "
+                       "the config and the image size is unknown: give --image-size WxH (or "
+                       "camera.image_width_px and image_height_px in the config)")
+    if world and pp == "fitted":
+        raise BadInput(path, ("--world and --fit-center together" if fit_center else
+                              "the principal point is not in the config and with --world it")
+                       + " cannot be determined from ground footprints (the world frame's "
+                       "shift trades with it): give camera.uc_px and vc_px in the config, or "
+                       "--image-center to hold it at the image centre")
+    roll_fitted = fit_roll or "roll_deg" not in cam
+    fit = (("af", "h", "theta", "uc", "vc") if pp == "fitted" else
+           ("af", "h", "theta") if world else ("af", "bf", "h", "theta"))
+    fit += ("roll",) if roll_fitted else ()
+    thr = d.get("thresholds", {}) if isinstance(d.get("thresholds"), dict) else {}
+    start = {**d, "thresholds": {**thr, "range_min_m": thr.get("range_min_m", 3.0),
+                                 "range_max_m": thr.get("range_max_m", 20.0)}}
+    cfg0 = config_or_bad_input(start, cpath)  # a fixed range: the start needs none
+    notes.append({"fitted": "principal point not in the config: fitted",
+                  "config": "principal point held at the config's",
+                  "image centre": "principal point not in the config: held at the image "
+                  "centre (--image-center)"}[pp] + (" (--fit-center)" if fit_center else ""))
+    c0 = cfg0.camera
+    if pp != "fitted":
+        where = "the config's" if pp == "config" else "the image centre"
+        held["uc"], held["vc"] = (f"at {where} {float(q):.1f} px" for q in (c0.uc, c0.vc))
+    if pp == "fitted" or world:
+        held["bf"] = (f"b/a at the config's {float(c0.b / c0.a):.4g}: "
+                      "ground footprints fix only five combinations of a f, b f, h, theta, Uc, "
+                      "Vc" + (" (and the world frame's shift trades with b f)" if world else ""))
+    if roll_fitted:
+        notes.append("roll not in the config: fitted" if "roll_deg" not in cam else
+                     "roll fitted (--fit-roll)")
+    else:
+        held["roll"] = f"at the config's {math.degrees(float(c0.roll)):.2f} deg"
+    try:
+        r = fit_camera(u, v, x, y, cfg0.camera, fit=fit, loss=loss, max_steps=max_steps,
+                       world=world)
+    except ValueError as e:
+        raise BadInput(path, str(e)) from None
+    warnings = [w for w in (units_warning(x, y, r.values["h"]),) if w]
+    out = None
+    if r.success and not r.ill_determined:
+        d["camera"] = config_to_dict(Config(camera=r.camera))["camera"]
+        try:
+            out = config_or_bad_input(d, cpath)
+        except BadInput as e:
+            if not (e.key or "").startswith("thresholds"):
+                raise
+            warnings.append(f"no detection range from the fitted camera ({e.message}); the "
+                            "config's (or Table 1's 3-20 m) is kept")
+            d["thresholds"] = start["thresholds"]
+            out = config_or_bad_input(d, cpath)
+    report = camera_report(r.camera, float(cfg0.width.height))
+    return CameraRun(r, out, report, pp, held, notes, warnings)
+
+
+def _camera(args):
+    from rhythmjax.io import BadInput, read_config_dict, read_footprints
+
+    fp = read_footprints(args.footprints)
+    ok = np.isfinite(fp.u) & np.isfinite(fp.v) & np.isfinite(fp.x) & np.isfinite(fp.y)
     if not np.any(ok):
         raise BadInput(args.footprints, "no footprint with finite u, v, x and y")
-    if args.world and args.fit_center:
-        raise BadInput(args.footprints, "--world and --fit-center together are not identifiable "
-                       "from ground footprints; give the principal point in the config")
-    # In a world frame of its own the ground's translation trades with b f (singular Jacobian,
-    # measured): b/a is held at the config's, as with --fit-center.
-    fit = (("af", "h", "theta", "uc", "vc") if args.fit_center
-           else ("af", "h", "theta") if args.world else ("af", "bf", "h", "theta"))
-    fit += ("roll",) if args.fit_roll else ()
-    try:
-        r = fit_camera(tr.u[ok], tr.v[ok], tr.x[ok], tr.y[ok], cfg.camera, fit=fit,
-                       loss=args.loss, max_steps=args.max_steps, world=args.world)
-    except ValueError as e:
-        raise BadInput(args.footprints, str(e)) from None
-    return r, cfg.__class__(r.camera, cfg.noise, cfg.width, cfg.walking, cfg.thresholds)
+    scale = UNITS[args.units]
+    x, y = fp.x[ok] * scale, fp.y[ok] * scale
+    if not args.world and np.any(y <= 0):
+        i = int(np.flatnonzero(ok)[np.flatnonzero(y <= 0)[0]])
+        raise BadInput(args.footprints, f"ground y {fp.y[i]:.6g} <= 0: x, y must be in the "
+                       "camera's ground frame (y > 0 ahead of its foot); for x, y in a world "
+                       "frame of their own, add --world", column="y",
+                       **{fp.unit: int(fp.line[i])})
+    d = read_config_dict(args.config) if args.config else {}
+    run = fit_footprints(fp.u[ok], fp.v[ok], x, y, d, path=args.footprints,
+                         config_path=args.config, image_size=args.image_size,
+                         fit_center=args.fit_center, image_center=args.image_center,
+                         fit_roll=args.fit_roll, world=args.world, loss=args.loss,
+                         max_steps=args.max_steps)
+    return run.fit, run.config, run
 
 
-def _noise(args, cfg):
+def _noise(args):
     from fit.noise import fit_noise
     from rhythmjax.io import BadInput, read_tracks, to_batch
 
+    cfg = _config(args)
     tr = read_tracks(args.tracks, fps=cfg.camera.fps)
     b = to_batch(tr, max_gap_frames=args.max_gap_frames, min_len=2, fps=cfg.camera.fps)
     fit = ("log_q", "log_r_diag", "r_offdiag") + (
@@ -98,13 +298,14 @@ def _noise(args, cfg):
                       max_steps=args.max_steps)
     except ValueError as e:
         raise BadInput(args.tracks, str(e)) from None
-    return r, cfg.__class__(cfg.camera, r.noise, cfg.width, cfg.walking, cfg.thresholds)
+    return r, cfg.__class__(cfg.camera, r.noise, cfg.width, cfg.walking, cfg.thresholds), None
 
 
-def _walking(args, cfg):
+def _walking(args):
     from fit.walking import fit_walking
     from rhythmjax.io import BadInput, read_tracks, to_batch
 
+    cfg = _config(args)
     tr = read_tracks(args.tracks, fps=cfg.camera.fps)
     if tr.label is None:
         raise BadInput(args.tracks, "no 'label' column: the walking fit needs labelled tracks")
@@ -115,26 +316,98 @@ def _walking(args, cfg):
                         max_iter=args.max_iter)
     except ValueError as e:
         raise BadInput(args.tracks, str(e)) from None
-    return r, r.config
+    return r, r.config, None
 
 
-def main(argv: list[str] | None = None) -> int:
-    from rhythmjax.io import BadInput, dumps_json, read_config, write_config
+def _config(args):
+    from rhythmjax.io import read_config
     from rhythmjax.model.params import Config
 
-    args = _parser().parse_args(argv)
+    return Config() if args.config is None else read_config(args.config)
+
+
+# ----------------------------------------------------------------------------------------------
+# footprints
+
+def make_footprints(args):
+    """`rhythmjax-fit footprints`: the `fit.footprints.Made` table of the arguments."""
+    from fit import footprints as F
+    from rhythmjax.io import BadInput
+
+    sources = [k for k in ("boxes", "points", "grid") if getattr(args, k) is not None]
+    if len(sources) != 1:
+        raise BadInput("footprints", "give one image source: --boxes, --points or --grid")
+    if args.homography is None and sources != ["boxes"]:
+        raise BadInput("footprints", f"--{sources[0]} needs --homography")
+    if args.positions is not None and args.homography is not None:
+        raise BadInput("footprints", "give --positions or --homography, not both")
+    if not (args.box_scale > 0 and math.isfinite(args.box_scale)):
+        raise BadInput("footprints", f"--box-scale {args.box_scale} must be > 0")
+    scale = UNITS[args.units]
+    if args.homography is not None:
+        H = F.read_homography(args.homography)
+        H = np.diag([scale, scale, 1.0]) @ H
+        if args.grid is not None:
+            if args.image_size is None or args.grid < 2:
+                raise BadInput("footprints", "--grid N (N >= 2) needs --image-size WxH")
+            u, v = F.grid_points(H, args.image_size, args.grid, args.homography_order,
+                                 args.depth_ratio)
+            src = f"a {args.grid}x{args.grid} grid over the image through {args.homography}"
+            return F.through_homography({"u": u, "v": v}, H, args.homography_order, source=src)
+        path = args.boxes or args.points
+        pts = F.read_points(path, scale=args.box_scale)
+        return F.through_homography(pts, H, args.homography_order, source=path)
+    boxes = F.read_boxes(args.boxes, scale=args.box_scale)
+    boxes["x"], boxes["y"] = boxes["x"] * scale, boxes["y"] * scale
+    pos = None
+    if args.positions is not None:
+        pos = F.read_positions(args.positions)
+        pos["x"], pos["y"] = pos["x"] * scale, pos["y"] * scale
+    return F.from_boxes(boxes, pos, match=args.match, frame_offset=args.frame_offset,
+                        gate_px=args.gate_px, source=args.boxes)
+
+
+def _footprints_main(args) -> int:
+    from fit.footprints import write_footprints
+    from rhythmjax.io import BadInput, check_writable, dumps_json
+
     try:
-        cfg = Config() if args.config is None else read_config(args.config)
-        r, new = {"camera": _camera, "noise": _noise, "walking": _walking}[args.cmd](args, cfg)
+        check_writable(args.output)
+        made = make_footprints(args)
+        write_footprints(args.output, made)
     except BadInput as e:
         print(f"rhythmjax-fit: {e}", file=sys.stderr)
         return 2
-    bad = r.ill_determined or not r.success
+    print(dumps_json({"command": "footprints", "written": args.output, **made.to_dict()})
+          if args.json else made.summary() + f"\nwrote {args.output}")
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------
+
+def main(argv: list[str] | None = None) -> int:
+    from rhythmjax.io import BadInput, dumps_json, write_config
+    from rhythmjax.model.view import format_report
+
+    args = _parser().parse_args(argv)
+    if args.cmd == "footprints":
+        return _footprints_main(args)
+    try:
+        r, new, run = {"camera": _camera, "noise": _noise, "walking": _walking}[args.cmd](args)
+    except BadInput as e:
+        print(f"rhythmjax-fit: {e}", file=sys.stderr)
+        return 2
+    bad = r.ill_determined or not r.success or new is None
     if args.json:
         print(dumps_json({"command": args.cmd, "written": None if bad else args.output,
-                          **r.to_dict()}))
+                          **(run.to_dict() if run is not None else r.to_dict())}))
     else:
         print(r.summary())
+        if run is not None:
+            print("\n".join(run.notes + [f"held {k}: {why}" for k, why in run.held.items()]))
+            print(format_report(run.report))
+    for w in run.warnings if run is not None else ():
+        print(f"rhythmjax-fit: warning: {w}", file=sys.stderr)
     if bad:
         print(f"rhythmjax-fit: fit failed or ill-determined ({r.result or 'successful'}); the "
               f"best point is shown above; {args.output} not written", file=sys.stderr)

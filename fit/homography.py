@@ -1,10 +1,14 @@
-"""Start values for the camera fit in a world frame of the data's own (`fit_camera(world=True)`):
-a plane-to-image homography by the normalised DLT, and the camera pose it implies."""
+"""Start values for the camera fit: in the camera's ground frame a (h, theta) grid with the linear
+parameters solved in closed form (`grid_starts`); in a world frame of the data's own
+(`fit_camera(world=True)`) a plane-to-image homography by the normalised DLT, and the camera
+pose it implies."""
 
 from __future__ import annotations
 
 import math
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 
@@ -52,3 +56,36 @@ def pose_from_homography(M: np.ndarray, c0: dict[str, float], X, Y
     tx, ty = -(C[0] * fy - C[1] * fx), -(C[0] * fx + C[1] * fy)
     return {"af": af, "h": float(C[2]), "theta": math.degrees(th), "roll": math.degrees(roll),
             "tx": float(tx), "ty": float(ty), "yaw": math.degrees(math.atan2(fx, fy))}, mirror
+
+
+@jax.jit
+def grid_starts(f, u, v, x, y, uc0, vc0, fit_center):
+    """Starts of `fit.camera.fit_camera`: the profile SSE (px^2) over a (h, theta) grid (m, rad),
+    with (a f, Uc) and (b f, Vc) (px) solved linearly at each point (variable projection; the
+    principal point held at (uc0, vc0) unless `fit_center`). Returns (sse (K,), params (K, 6) in
+    `fit.camera.NAMES[:6]` order and units)."""
+    hs = jnp.exp(jnp.linspace(math.log(0.2), math.log(50.0), 40))
+    ths = jnp.deg2rad(jnp.linspace(0.5, 75.0, 60))
+    H, TH = jnp.meshgrid(hs, ths, indexing="ij")
+
+    def one(h, th):
+        s, c = jnp.sin(th), jnp.cos(th)
+        d = f + y * c + h * s
+        d = jnp.where(jnp.abs(d) > 1e-3, d, 1e-3)
+        gu, gv = x / d, -(y * s - h * c) / d
+
+        def lin(g, obs, c0):
+            gm, om = jnp.mean(g), jnp.mean(obs)  # obs = c + k g, by (centred) normal equations
+            k_c = jnp.sum((g - gm) * (obs - om)) / jnp.maximum(jnp.sum((g - gm) ** 2), 1e-30)
+            k_nc = jnp.sum(g * (obs - c0)) / jnp.maximum(jnp.sum(g * g), 1e-30)
+            k = jnp.where(fit_center, k_c, k_nc)
+            c_ = jnp.where(fit_center, om - k_c * gm, c0)
+            return k, c_, jnp.sum((obs - c_ - k * g) ** 2)
+
+        af, uc, su = lin(gu, u, uc0)
+        bf, vc, sv = lin(gv, v, vc0)
+        ok = (af > 0) & (bf > 0) & jnp.all(d > 1e-3)
+        return jnp.where(ok, su + sv, jnp.inf), jnp.stack([af, bf, h, jnp.rad2deg(th), uc, vc])
+
+    sse, par = jax.vmap(jax.vmap(one))(H, TH)
+    return sse.reshape(-1), par.reshape(-1, 6)

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..model.config_setup import config_for
 from ..model.params import Config, ConfigError, config_to_dict
+from .footprints import Footprints as Footprints, read_footprints as read_footprints
 from .tables import (
     BadInput as BadInput,
     PathLike,
@@ -142,14 +143,6 @@ def read_tracks(path: PathLike, *, fps: float | int | None = None) -> Tracks:
                   u=col["u"], v=col["v"], width_px=col["width_px"], intensity=col["intensity"],
                   line=lines, unit=tab.unit, label=labels, x=col.get("x"), y=col.get("y"),
                   fps=None if fps is None else float(fps), notes=notes)
-
-
-def read_footprints(path: PathLike, *, fps: float | int | None = None) -> Tracks:
-    """`read_tracks` for annotated footprints: the ground position columns x, y are required."""
-    tr = read_tracks(path, fps=fps)
-    if tr.x is None or tr.y is None:
-        raise BadInput(path, "footprints need columns 'x' and 'y' (ground position, m)")
-    return tr
 
 
 def _first(mask: np.ndarray) -> int | None:
@@ -413,8 +406,8 @@ def dumps_json(obj: Any, **kwargs: Any) -> str:
 
 
 __all__: Sequence[str] = (
-    "BadInput", "Table", "Tracks", "TrackBatch", "atomic_path", "atomic_write", "check_writable",
-    "config_or_bad_input", "dumps_json", "make_output_dir", "read_config", "read_config_dict",
-    "read_footprints", "read_table",
-    "read_tracks", "to_batch", "write_config", "write_table",
+    "BadInput", "Footprints", "Table", "Tracks", "TrackBatch", "atomic_path", "atomic_write",
+    "check_writable", "config_or_bad_input", "dumps_json", "make_output_dir", "read_config",
+    "read_config_dict", "read_footprints", "read_table", "read_tracks", "to_batch",
+    "write_config", "write_table",
 )
