@@ -8,7 +8,8 @@ b f (px), no skew, whose centre is at (0, -f cos(theta), h + f sin(theta)) of it
 frame (its depth f + y cos(theta) + h sin(theta) is the distance along the optical axis from
 there), the image rotated by `roll` about (uc, vc). So a pin-hole at height H (m) looking down
 by theta is (3) with h = H - f sin(theta), and a world ground point enters (3)'s frame by a
-rotation about the camera's foot and a shift of f cos(theta) back (`GroundTransform`).
+rotation about the camera's foot, y' = (its distance ahead of the foot) - f cos(theta)
+(`GroundTransform`).
 
 Assumed of a world frame (and checked): ground plane z = 0, z up, the camera above it and
 looking down (tilt > 0), rolled less than 45 deg. A camera with square pixels and no skew or
