@@ -117,7 +117,7 @@ def test_pets_from_its_xml_and_video_is_datasets_pets_camera(tmp_path, capsys):
 
 
 def opencv_files(tmp_path, K, R, t, size, dist):
-    """The same calibration as cv2.FileStorage writes it (YAML, JSON) and as plain JSON."""
+    """The same calibration as cv2.FileStorage writes it (YAML, JSON, XML) and as plain JSON."""
     rvec = cv2.Rodrigues(R)[0]
     paths = []
     for ext in ("yml", "json"):
@@ -131,6 +131,15 @@ def opencv_files(tmp_path, K, R, t, size, dist):
         fs.write("image_height", size[1])
         fs.release()
         paths.append(p)
+    p = tmp_path / "cal.xml"  # other spellings, 1-D arrays (FileStorage's nd-matrix)
+    fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_WRITE)
+    fs.write("cameraMatrix", K)
+    fs.write("distCoeffs", np.asarray(dist, np.float64))
+    fs.write("R", R)
+    fs.write("T", t.ravel())
+    fs.write("imageSize", np.asarray(size, np.float64))
+    fs.release()
+    paths.append(p)
     p = tmp_path / "plain.json"
     p.write_text(json.dumps({"K": K.tolist(), "R": R.tolist(), "t": t.tolist(),
                              "dist": list(dist), "image_size": list(size)}))

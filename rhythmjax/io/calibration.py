@@ -129,12 +129,14 @@ class OpenCVCalibration:
 
 
 def _from_json_object(obj):
-    """A parsed JSON value with OpenCV's {"type_id": "opencv-matrix", rows, cols, data} as a
-    nested list."""
+    """A parsed value with OpenCV's matrices ({rows, cols, data} of "opencv-matrix", {sizes,
+    data} of "opencv-nd-matrix") as arrays."""
     if isinstance(obj, dict):
-        if obj.get("type_id") == "opencv-matrix" and {"rows", "cols", "data"} <= obj.keys():
+        shape = ([obj.get("rows"), obj.get("cols")] if {"rows", "cols"} <= obj.keys() else
+                 obj.get("sizes"))
+        if "data" in obj and shape is not None:
             try:
-                return np.asarray(obj["data"], np.float64).reshape(obj["rows"], obj["cols"])
+                return np.asarray(obj["data"], np.float64).reshape(np.asarray(shape, int))
             except (TypeError, ValueError):
                 return obj
         return {k: _from_json_object(v) for k, v in obj.items()}
@@ -144,12 +146,10 @@ def _from_json_object(obj):
 
 
 def _from_node(node):
-    """A cv2.FileNode as Python: maps, sequences, matrices (`!!opencv-matrix`), numbers."""
+    """A cv2.FileNode as Python: maps, sequences, numbers, strings (matrices are maps here;
+    `_from_json_object` turns them into arrays)."""
     if node.isMap():
-        keys = node.keys()
-        if {"rows", "cols", "data"} <= set(keys):
-            return node.mat()
-        return {k: _from_node(node.getNode(k)) for k in keys}
+        return {k: _from_node(node.getNode(k)) for k in node.keys()}
     if node.isSeq():
         return [_from_node(node.at(i)) for i in range(node.size())]
     if node.isInt() or node.isReal():
