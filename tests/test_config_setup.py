@@ -128,3 +128,16 @@ def test_range_of_a_high_camera_looking_down():
     assert far > near and person_height_px(cam, far) == pytest.approx(MIN_PERSON_PX, rel=1e-6)
     ys = np.linspace(far * 1.001, 3 * far, 50)
     assert all(person_height_px(cam, float(y)) < MIN_PERSON_PX for y in ys)
+
+
+def test_range_of_a_camera_looking_almost_straight_down():
+    """82 deg down (ETH seq_hotel): the bottom row sees the ground behind the camera's foot
+    (y < 0); the derived range starts at NEAR_FLOOR_M, the config's range being y > 0."""
+    from rhythmjax.model.view import NEAR_FLOOR_M
+
+    cam = _cam(500.0, 10.0, 82.0, w=720, hgt=576)
+    assert ground_distance_at_row(cam, 576.0) < 0
+    near, far = visible_range(cam)
+    assert near == NEAR_FLOOR_M and far == pytest.approx(ground_distance_at_row(cam, 0.0))
+    cfg = config_for({"camera": {"h_m": 10.0, "theta_deg": 82.0}}, image_size=(720, 576))
+    assert float(cfg.thresholds.range_min) == pytest.approx(NEAR_FLOOR_M)

@@ -21,6 +21,7 @@ from .params import Camera, host_float
 
 
 MIN_PERSON_PX = 20.0  # px: a walker shorter than this in the image is out of the derived range
+NEAR_FLOOR_M = 0.1  # m: the derived range starts no nearer (the config's range is y > 0)
 PERSON_HEIGHT_M = 1.7  # m: WidthModel.height's default, the person of the report
 
 
@@ -85,7 +86,7 @@ def distance_of_person_px(camera: Camera, px: float, height_m: float = PERSON_HE
 def visible_range(camera: Camera, height_m: float = PERSON_HEIGHT_M
                   ) -> tuple[float, float]:
     """(near, far) m: the derived detection range (module doc). near is the bottom row's ground
-    distance; far the top row's, or the distance where a person is `MIN_PERSON_PX` tall if
+    distance, at least `NEAR_FLOOR_M` (a steep camera's bottom row sees behind its foot); far the top row's, or the distance where a person is `MIN_PERSON_PX` tall if
     nearer. Raises ValueError when the image sees no usable ground (the bottom row at or above
     the horizon, or near >= far)."""
     c = camera_tuple(camera)
@@ -94,6 +95,7 @@ def visible_range(camera: Camera, height_m: float = PERSON_HEIGHT_M
     if not math.isfinite(near):
         raise ValueError(f"the bottom row of the image is above the horizon (row "
                          f"{horizon_row(camera):.0f}): the camera sees no ground")
+    near = max(near, NEAR_FLOOR_M)  # a camera looking steeply down sees behind its foot (y < 0)
     far = min(ground_distance_at_row(camera, 0.0),
               distance_of_person_px(camera, MIN_PERSON_PX, height_m))
     if not far > near:
