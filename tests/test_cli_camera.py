@@ -201,15 +201,15 @@ def test_homography_and_config_base(tmp_path, capsys):
     ("seq_eth", "640x480", "max 4.85 px, RMS 1.58 px"),
     ("seq_hotel", "720x576", "max 9.78 px, RMS 2.72 px")])
 def test_eth_homographies(name, size, line, tmp_path, capsys):
-    """seq_hotel's camera looks 82 deg down: its bottom row sees ground behind the camera's foot,
-    so the detection range comes from the base config (view.visible_range gives near < 0)."""
-    out, base = tmp_path / "eth.json", tmp_path / "base.json"
-    base.write_text(json.dumps({"thresholds": {"range_min_m": 0.5, "range_max_m": 15.0}}))
+    """seq_hotel's camera looks 82 deg down: its bottom row sees ground behind the camera's foot;
+    the derived range starts at view.NEAR_FLOOR_M, so no base config is needed."""
+    out = tmp_path / "eth.json"
     code, stdout, err = run(capsys, "--homography", D.eth_root() / name / "H.txt",
                             "--homography-convention", "image-rowcol", "--image-size", size,
-                            "--fps", 25, "--config", base, "-o", out)
+                            "--fps", 25, "-o", out)
     assert code == 0, err
     assert f"nearest camera of (3): {line}" in stdout
+    assert "detection range   " in stdout and "none" not in stdout.split("detection range")[1][:8]
     read_config(out)
 
 
