@@ -5,7 +5,8 @@ the longest track's length, verdict and pace per clip, and the pace spread of su
 normal walks.
 
 PETS09-S2L1 (`../shared/data/real/pets2009_s2l1/`, 480x360, dt = 1/7 s, the camera of (3) nearest
-to the Tsai calibration, `datasets.pets_camera`): the online tracker's measured foot points are
+to the Tsai calibration as `rhythmjax camera --tsai` writes it, the rest of the config Table 1's,
+24 object slots, i.e. `rhythmjax run VIDEO -c pets.json --fps 7 --max-objects 24`): the online tracker's measured foot points are
 matched per frame to the annotated boxes' bottom centres (greedy nearest pairs within
 max(GATE_PX, 0.5 box width)); each track is assigned to the person it matched most often. Reports
 the median px distance over matched track-frames, the annotated people tracked, the fraction of
@@ -14,8 +15,9 @@ people walk.
 
 UCSD Ped2 (`ucsd_ped2/`, 360x240 frames, camera GUESSED, see UCSD_CAMERA; the frame rate is not
 stated: 30 fps by default, because at the 10 fps the literature usually quotes the walkers'
-rhythm comes out at a third of a walking pace (measured: 1 of the 57 judged tracks off the
-anomaly boxes is Pedestrian at 10 fps, 31 of 47 at 30 fps; `--ucsd-fps`)): a track
+rhythm comes out at a third of a walking pace (measured with an earlier config: 1 of the 57
+judged tracks off the anomaly boxes is Pedestrian at 10 fps, 31 of 47 at 30 fps; `--ucsd-fps`)):
+a track
 overlaps the anomaly boxes (cyclists, the cart) when its foot point lies in a box (grown by
 BOX_MARGIN_PX) on at least OVERLAP_FRACTION of its measured frames; those should be judged
 Non-pedestrian, the others Pedestrian. Prints the confusion counts per clip and in total.
@@ -36,40 +38,48 @@ import time
 import numpy as np
 
 from rhythmjax.evaluation import datasets
-from rhythmjax.model.params import Camera, Config, Noise, Thresholds, WidthModel
+from rhythmjax.model.params import Config
 
 
 GATE_PX = 12.0  # PETS: a track's foot point and a box bottom centre this close (or 0.5 W) match
 BOX_MARGIN_PX = 6.0  # UCSD: anomaly boxes grown by this on each side
 OVERLAP_FRACTION = 0.3  # UCSD: of a track's measured frames inside an anomaly box
-# The detector-matched noise of the synthetic evaluation (cli_video.SYNTHETIC_CONFIG).
-NOISE = Noise(r_std=(4.0, 4.0))
-WIDTH = WidthModel(std=0.2)
+# Every config here is what a user gives the command line: a partial config dict, resolved for
+# the video by `model.config_setup.config_for` exactly as `rhythmjax run -c CONFIG` does
+# (image size and fps from the video, principal point at the centre, N = window_s x fps, the
+# detection range from the camera). The rest of the config is Table 1's.
+
 # UCSD Ped2 gives no calibration. A guess that puts a 1.7 m walker ~33 px tall on the walkway
 # (measured blob heights 31-39 px): camera 8 m up, 25 deg down, focal 400 px.
-UCSD_CAMERA = dict(f=0.01, h=8.0, theta=math.radians(25.0), a=40000.0, b=40000.0, uc=180.0,
-                   vc=120.0, fps=10.0, image_width=360, image_height=240)
+UCSD_CAMERA = {"f_m": 0.01, "h_m": 8.0, "theta_deg": 25.0, "a_px_per_m": 40000.0,
+               "b_px_per_m": 40000.0}
+# CASIA-B side view (README, "Your own camera"): not calibrated; `rhythmjax camera --focal-px 400
+# --height 0.85 --tilt 2 --window-s 1.92` (a walker is in view for 63-86 frames at 25 fps: the
+# window is N = 48 samples).
+CASIA_CONFIG = {"camera": {"f_m": 0.008, "a_px_per_m": 50000.0, "b_px_per_m": 50000.0,
+                           "h_m": 0.85, "theta_deg": 2.0},
+                "thresholds": {"window_s": 1.92}}
 
 
-# CASIA-B side view (README, "Real data"): not calibrated; a camera that puts the walkers' feet
-# in the detection range, N = 48 (a walker is in view for 63-86 frames at 25 fps).
-CASIA_CONFIG = {"camera": {"h_m": 0.85, "theta_deg": 2.0, "fps": 25, "image_width_px": 320,
-                           "image_height_px": 240, "uc_px": 160, "vc_px": 120,
-                           "a_px_per_m": 50000, "b_px_per_m": 50000},
-                "noise": {"r_std_px": [3.0, 6.0]},
-                "thresholds": {"range_min_m": 2.0, "range_max_m": 12.0, "n_samples": 48}}
+def video_config(d: dict, path, fps: float) -> Config:
+    """`d` resolved for the video at `path` played at `fps`, as the command line does."""
+    from rhythmjax.model.config_setup import config_for
+    from rhythmjax.vision.video import open_video
+
+    with open_video(str(path), fps=fps) as src:
+        return config_for(d, image_size=(src.width, src.height), fps=src.fps)
 
 
-def pets_config(n: int) -> Config:
-    """PETS: the Tsai-nearest camera; detection range 5-40 m covers every annotated foot point
-    (their ground distances along the optical axis span about 9-35 m); N samples per window."""
-    return Config(camera=datasets.pets_camera(), noise=NOISE, width=WIDTH,
-                  thresholds=Thresholds(range_min=5.0, range_max=40.0, n=n))
+def pets_config_dict(window_s: float | None = None) -> dict:
+    """PETS: the camera section `rhythmjax camera --tsai View_001.xml --video VIDEO --fps 7`
+    writes (the Tsai calibration's nearest camera of (3) at 480 x 360, 7 fps)."""
+    from rhythmjax.io.calibration import read_tsai
+    from rhythmjax.model.camera_from import camera_from_tsai
 
-
-def ucsd_config(n: int, fps: float = 10.0) -> Config:
-    return Config(camera=Camera(**{**UCSD_CAMERA, "fps": fps}), noise=NOISE, width=WIDTH,
-                  thresholds=Thresholds(range_min=5.0, range_max=60.0, n=n))
+    xml = datasets.pets_root() / "calibration" / "View_001.xml"
+    section = camera_from_tsai(read_tsai(xml), image_size=datasets.PETS_SIZE,
+                               fps=datasets.PETS_FPS).section
+    return {"camera": section, **({"thresholds": {"window_s": window_s}} if window_s else {})}
 
 
 MAX_OBJECTS = 24  # object slots (TrackerOptions default 8): up to ~20 people in view at once
@@ -183,24 +193,36 @@ def score_ucsd(tracks, verdicts, boxes) -> dict:
     return out
 
 
-def run_pets(n: int, overlay_dir=None) -> dict:
-    cfg = pets_config(n)
+def run_pets(window_s: float | None, overlay_dir=None) -> dict:
+    cfg = video_config(pets_config_dict(window_s), datasets.pets_video(), datasets.PETS_FPS)
     t0 = time.perf_counter()
     tracks, verdicts = track(cfg, datasets.pets_video(), datasets.PETS_FPS,
                              overlay_dir and os.path.join(overlay_dir, "pets.mp4"))
     res = score_pets(tracks, verdicts, datasets.pets_boxes())
     res["seconds"] = time.perf_counter() - t0
-    res["n_samples"] = n
+    res["n_samples"] = cfg.thresholds.n
+    res["range_m"] = [float(cfg.thresholds.range_min), float(cfg.thresholds.range_max)]
     return res
+
+
+def score_pets_run(out_dir) -> dict:
+    """Score the output folder of `rhythmjax run` on the PETS video (tracks.parquet,
+    verdicts.csv) as `run_pets` scores its own run: the two-command check of issue 15."""
+    import pandas as pd
+
+    tracks = {k: v.to_numpy() for k, v in pd.read_parquet(
+        os.path.join(out_dir, "tracks.parquet")).items()}
+    verdicts = {k: v.to_numpy() for k, v in pd.read_csv(
+        os.path.join(out_dir, "verdicts.csv")).items()}
+    verdicts["verdict"] = verdicts["verdict"].astype(str)
+    return score_pets(tracks, verdicts, datasets.pets_boxes())
 
 
 def run_casia(overlay_dir=None) -> dict:
     """Every clip of casia_b_090/: tracks, the longest track's frames, its verdict and pace."""
-    from rhythmjax.model.params import config_from_dict
-
-    cfg = config_from_dict(CASIA_CONFIG)
     out = {}
     for path in sorted((datasets.DATA_ROOT / "casia_b_090").glob("*.avi")):
+        cfg = video_config(CASIA_CONFIG, path, 25.0)
         video = overlay_dir and os.path.join(overlay_dir, f"casia_{path.stem}.mp4")
         tracks, verdicts = track(cfg, path, 25.0, video, max_objects=8)
         tid = np.asarray(tracks["track_id"])
@@ -215,11 +237,12 @@ def run_casia(overlay_dir=None) -> dict:
     return out
 
 
-def run_ucsd(n: int, fps: float, overlay_dir=None) -> dict:
-    cfg = ucsd_config(n, fps)
+def run_ucsd(window_s: float, fps: float, overlay_dir=None) -> dict:
+    d = {"camera": UCSD_CAMERA, "thresholds": {"window_s": window_s}}
     out, total = {}, {"anomaly": {}, "other": {}}
     for clip in datasets.UCSD_CLIPS:
         folder, boxes = datasets.ucsd_clip(clip)
+        cfg = video_config(d, folder, fps)
         tracks, verdicts = track(cfg, folder, fps,
                                  overlay_dir and os.path.join(overlay_dir, f"ucsd_{clip}.mp4"))
         out[clip] = score_ucsd(tracks, verdicts, boxes)
@@ -227,7 +250,8 @@ def run_ucsd(n: int, fps: float, overlay_dir=None) -> dict:
             for k, c in out[clip][g].items():
                 total[g][k] = total[g].get(k, 0) + c
     out["total"] = total
-    out["n_samples"], out["fps"] = n, fps
+    out["n_samples"], out["fps"] = cfg.thresholds.n, fps
+    out["range_m"] = [float(cfg.thresholds.range_min), float(cfg.thresholds.range_max)]
     return out
 
 
@@ -236,8 +260,12 @@ def main(argv=None) -> int:
     p.add_argument("--only", choices=("casia", "pets", "ucsd"))
     p.add_argument("-o", "--output", default="eval_real_video.json")
     p.add_argument("--overlay", help="folder for annotated videos")
-    p.add_argument("--n-pets", type=int, default=32, help="rhythm window N at 7 fps (4.6 s)")
-    p.add_argument("--n-ucsd", type=int, default=32, help="rhythm window N for UCSD")
+    p.add_argument("--window-pets", type=float, help="rhythm window (s) for PETS (default: "
+                   "Table 1's 64/15 s, N = 30 at 7 fps)")
+    p.add_argument("--window-ucsd", type=float, default=32 / 30, help="rhythm window (s) for "
+                   "UCSD (N = 32 at 30 fps; walkers cross the small view in a few seconds)")
+    p.add_argument("--pets-run", metavar="DIR", help="score this `rhythmjax run` output folder "
+                   "on PETS instead of running the tracker")
     p.add_argument("--ucsd-fps", type=float, default=30.0,
                    help="UCSD frame rate (not stated; 10 is the usual claim, but the "
                    "walkers' rhythm is a walking pace only at 30 fps: see the module doc)")
@@ -261,8 +289,13 @@ def main(argv=None) -> int:
         if datasets.pets_root() is None:
             print("PETS09-S2L1 absent: skipped", file=sys.stderr)
         else:
-            r = out["pets"] = run_pets(a.n_pets, a.overlay)
-            print(f"PETS09-S2L1 (N = {a.n_pets}): {r['n_tracks']} tracks; foot point vs box "
+            if a.pets_run:
+                r = out["pets"] = score_pets_run(a.pets_run)
+                r.update(n_samples=math.nan, range_m=[math.nan, math.nan], seconds=math.nan)
+            else:
+                r = out["pets"] = run_pets(a.window_pets, a.overlay)
+            print(f"PETS09-S2L1 (N = {r['n_samples']}, range {r['range_m'][0]:.1f}-"
+                  f"{r['range_m'][1]:.1f} m): {r['n_tracks']} tracks; foot point vs box "
                   f"bottom centre median {r['median_px']:.1f} px (90 % {r['p90_px']:.1f} px) "
                   f"over {r['matched_track_frames']} of {r['measured_track_frames']} measured "
                   f"track-frames; people tracked {r['people_tracked']}/{r['n_people']}, "
@@ -273,9 +306,10 @@ def main(argv=None) -> int:
         if datasets.ucsd_root() is None:
             print("UCSD Ped2 absent: skipped", file=sys.stderr)
         else:
-            r = out["ucsd"] = run_ucsd(a.n_ucsd, a.ucsd_fps, a.overlay)
+            r = out["ucsd"] = run_ucsd(a.window_ucsd, a.ucsd_fps, a.overlay)
             for clip in (*datasets.UCSD_CLIPS, "total"):
-                print(f"UCSD {clip} (N = {a.n_ucsd}, {a.ucsd_fps:g} fps): tracks on anomaly boxes "
+                print(f"UCSD {clip} (N = {r['n_samples']}, {a.ucsd_fps:g} fps, range "
+                      f"{r['range_m'][0]:.1f}-{r['range_m'][1]:.1f} m): tracks on anomaly boxes "
                       f"{r[clip]['anomaly']}; other tracks {r[clip]['other']}")
     with open(a.output, "w") as fh:
         json.dump(out, fh, indent=1, default=float)
