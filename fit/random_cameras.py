@@ -10,10 +10,10 @@ rotated by roll about (Uc, Vc)), with Gaussian noise of `noise_px` in each coord
 
 ``python -m fit.random_cameras [n_cameras] [seed] [--held-at-centre]`` runs the acceptance:
 for each camera a config giving only the image size and fps, `rhythmjax-fit camera`'s own
-defaults (`fit.cli.fit_footprints`), footprints of half the walkers for the fit and the other
-half held out; it prints the held-out RMS (px per coordinate: the 1 px noise's own is 1.0, its
-2-D distance sqrt(2)) of the fitted camera, of the TRUE camera and of an OpenCV least-squares
-homography fitted on the same points.
+defaults (`fit.calibrate.fit_footprints`), footprints of half the walkers for the fit and the
+other half held out; it prints the held-out RMS (px per coordinate: the 1 px noise's own is 1.0,
+its 2-D distance sqrt(2)) of the fitted camera, of the TRUE camera and of an OpenCV
+least-squares homography fitted on the same points.
 With --held-at-centre the fit is the one before issue 15 (principal point at the image centre,
 roll 0: what a config giving only the image size meant then), for comparison.
 """
@@ -134,8 +134,8 @@ def study(n_cameras: int = 20, seed: int = 0, fit=None) -> list[dict]:  # pragma
     """One row per camera: the held-out RMS of the fit (the CLI's defaults on `only_size`'s
     config), of the true camera and of the OpenCV homography (px per coordinate), and the fit's
     verdict. `fit`: a function (u, v, x, y, image_size, fps) -> CameraFit (default: that of
-    `fit.cli.fit_footprints`)."""
-    from fit.cli import fit_footprints
+    `fit.calibrate.fit_footprints`)."""
+    from fit.calibrate import fit_footprints
     from rhythmjax.model.camera_np import project_3d
 
     fit = fit or (lambda u, v, x, y, size, fps: fit_footprints(u, v, x, y, only_size(size, fps)

@@ -275,7 +275,7 @@ def test_max_steps_at_a_stationary_point_counts_as_converged():
 
 
 # ----------------------------------------------------------------------------------------------
-# Issue 15: the CLI's defaults with only the image size known (fit.cli.fit_footprints)
+# Issue 15: the CLI's defaults with only the image size known (fit.calibrate.fit_footprints)
 
 def test_acceptance_generator_is_opencvs_pinhole():
     # fit.random_cameras projects through cv2.projectPoints (an independent pin-hole); it agrees
@@ -300,7 +300,7 @@ def test_only_image_size_known_reaches_the_noise():
     # training points. Before issue 15 (principal point at the image centre, roll 0) the same
     # cameras gave 10-69 px.
     from fit import random_cameras as RC
-    from fit.cli import fit_footprints
+    from fit.calibrate import fit_footprints
     from rhythmjax.model.camera_np import project_3d
 
     rng = np.random.default_rng(0)
