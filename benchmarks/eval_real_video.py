@@ -6,10 +6,10 @@ normal walks.
 
 PETS09-S2L1 (`../shared/data/real/pets2009_s2l1/`, 480x360, dt = 1/7 s, the camera of (3) nearest
 to the Tsai calibration as `rhythmjax camera --tsai` writes it, the rest of the config Table 1's,
-24 object slots, i.e. `rhythmjax run VIDEO -c pets.json --fps 7 --max-objects 24`): the online tracker's measured foot points are
-matched per frame to the annotated boxes' bottom centres (greedy nearest pairs within
-max(GATE_PX, 0.5 box width)); each track is assigned to the person it matched most often. Reports
-the median px distance over matched track-frames, the annotated people tracked, the fraction of
+24 object slots, i.e. `rhythmjax run VIDEO -c pets.json --max-objects 24`): the online tracker's
+measured foot points are matched per frame to the annotated boxes' bottom centres (greedy
+nearest pairs within max(GATE_PX, 0.5 box width)); each track is assigned to the person it
+matched most often. Reports the median px distance over matched track-frames, the annotated people tracked, the fraction of
 annotated person-frames covered, and each person's verdict (its longest classified track). All 19
 people walk.
 

@@ -104,8 +104,9 @@ def _footprints_parser(sub) -> None:
                    "TrajNet layout: 'frame id x y' per line")
     f.add_argument("--homography", metavar="H", help="3x3 image-to-ground homography (one row "
                    "per line), to metres (or --units)")
-    f.add_argument("--homography-order", choices=("rowcol", "uv"), default="rowcol",
-                   help="H maps [row, col, 1] (ETH's H.txt) or [u, v, 1]")
+    f.add_argument("--homography-convention", choices=("image-rowcol", "image-uv"),
+                   default="image-rowcol", help="H maps the image's [row, col, 1] (ETH's H.txt) "
+                   "or [u, v, 1] to the ground (as in `rhythmjax camera`)")
     f.add_argument("--box-scale", type=float, default=1.0, help="multiply box and point "
                    "coordinates (boxes at another resolution: 0.625 for PETS' 768x576 boxes on "
                    "its 480x360 video)")
@@ -215,16 +216,16 @@ def make_footprints(args):
     if args.homography is not None:
         H = F.read_homography(args.homography)
         H = np.diag([scale, scale, 1.0]) @ H
+        order = args.homography_convention.removeprefix("image-")  # "rowcol" or "uv"
         if args.grid is not None:
             if args.image_size is None or args.grid < 2:
                 raise BadInput("footprints", "--grid N (N >= 2) needs --image-size WxH")
-            u, v = F.grid_points(H, args.image_size, args.grid, args.homography_order,
-                                 args.depth_ratio)
+            u, v = F.grid_points(H, args.image_size, args.grid, order, args.depth_ratio)
             src = f"a {args.grid}x{args.grid} grid over the image through {args.homography}"
-            return F.through_homography({"u": u, "v": v}, H, args.homography_order, source=src)
+            return F.through_homography({"u": u, "v": v}, H, order, source=src)
         path = args.boxes or args.points
         pts = F.read_points(path, scale=args.box_scale)
-        return F.through_homography(pts, H, args.homography_order, source=path)
+        return F.through_homography(pts, H, order, source=path)
     boxes = F.read_boxes(args.boxes, scale=args.box_scale)
     boxes["x"], boxes["y"] = boxes["x"] * scale, boxes["y"] * scale
     pos = None

@@ -269,7 +269,7 @@ def through_homography(pts: dict[str, np.ndarray], H: np.ndarray, order: str, *,
                      "of the homography")
     if not keep.any():
         raise BadInput(source, "no image point maps onto the ground in front of the camera "
-                       "(check --homography-order)")
+                       "(check --homography-convention)")
     cols = {k: np.asarray(a)[keep] for k, a in pts.items()}
     cols["x"], cols["y"] = x[keep], y[keep]
     return Made(cols, _order(cols), source=source, notes=notes, homography_rms_px=0.0)

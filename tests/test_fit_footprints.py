@@ -202,7 +202,8 @@ def test_grid_homography_to_camera_end_to_end(tmp_path, capsys):
     W = np.array([[c, -s, 3.0], [s, c, -7.0], [0, 0, 1]])  # ground -> world
     np.savetxt(tmp_path / "H.txt", W @ H)
     rc = main(["footprints", "--grid", "15", "--image-size", "640x480", "--homography",
-               str(tmp_path / "H.txt"), "--homography-order", "uv", "-o", str(tmp_path / "g.csv")])
+               str(tmp_path / "H.txt"), "--homography-convention", "image-uv", "-o",
+               str(tmp_path / "g.csv")])
     assert rc == 0, capsys.readouterr()
     capsys.readouterr()
     rc = main(["camera", str(tmp_path / "g.csv"), "--world", "--image-size", "640x480",

@@ -86,9 +86,10 @@ def distance_of_person_px(camera: Camera, px: float, height_m: float = PERSON_HE
 def visible_range(camera: Camera, height_m: float = PERSON_HEIGHT_M
                   ) -> tuple[float, float]:
     """(near, far) m: the derived detection range (module doc). near is the bottom row's ground
-    distance, at least `NEAR_FLOOR_M` (a steep camera's bottom row sees behind its foot); far the top row's, or the distance where a person is `MIN_PERSON_PX` tall if
-    nearer. Raises ValueError when the image sees no usable ground (the bottom row at or above
-    the horizon, or near >= far)."""
+    distance, at least `NEAR_FLOOR_M` (a steep camera's bottom row sees behind its foot); far
+    the top row's, or the distance where a person is `MIN_PERSON_PX` tall if nearer. Raises
+    ValueError when the image sees no usable ground (the bottom row at or above the horizon, or
+    near >= far)."""
     c = camera_tuple(camera)
     height = int(getattr(camera, "image_height", 2 * c.vc))
     near = ground_distance_at_row(camera, float(height))
