@@ -9,9 +9,9 @@ to the Tsai calibration as `rhythmjax camera --tsai` writes it, the rest of the 
 24 object slots, i.e. `rhythmjax run VIDEO -c pets.json --max-objects 24`): the online tracker's
 measured foot points are matched per frame to the annotated boxes' bottom centres (greedy
 nearest pairs within max(GATE_PX, 0.5 box width)); each track is assigned to the person it
-matched most often. Reports the median px distance over matched track-frames, the annotated people tracked, the fraction of
-annotated person-frames covered, and each person's verdict (its longest classified track). All 19
-people walk.
+matched most often. Reports the median px distance over matched track-frames, the annotated
+people tracked, the fraction of annotated person-frames covered, and each person's verdict (its
+longest classified track). All 19 people walk.
 
 UCSD Ped2 (`ucsd_ped2/`, 360x240 frames, camera GUESSED, see UCSD_CAMERA; the frame rate is not
 stated: 30 fps by default, because at the 10 fps the literature usually quotes the walkers'

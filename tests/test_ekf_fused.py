@@ -119,7 +119,8 @@ def test_same_public_signatures():
 
 def test_predict_equals_readable_and_the_matrix_form():
     """`ekf_fused.predict` (the online trackers' prediction) against `ekf.predict` and against
-    (5), (8) written with NumPy float64 matrices: F X, F P F^T + Q, Q = diag(0, qx^2, 0, qy^2) dt."""
+    (5), (8) written with NumPy float64 matrices: F X, F P F^T + Q,
+    Q = diag(0, qx^2, 0, qy^2) dt."""
     rng = np.random.default_rng(3)
     noise = Noise(q_std=(0.4, 0.7))
     for _ in range(5):
