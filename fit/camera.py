@@ -220,8 +220,10 @@ def _check_input(u, v, x, y, n_par, world=False):
             raise ValueError(f"{bad.size} non-finite {name} coordinate(s) (first at index "
                              f"{bad[0]}); drop incomplete footprints before fitting")
     n = arrs[0].size
-    if n < max(n_par, 3):
-        raise ValueError(f"{n} footprints for {n_par} parameters: need at least {max(n_par, 3)}")
+    need = max(4, -(-n_par // 2))  # two equations per footprint; 4 fix a ground homography
+    if n < need:
+        raise ValueError(f"{n} footprints for {n_par} parameters: need at least {need} (each "
+                         "gives two equations, and 4 are the fewest that fix the ground plane)")
     g = np.stack([arrs[2], arrs[3]], axis=1)
     sv = np.linalg.svd(g - g.mean(axis=0), compute_uv=False)
     if sv[1] <= 1e-6 * max(sv[0], 1e-12):

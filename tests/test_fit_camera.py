@@ -151,8 +151,13 @@ def test_solver_failure_is_reported():
 def test_bad_input():
     cam = random_camera(np.random.default_rng(1))
     u, v, x, y, _ = footprints(cam, np.random.default_rng(1), n=100)
-    with pytest.raises(ValueError, match="3 footprints for 4 parameters"):
+    with pytest.raises(ValueError, match="3 footprints for 4 parameters: need at least 4"):
         fit_camera(u[:3], v[:3], x[:3], y[:3], fit=FIT4)
+    k = [0, 20, 40, 60]  # one footprint from each of four walkers: not on one line
+    fit_camera(u[k], v[k], x[k], y[k], fit=FIT4, n_starts=1, max_steps=4)  # 4 pairs suffice
+    with pytest.raises(ValueError, match="4 footprints for 10 parameters: need at least 5"):
+        fit_camera(u[k], v[k], x[k], y[k], fit=FIT4 + ("uc", "vc", "roll", "tx", "ty"),
+                   world=True)
     with pytest.raises(ValueError, match="one line"):
         fit_camera(u, v, np.full_like(x, 1.0), y, fit=FIT4)
     with pytest.raises(ValueError, match="one line"):
