@@ -98,12 +98,13 @@ def cmd_track(args) -> int:
     """Track the moving objects of a video (Fig. 3 state machine, EKF + gates (10)(11)) and
     write the tracks file; classification happens as in `run` and is in the summary."""
     check_writable(args.output)
+    options = _options(args)
     src, cfg, notes = open_source(args, load_config_dict(args.config))
     _notes(args, notes)
     with src, overlay_writer(args.overlay, src.fps, (src.width, src.height)) as overlay:
         tracks, verdicts, objs, tracker = track_frames(
             cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
-            progress=not (args.quiet or args.json), options=_options(args))
+            progress=not (args.quiet or args.json), options=options)
         write_table(args.output, tracks, TRACK_ORDER)
     _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
     return 0
@@ -114,13 +115,14 @@ def cmd_run(args) -> int:
     DIR/verdicts.csv, DIR/spectra.png and DIR/overlay.mp4 (annotated video)."""
     make_output_dir(args.output)
     check_writable(os.path.join(args.output, "verdicts.csv"))
+    options = _options(args)
     src, cfg, notes = open_source(args, load_config_dict(args.config))
     _notes(args, notes)
     path = None if args.no_overlay else os.path.join(args.output, "overlay.mp4")
     with src, overlay_writer(path, src.fps, (src.width, src.height)) as overlay:
         tracks, verdicts, objs, tracker = track_frames(
             cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
-            progress=not (args.quiet or args.json), options=_options(args))
+            progress=not (args.quiet or args.json), options=options)
         _write_outputs(args.output, cfg, tracks, verdicts, objs)
     _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
     return 0
