@@ -33,6 +33,7 @@ import cv2
 import numpy as np
 
 from rhythmjax.io import BadInput, read_table, write_table
+from rhythmjax.io.errors import read_text
 from rhythmjax.io.mot import read_mot
 
 
@@ -134,7 +135,7 @@ def read_positions(path) -> dict[str, np.ndarray]:
     x, y (float64, the file's units), line."""
     p = os.fspath(path)
     rows, lines = [], []
-    for k, text in enumerate(_lines(p), 1):
+    for k, text in enumerate(read_text(p).splitlines(), 1):
         s = text.strip()
         if not s or s.startswith("#"):
             continue
@@ -159,20 +160,6 @@ def read_positions(path) -> dict[str, np.ndarray]:
     a = np.asarray(rows)
     return {"frame": a[:, 0].astype(np.int64), "id": a[:, 1].astype(np.int64), "x": a[:, 2],
             "y": a[:, 3], "line": np.asarray(lines)}
-
-
-def _lines(p: str) -> list[str]:
-    if os.path.isdir(p):
-        raise BadInput(p, "is a directory, not a file")
-    try:
-        with open(p, encoding="utf-8-sig") as f:
-            return f.read().splitlines()
-    except FileNotFoundError:
-        raise BadInput(p, "no such file") from None
-    except UnicodeDecodeError:
-        raise BadInput(p, "not UTF-8 text") from None
-    except OSError as e:
-        raise BadInput(p, f"cannot read: {e.strerror}") from None
 
 
 def read_points(path, *, scale: float = 1.0) -> dict[str, np.ndarray]:
@@ -203,7 +190,7 @@ def read_homography(path) -> np.ndarray:
     for another shape, a non-number, a non-finite value or a singular matrix."""
     p = os.fspath(path)
     rows = []
-    for k, text in enumerate(_lines(p), 1):
+    for k, text in enumerate(read_text(p).splitlines(), 1):
         parts = text.replace(",", " ").split()
         if not parts or parts[0].startswith("#"):
             continue

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..model.camera_from import CameraError, rodrigues
 from ..model.lens import OPENCV_COUNTS, TsaiCalibration
-from .errors import BadInput, PathLike
+from .errors import BadInput, PathLike, read_text
 
 
 # key spellings accepted in OpenCV files, compared without case; the first is the one we write
@@ -31,21 +31,6 @@ KEYS = {
     "image_width": ("image_width", "imageWidth", "width"),
     "image_height": ("image_height", "imageHeight", "height"),
 }
-
-
-def _read_text(path: PathLike) -> str:
-    p = os.fspath(path)
-    if os.path.isdir(p):
-        raise BadInput(p, "is a directory, not a calibration file")
-    try:
-        with open(p, "rb") as f:
-            return f.read().decode("utf-8-sig")
-    except FileNotFoundError:
-        raise BadInput(p, "no such file") from None
-    except UnicodeDecodeError:
-        raise BadInput(p, "not UTF-8 text") from None
-    except OSError as e:
-        raise BadInput(p, f"cannot read: {e.strerror}") from None
 
 
 def _number(path, key: str, text) -> float:
@@ -66,7 +51,7 @@ def read_tsai(path: PathLike) -> TsaiCalibration:
     dy>, <Intrinsic focal kappa1 cx cy sx> and <Extrinsic tx ty tz rx ry rz> (mm, px, rad).
     width and height (the calibration's image size) may be absent (None)."""
     p = os.fspath(path)
-    text = _read_text(p)
+    text = read_text(p, "calibration file")
     try:
         root = ET.fromstring(text)
     except ET.ParseError as e:
@@ -160,7 +145,7 @@ def _from_node(node):
 
 
 def _load_opencv(p: str) -> dict:
-    text = _read_text(p)
+    text = read_text(p, "calibration file")
     if p.lower().endswith(".json") or text.lstrip().startswith("{"):
         try:
             obj = json.loads(text)
@@ -273,7 +258,7 @@ def read_homography(path: PathLike) -> np.ndarray:
     blank lines and # comments skipped), as ETH's H.txt."""
     p = os.fspath(path)
     rows = []
-    for n, line in enumerate(_read_text(p).splitlines(), 1):
+    for n, line in enumerate(read_text(p, "calibration file").splitlines(), 1):
         line = line.split("#")[0].replace(",", " ").strip()
         if not line:
             continue

@@ -31,3 +31,21 @@ class BadInput(ValueError):
             elif self.column is not None:
                 head += f", column '{self.column}'"
         return f"{head}: {msg}".replace("\n", " ")
+
+
+def read_text(path: PathLike, what: str = "file") -> str:
+    """The UTF-8 text of the file at `path` (a leading byte-order mark dropped). Raises
+    `BadInput` naming it for a directory ("is a directory, not a `what`"), a missing file, text
+    that is not UTF-8, or an OS error."""
+    p = os.fspath(path)
+    if os.path.isdir(p):
+        raise BadInput(p, f"is a directory, not a {what}")
+    try:
+        with open(p, "rb") as f:
+            return f.read().decode("utf-8-sig")
+    except FileNotFoundError:
+        raise BadInput(p, "no such file") from None
+    except UnicodeDecodeError:
+        raise BadInput(p, "not UTF-8 text") from None
+    except OSError as e:
+        raise BadInput(p, f"cannot read: {e.strerror}") from None

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..model.config_setup import config_for
 from ..model.params import Config, ConfigError, config_to_dict
+from .errors import read_text
 from .footprints import Footprints as Footprints, read_footprints as read_footprints
 from .tables import (
     BadInput as BadInput,
@@ -329,17 +330,7 @@ def read_config_dict(path: PathLike) -> dict:
     """The JSON object of a config file as written (keys not filled in). Raises `BadInput`
     naming the file and the line/col (syntax), the token (NaN, Infinity) or the duplicate key."""
     p = os.fspath(path)
-    if os.path.isdir(p):
-        raise BadInput(p, "is a directory, not a config file")
-    try:
-        with open(p, "rb") as f:
-            text = f.read().decode("utf-8-sig")
-    except FileNotFoundError:
-        raise BadInput(p, "no such file") from None
-    except UnicodeDecodeError:
-        raise BadInput(p, "not UTF-8 text") from None
-    except OSError as e:
-        raise BadInput(p, f"cannot read: {e.strerror}") from None
+    text = read_text(p, "config file")
     if not text.strip():
         raise BadInput(p, "empty file (expected a JSON object)")
     try:
