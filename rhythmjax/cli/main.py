@@ -29,6 +29,7 @@ from ..sim.tracks import make_tracks
 from .camera import register as register_camera
 from .common import EPILOG, Formatter, add_common, emit_json, load_config, print_verdicts, say
 from .count import register as register_count
+from .rhythm import register as register_rhythm
 from .video import register as register_video
 
 
@@ -142,6 +143,7 @@ def build_parser() -> argparse.ArgumentParser:
     register_video(sub, Formatter)
     register_count(sub, Formatter)
     register_camera(sub, Formatter)
+    register_rhythm(sub, Formatter)
     return parser
 
 

@@ -106,3 +106,13 @@ def read_mot(path: PathLike, extra: Sequence[str] = ()) -> dict[str, np.ndarray]
     out["frame"] = out["frame"].astype(np.int64)
     out["id"] = out["id"].astype(np.int64)
     return out
+
+
+def read_mot_numbered(path: PathLike) -> dict[str, np.ndarray]:
+    """`read_mot(path)` plus `line`: each row's 1-based line number in the file (blank lines
+    counted, as an editor shows them), so that a later check can name the line of a row."""
+    out = read_mot(path)
+    with open(os.fspath(path), encoding="utf-8") as f:
+        lines = [k for k, line in enumerate(f.read().splitlines(), 1) if line.strip()]
+    out["line"] = np.asarray(lines, np.int64)
+    return out

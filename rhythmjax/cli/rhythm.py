@@ -1,0 +1,147 @@
+"""The `rhythm` verb: the rhythm classifier behind any detector and tracker (registered by
+`cli.main`). Boxes in, I(k) of window B measured from the video at their feet, verdicts out."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+from ..io import (
+    BadInput,
+    check_writable,
+    dumps_json,
+    make_output_dir,
+    read_tracks,
+    to_batch,
+    write_table,
+)
+from ..io.mot import read_mot_numbered
+from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
+from ..model.params import ConfigError
+from ..track.boxes import box_intensities, check_in_image, tracks_from_mot, window_widths
+from .common import add_camera_check, add_common, load_config_dict, open_source, print_verdicts, say
+
+
+TABLE_SUFFIXES = (".csv", ".parquet")
+
+
+def read_boxes(path: str, *, fps: float, frame_base: int | None, scale: float):
+    """(Tracks, MOT columns or None): a tracks file (.csv/.parquet; frame = the video's 0-based
+    index unless `frame_base` says otherwise; u, v, width_px times `scale`) or MOT text (any
+    other name; frame 1-based unless `frame_base`)."""
+    if path.lower().endswith(TABLE_SUFFIXES):
+        tr = read_tracks(path, fps=fps)
+        base = 0 if frame_base is None else frame_base
+        tr.frame = tr.frame - base
+        if len(tr.frame) and tr.frame.min() < 0:
+            k = int(np.argmin(tr.frame))
+            raise BadInput(path, f"frame {int(tr.frame[k]) + base} is before the video's first "
+                           f"(frames are {base}-based here; see --frame-base)",
+                           **({"line": int(tr.line[k])} if tr.unit == "line"
+                              else {"row": int(tr.line[k])}), column="frame")
+        tr.t = tr.frame / float(fps)
+        tr.u, tr.v, tr.width_px = tr.u * scale, tr.v * scale, tr.width_px * scale
+        tr.intensity = np.full(len(tr.frame), np.nan)
+        return tr, None
+    mot = read_mot_numbered(path)
+    if not len(mot["frame"]):
+        raise BadInput(path, "no boxes")
+    return tracks_from_mot(mot, path, fps=fps, frame_base=1 if frame_base is None else frame_base,
+                           scale=scale), mot
+
+
+def cmd_rhythm(args) -> int:
+    """Judge the objects of any tracker's boxes by the rhythm of their gait.
+
+    BOXES is MOTChallenge text (frame, id, bb_left, bb_top, bb_width, bb_height, conf, x, y, z;
+    ground truth or a tracker's output; frames 1-based; x, y, z ignored) or a tracks file
+    (.csv/.parquet: track_id, frame, t, u, v, width_px, intensity; frames the video's 0-based
+    index; t and intensity are recomputed). Each box gives the foot point (u, v) = its bottom
+    centre (px) and width_px = its width; I(k) = the sum of |frame k - frame k-1| (grey levels)
+    over window B, W x W/5 px with its bottom row at the foot row, W the mean walker width at
+    the foot point through the camera (Sec. 4.1, as the online tracker measures it). Each box
+    track is then judged as `rhythmjax classify` does (EKF with the paper's gates, MEM
+    spectrum, (13)-(15)). The config is resolved for the video as `run` does.
+
+    Writes DIR/tracks.parquet (the tracks format with intensity) and DIR/verdicts.csv; prints
+    the verdicts (or a --json summary). Nothing is written when the input is bad."""
+    if args.box_scale is None or not (np.isfinite(args.box_scale) and args.box_scale > 0):
+        raise ConfigError("--box-scale", f"must be a number > 0, got {args.box_scale}")
+    out_tracks = os.path.join(args.output, "tracks.parquet")
+    out_verdicts = os.path.join(args.output, "verdicts.csv")
+    src, cfg, notes = open_source(args, load_config_dict(args.config))
+    with src:
+        tracks, mot = read_boxes(args.boxes, fps=float(src.fps), frame_base=args.frame_base,
+                                 scale=args.box_scale)
+        check_in_image(tracks, src.width, src.height, mot, args.box_scale)
+        W = window_widths(cfg, tracks.u, tracks.v)
+        sig = box_intensities(src, tracks.frame, tracks.u, tracks.v, W)
+    late = np.flatnonzero(tracks.frame >= sig.n_frames)
+    if late.size:
+        k = int(late[0])
+        where = {"line": int(tracks.line[k])} if tracks.unit == "line" else \
+            {"row": int(tracks.line[k])}
+        raise BadInput(args.boxes, f"frame {int(tracks.frame[k])} (0-based) is past the video's "
+                       f"last ({sig.n_frames - 1}; {args.video})", **where)
+    tracks.intensity = sig.intensity
+    n = cfg.thresholds.n
+    batch = to_batch(tracks, max_gap_frames=max(1, round(float(cfg.thresholds.predict_timeout)
+                                                         * cfg.camera.fps)), min_len=n)
+    verdicts = classify_tracks(cfg, batch, progress=not (args.quiet or args.json))
+    order = list(VERDICT_COLUMNS)
+    labels = None if batch.labels is None else np.asarray(batch.labels, dtype=object)
+    if labels is not None:
+        verdicts["label"] = labels
+        order.append("label")
+    make_output_dir(args.output)
+    check_writable(out_verdicts)
+    cols = {"track_id": tracks.track_id, "frame": tracks.frame, "t": tracks.t, "u": tracks.u,
+            "v": tracks.v, "width_px": tracks.width_px, "intensity": tracks.intensity}
+    track_order = list(cols)
+    if tracks.label is not None:
+        cols["label"] = tracks.label
+        track_order.append("label")
+    write_table(out_tracks, cols, track_order)
+    write_table(out_verdicts, verdicts, order)
+    sampled = int(np.sum(np.isfinite(sig.intensity)))
+    notes = notes + list(tracks.notes) + [n for n in src.notes if n not in notes]
+    summary = {"video": args.video, "boxes": args.boxes, "output": args.output,
+               "n_rows": int(len(tracks.frame)), "rows_sampled": sampled,
+               "frames_read": sig.n_frames, "glitch_frames": sig.glitch,
+               "bad_frames": sig.bad, **summarise(verdicts, labels), "notes": notes}
+    if args.json:
+        print(json.dumps(json.loads(dumps_json(summary))))
+        return 0
+    print_verdicts(verdicts)
+    v = summary["verdicts"]
+    say(args, f"{summary['n_tracks']} box tracks: {v['pedestrian']} pedestrian, "
+        f"{v['non-pedestrian']} non-pedestrian, {v['unclassified']} unclassified; I(k) sampled "
+        f"in {sampled} of {summary['n_rows']} rows; wrote {args.output}/")
+    for note in notes:
+        say(args, note if note.startswith("warning") else f"note: {note}")
+    return 0
+
+
+def register(sub, formatter=None) -> None:
+    """Add the rhythm verb to the subparsers `sub`."""
+    from .common import Formatter
+
+    formatter = formatter or Formatter
+    p = sub.add_parser("rhythm", formatter_class=formatter, help="judge any tracker's boxes "
+                       "by the rhythm of walking", description=cmd_rhythm.__doc__)
+    p.add_argument("video", metavar="VIDEO", help="video file, or a folder of numbered frames")
+    p.add_argument("--boxes", required=True, metavar="BOXES", help="MOTChallenge text (any "
+                   "name but .csv/.parquet) or a tracks file (.csv/.parquet)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--frame-base", type=int, choices=(0, 1), default=None, help="the frame "
+                   "number of the video's first frame in BOXES (default: 1 for MOT text, 0 for "
+                   "a tracks file)")
+    p.add_argument("--box-scale", type=float, default=1.0, metavar="S", help="boxes are at S "
+                   "times smaller resolution than the video: their px are multiplied by S")
+    p.add_argument("--fps", type=float, help="frame rate (frames/s): --fps, else the config's "
+                   "camera.fps, else the file's; needed for a frame folder without camera.fps")
+    add_camera_check(p)
+    add_common(p)
+    p.set_defaults(func=cmd_rhythm)
