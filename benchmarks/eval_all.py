@@ -200,12 +200,48 @@ def run_pets_count(sets, quick, log) -> dict:
     return {"count": count_row([r]), "clip": r}
 
 
+def has_rhythm_verb() -> bool:
+    """Whether `rhythmjax rhythm` (issue 16 item 1) is installed."""
+    import importlib.util
+
+    return importlib.util.find_spec("rhythmjax.cli.rhythm") is not None
+
+
 def run_pets_boxes(sets, quick, log) -> dict:
-    try:
-        from rhythmjax.cli import rhythm  # noqa: F401  (another helper's verb, issue 16 item 1)
-    except ImportError:
+    """`rhythmjax rhythm VIDEO --boxes GT.txt -c pets.json --fps 7` on PETS's annotated boxes
+    (all 19 people; occluded boxes included), each person's verdict its box track's."""
+    import subprocess
+    import tempfile
+
+    import eval_real_video as ev
+    import pandas as pd
+
+    from rhythmjax.evaluation import datasets
+
+    if not has_rhythm_verb():
         return {"skipped": "not yet (rhythmjax rhythm --boxes absent)"}
-    return {"skipped": "not yet (rhythmjax rhythm exists; its scoring is not wired here)"}
+    b = datasets.pets_boxes()  # 0-based frames, 480 x 360 px
+    with tempfile.TemporaryDirectory() as tmp:
+        gt, cfg, out = (os.path.join(tmp, n) for n in ("gt.txt", "pets.json", "out"))
+        with open(gt, "w") as fh:
+            for r in range(len(b["frame"])):
+                fh.write(f"{int(b['frame'][r]) + 1},{int(b['id'][r])},{b['bb_left'][r]:.3f},"
+                         f"{b['bb_top'][r]:.3f},{b['bb_width'][r]:.3f},{b['bb_height'][r]:.3f},"
+                         "1,-1,-1,-1\n")
+        with open(cfg, "w") as fh:
+            json.dump(apply_set(ev.pets_config_dict(), sets), fh)
+        cmd = [sys.executable, "-m", "rhythmjax.cli.main", "rhythm", str(datasets.pets_video()),
+               "--boxes", gt, "--frame-base", "1", "-c", cfg, "--fps", str(datasets.PETS_FPS),
+               "-o", out, "-q"]
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        if p.returncode:
+            return {"skipped": f"failed: rhythmjax rhythm exit {p.returncode}: "
+                               f"{p.stderr.strip()[-300:]}"}
+        v = pd.read_csv(os.path.join(out, "verdicts.csv"))
+    got = {int(t): str(w) for t, w in zip(v["track_id"], v["verdict"])}
+    people = sorted(set(int(i) for i in b["id"]))
+    rows = [{"kind": "pedestrian", "verdict": got.get(i, "missed")} for i in people]
+    return {"verdicts": verdict_row(rows), "people": {i: got.get(i, "missed") for i in people}}
 
 
 def run_ucsd(sets, quick, log) -> dict:

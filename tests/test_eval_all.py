@@ -127,6 +127,7 @@ def test_cli_bad_input_exit_2(capsys):
     assert "nowhere" in capsys.readouterr().err
 
 
-def test_pets_boxes_row_guarded():
+def test_pets_boxes_row_guarded(monkeypatch):
+    monkeypatch.setattr(eval_all, "has_rhythm_verb", lambda: False)  # the verb absent
     r = eval_all.run_pets_boxes([], True, lambda s: None)
-    assert "skipped" in r or "verdicts" in r
+    assert r == {"skipped": "not yet (rhythmjax rhythm --boxes absent)"}
