@@ -108,7 +108,9 @@ def test_count_cli_writes_consistent_files(crossing_run):
     tracks = read_table(out / "tracks.parquet", required=["track_id", "frame", "t", "u", "v",
                                                             "width_px", "intensity"])
     verdicts = read_table(out / "verdicts.csv", required=["track_id", "verdict", "reason",
-                                                            "too_fast", "counted"])
+                                                            "too_fast", "counted",
+                                                            "track_speed_mps", "width_m",
+                                                            "width_ok"])
     counts = json.loads((out / "counts.json").read_text())
     ids = sorted(set(mot["id"].tolist()))
     assert ids == [1, 2]  # two walkers crossing, two tracks
@@ -121,6 +123,12 @@ def test_count_cli_writes_consistent_files(crossing_run):
     assert c["walkers"] == 2 - int(np.sum(np.asarray(verdicts["verdict"]) == "non-pedestrian")) \
         - c["too_fast"]
     assert sum(str(x).lower() == "true" for x in verdicts["counted"]) == c["walkers"]
+    assert c["walkers_low"] <= c["walkers"] <= c["walkers_high"]
+    assert c["walkers_low"] == c["pedestrians"]
+    assert c["walkers_high"] == c["pedestrians"] + c["unclassified"]
+    # the drawn walkers go 2.05 Hz x 0.72 m = 1.476 m/s: the speed guess within 10 %; a width
+    assert np.allclose(np.asarray(verdicts["track_speed_mps"], float), 1.476, rtol=0.1)
+    assert np.all(np.isfinite(np.asarray(verdicts["width_m"], float)))
     assert "unclassified" in counts["count_rule"]
     # MOT frames are 1-based video frames; the tracks file keeps the 0-based index
     assert mot["frame"].min() == np.asarray(tracks["frame"]).min() + 1
@@ -145,7 +153,8 @@ def test_no_motion_gives_zero_tracks(videos, tmp_path, capsys):
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["counts"] == {"tracks": 0, "pedestrians": 0, "non_pedestrians": 0,
-                                 "unclassified": 0, "too_fast": 0, "walkers": 0}
+                                 "unclassified": 0, "too_fast": 0, "unjudged_plausible": 0,
+                                 "walkers": 0, "walkers_low": 0, "walkers_high": 0}
     assert "non_pedestrians" in summary["count_rule"]
     assert summary["n_frames"] == 30 and summary["crowd_frames"] == 0
     assert (tmp_path / "mot.txt").read_text() == ""
@@ -216,11 +225,15 @@ def test_count_rule_removes_non_pedestrians_and_too_fast_unclassified():
     # the paper counts every confirmed track (7); the classifier removes the 2 non-pedestrians;
     # the 3 too short to judge still count
     assert c == {"tracks": 7, "pedestrians": 2, "non_pedestrians": 2, "unclassified": 3,
-                 "too_fast": 0, "walkers": 5}
+                 "too_fast": 0, "unjudged_plausible": 3, "walkers": 5, "walkers_low": 2,
+                 "walkers_high": 5}
     # ... unless faster than the walking model accepts (only the unclassified one counts as
     # too fast: a judged track keeps its verdict)
     c = count_walkers(v, fast)
-    assert c["too_fast"] == 1 and c["walkers"] == 4
+    assert c["too_fast"] == 1 and c["walkers"] == 4 and c["unjudged_plausible"] == 2
+    # judged pedestrian + unjudged and plausible; the range: judged only .. + every unjudged
+    assert c["walkers"] == c["pedestrians"] + c["unjudged_plausible"]
+    assert (c["walkers_low"], c["walkers_high"]) == (2, 5)
     verdicts = {"track_id": np.arange(1, 8), "verdict": np.asarray(v, dtype=object),
                 "too_fast": np.asarray(fast)}
     assert counted(verdicts).tolist() == [True, True, False, False, True, False, True]
@@ -228,7 +241,8 @@ def test_count_rule_removes_non_pedestrians_and_too_fast_unclassified():
     del verdicts["too_fast"]
     assert walker_ids(verdicts) == [1, 2, 4, 5, 7]
     assert count_walkers([]) == {"tracks": 0, "pedestrians": 0, "non_pedestrians": 0,
-                                 "unclassified": 0, "too_fast": 0, "walkers": 0}
+                                 "unclassified": 0, "too_fast": 0, "unjudged_plausible": 0,
+                                 "walkers": 0, "walkers_low": 0, "walkers_high": 0}
     assert "non_pedestrians" in COUNT_RULE and "too_fast" in COUNT_RULE
 
 

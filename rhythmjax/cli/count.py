@@ -25,6 +25,9 @@ from .common import (
 from .overlay import draw_count_frame
 
 
+GUESS_COLUMNS = ("track_speed_mps", "too_fast", "width_m", "width_ok", "counted")
+
+
 def cmd_count(args) -> int:
     """Count the pedestrians of a video.
 
@@ -38,7 +41,11 @@ def cmd_count(args) -> int:
     plane). The walkers counted are all tracks minus those judged non-pedestrian (bicycles,
     which the paper counted twice): a track too short to judge (unclassified) still counts,
     unless it moves faster than the walking model accepts for any rhythm (too_fast: 2.6 m/s
-    with the paper's Table 1).
+    with the paper's Table 1). So walkers = judged pedestrian + unjudged_plausible, within the
+    range walkers_low (judged pedestrian only) to walkers_high (+ every unjudged track). The
+    background starts from the median of the first 3 s; a track whose foot point stays put
+    for 5 s ends there (its patch becomes background) and one that never moved is dropped (a
+    ghost of something present when the background was learnt).
 
     Writes DIR/mot.txt (MOTChallenge: frame (1-based), id, bb_left, bb_top, bb_width,
     bb_height, conf (1 measured, 0.5 predicted), x, y (ground, m), z (0; -1 -1 -1 where the
@@ -48,9 +55,11 @@ def cmd_count(args) -> int:
     py-motmetrics misreads a MOT file with more than ten columns), DIR/tracks.parquet (the
     tracks format, which `rhythmjax classify` re-judges: width_px is the measured width of the
     blob under the patch, for the width gate (10); plus vx, vy, du, dv), DIR/verdicts.csv
-    (with too_fast and counted per track) and
+    (per track also the unjudged ones' guess: track_speed_mps, too_fast, width_m (median
+    measured width at the foot point), width_ok (inside the width gate (10)), and counted) and
     DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
-    walkers; the rule in words; the run summary).
+    unjudged_plausible, walkers, walkers_low, walkers_high; the rule in words; the run summary
+    with ghosts_dropped).
     Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
     (dense crowd, camera jump) is not used for detection (pedestrians predict) and the summary
     says how many there were."""
@@ -80,17 +89,18 @@ def cmd_count(args) -> int:
         write_table(os.path.join(args.output, "tracks.parquet"), res.tracks,
                     TRACK_ORDER + list(VELOCITY_COLUMNS))
         write_table(os.path.join(args.output, "verdicts.csv"), res.verdicts,
-                    VERDICT_ORDER + ["too_fast", "counted"])
+                    VERDICT_ORDER + list(GUESS_COLUMNS))
         with atomic_write(os.path.join(args.output, "counts.json"), "w") as f:
             f.write(dumps_json(summary, indent=2) + "\n")
     if args.json:
         print(json.dumps(json.loads(dumps_json(summary))))
         return 0
     c = res.counts
-    print(f"{summary['n_frames']} frames: {c['walkers']} walkers = {c['tracks']} tracks - "
-          f"{c['non_pedestrians']} non-pedestrian - {c['too_fast']} unclassified too fast "
-          f"({c['pedestrians']} judged pedestrian, {c['unclassified']} unclassified); wrote "
-          f"{args.output}/", file=sys.stderr)
+    print(f"{summary['n_frames']} frames: {c['walkers']} walkers = {c['pedestrians']} judged "
+          f"pedestrian + {c['unjudged_plausible']} too short to judge and not too fast (range "
+          f"{c['walkers_low']}-{c['walkers_high']}: judged only to every unjudged track; "
+          f"{c['non_pedestrians']} judged non-pedestrian, {c['too_fast']} unjudged too fast, "
+          f"{c['tracks']} tracks); wrote {args.output}/", file=sys.stderr)
     for note in notes[len(setup_notes):]:  # the setup's were shown before the run
         say(args, f"note: {note}")
     return 0

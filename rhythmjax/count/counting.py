@@ -29,10 +29,13 @@ walking model's test (14) accepts for any rhythm (`walking_top_speed`: pace and 
 +k_sigma3, 2.57 m/s with Table 1): any window of it would be judged non-pedestrian, so it is
 not counted (`too_fast`: short bicycle tracks). A track judged pedestrian is counted; a
 non-pedestrian verdict removes one. Tracks shorter than `verdicts.min_track_frames` frames (after
-stitching) are dropped from every output and count first. `CountResult.counts` holds the six
-numbers (tracks, pedestrians, non_pedestrians, unclassified, too_fast, walkers), the verdicts
-say per track `too_fast` and `counted`, and `COUNT_RULE` says the rule in words (written to
-counts.json).
+stitching) are dropped from every output and count first, and so are tracks that never moved
+(`ghost`: `still.never_moved`, a ghost of the background). `CountResult.counts` holds the
+numbers of `count_walkers` (tracks, pedestrians, non_pedestrians, unclassified, too_fast,
+unjudged_plausible, walkers and its range walkers_low .. walkers_high: judged only .. judged +
+every unjudged track), the verdicts say per track `track_speed_mps`, `too_fast`, `width_m`,
+`width_ok` (the unjudged tracks' best guess by speed and size) and `counted`, and `COUNT_RULE`
+says the rule in words (written to counts.json).
 """
 
 from __future__ import annotations
@@ -51,17 +54,23 @@ from ..vision.frames import drive_frames
 from .options import CountOptions
 from .pedestrian_level import Pedestrian, PedestrianLevel
 from .rows import BlobRow, BoxRow, GroundRow
+from .still import never_moved, peek_background
 from .stitch import stitch_level
 
 
 __all__ = ["COUNT_RULE", "CountResult", "build_result", "count_frames", "finish_count",
            "count_walkers", "counted", "track_speed", "walker_ids", "walking_top_speed"]
 
-COUNT_RULE = ("walkers = tracks - non_pedestrians - too_fast: every confirmed track is a "
-              "pedestrian of the paper's method; the rhythm classifier removes the tracks it "
-              "judges non-pedestrian (bicycles); an unclassified track (too short to judge) is "
-              "counted unless it moves faster than the walking model (14) can accept for any "
-              "rhythm (too_fast)")
+COUNT_RULE = ("walkers = tracks - non_pedestrians - too_fast = pedestrians + "
+              "unjudged_plausible: every confirmed track is a pedestrian of the paper's method; "
+              "the rhythm classifier removes the tracks it judges non-pedestrian (bicycles); an "
+              "unclassified track (too short to judge) is counted (unjudged_plausible) unless it "
+              "moves faster than the walking model (14) can accept for any rhythm (too_fast). "
+              "The unjudged tracks leave the count uncertain: walkers_low = pedestrians (judged "
+              "only) to walkers_high = pedestrians + unclassified (every unjudged track a "
+              "walker); per track, verdicts.csv gives the unjudged ones' guess by speed "
+              "(track_speed_mps) and size (width_m: the median measured width at the foot "
+              "point, width_ok: inside the width gate (10))")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -109,7 +118,10 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     opt = options or CountOptions()
     if on_frame is None and opt.verdicts.online:
         opt = dataclasses.replace(opt, verdicts=dataclasses.replace(opt.verdicts, online=False))
-    level = PedestrianLevel(cfg, opt, defer=on_frame is None)  # no snapshot drawn: defer
+    b = opt.blobs  # the background from the first seconds' median (`still.peek_background`)
+    background, frames = peek_background(frames, b.bg_init_s, b.bg_init_frames)
+    level = PedestrianLevel(cfg, opt, defer=on_frame is None,  # no snapshot drawn: defer
+                            background=background)
     draw = None if on_frame is None else \
         (lambda frame, index: on_frame(frame, index, level.snapshot()))
     drive_frames(frames, level.update, draw, n_frames=n_frames, progress=progress,
@@ -119,10 +131,27 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
 
 def finish_count(level: PedestrianLevel) -> CountResult:
     """End every pedestrian of `level`; the `CountResult` of its tracks, stitched, those shorter
-    than `verdicts.min_track_frames` dropped, judged."""
+    than `verdicts.min_track_frames` and those that never moved (`ghost`) dropped, judged."""
     peds = stitch_level(level, level.end_all())
     shortest = level.opt.verdicts.min_track_frames
-    return build_result(level, [p for p in peds if len(p.rows) >= shortest])
+    kept = [p for p in peds if len(p.rows) >= shortest]
+    level.ghosts = sum(ghost(level, p) for p in kept)
+    return build_result(level, [p for p in kept if not ghost(level, p)])
+
+
+def ghost(level: PedestrianLevel, p: Pedestrian) -> bool:
+    """A track whose measured foot points stayed put over its whole life (`still.never_moved`
+    with the `life.still_*` settings, W and H of the patch at their median): a ghost of the
+    background or an object that never moved, no walker; False when `life.still_s` is 0."""
+    lf = level.opt.life
+    if lf.still_s <= 0:
+        return False
+    uv = np.asarray([(r.u, r.v) for r in p.rows], np.float64).reshape(-1, 2)
+    uv = uv[np.all(np.isfinite(uv), axis=1)]
+    if not len(uv):
+        return False
+    size = level.shape.size(*(float(q) for q in np.median(uv, axis=0)))
+    return never_moved(uv, size, level.block, lf.still_widths, lf.still_heights)
 
 
 def walking_top_speed(cfg: Config) -> float:
@@ -150,17 +179,36 @@ def track_speed(p: Pedestrian) -> float:
     return float(np.hypot(*v))
 
 
+def track_width(level: PedestrianLevel, p: Pedestrian) -> float:
+    """The median over a track's measured rows of its measured width (`widths.measured_width`,
+    px) in metres at its foot point: width_px / W x width.mean (W px: the patch of an average
+    pedestrian, `width.mean` m wide, at that foot point; `patches.ShapeModel`); NaN without a
+    measured width."""
+    r = np.asarray([(q.u, q.v, q.width_px) for q in p.rows], np.float64).reshape(-1, 3)
+    r = r[np.all(np.isfinite(r), axis=1)]
+    if not len(r):
+        return math.nan
+    W = np.asarray(level.shape.size(r[:, 0], r[:, 1])[0], np.float64)
+    m = np.isfinite(W) & (W > 0)
+    return float(np.median(r[m, 2] / W[m]) * level.shape.width_m) if m.any() else math.nan
+
+
 def count_walkers(verdicts, too_fast=None) -> dict[str, int]:
     """The counts of a verdict list (labels as `status.Verdict`; `too_fast`: per track, faster
-    than `walking_top_speed`, default none): tracks, pedestrians, non_pedestrians, unclassified,
-    too_fast (unclassified and too fast) and walkers = tracks - non_pedestrians - too_fast
-    (`COUNT_RULE`)."""
+    than `walking_top_speed`, default none): tracks, pedestrians (judged), non_pedestrians
+    (judged), unclassified (too short to judge), too_fast (unclassified and too fast),
+    unjudged_plausible (unclassified, not too fast), walkers = tracks - non_pedestrians -
+    too_fast = pedestrians + unjudged_plausible (`COUNT_RULE`), and the range the unjudged
+    tracks leave: walkers_low = pedestrians (judged only), walkers_high = pedestrians +
+    unclassified (every unjudged track a walker)."""
     v = [str(x) for x in verdicts]
     fast = [False] * len(v) if too_fast is None else [bool(f) for f in too_fast]
-    n, non = len(v), v.count("non-pedestrian")
+    n, non, ped, unc = len(v), v.count("non-pedestrian"), v.count("pedestrian"), \
+        v.count("unclassified")
     tf = sum(f and w == "unclassified" for w, f in zip(v, fast))
-    return {"tracks": n, "pedestrians": v.count("pedestrian"), "non_pedestrians": non,
-            "unclassified": v.count("unclassified"), "too_fast": tf, "walkers": n - non - tf}
+    return {"tracks": n, "pedestrians": ped, "non_pedestrians": non, "unclassified": unc,
+            "too_fast": tf, "unjudged_plausible": unc - tf, "walkers": n - non - tf,
+            "walkers_low": ped, "walkers_high": ped + unc}
 
 
 def counted(verdicts: dict) -> np.ndarray:
@@ -206,12 +254,17 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
                     "n_samples": np.asarray([len(p.rows) for p in peds], np.int64)}
     mot, detections = mot_table(peds), detections_table(level.detections)
     top = walking_top_speed(cfg)
-    verdicts["too_fast"] = np.asarray([track_speed(p) > top for p in peds], bool)
+    speed = np.asarray([track_speed(p) for p in peds], np.float64)
+    verdicts["track_speed_mps"], verdicts["too_fast"] = speed, speed > top
+    verdicts["width_m"] = np.asarray([track_width(level, p) for p in peds], np.float64)
+    w = cfg.width
+    verdicts["width_ok"] = np.abs(verdicts["width_m"] - float(w.mean)) <= \
+        float(cfg.thresholds.k_sigma1) * float(w.std)
     verdicts["counted"] = counted(verdicts)
     counts = count_walkers(verdicts["verdict"], verdicts["too_fast"])
     summary = {"n_frames": level.n_frames, "dynamics": level.opt.dynamics,
                "count_rule": COUNT_RULE, "stitched": level.stitched,
-               "crowd_frames": len(level.crowd_frames),
+               "ghosts_dropped": level.ghosts, "crowd_frames": len(level.crowd_frames),
                "missing_frames": len(level.missing_frames), "notes": []}
     if level.crowd_frames:
         summary["notes"].append(

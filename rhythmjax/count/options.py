@@ -30,6 +30,9 @@ class BlobOptions:
     close_px: int = 2
     min_area: int = 30  # px
     crowd_fraction: float = 0.5  # one blob box covering this fraction: no detection that frame
+    bg_init_s: float = 3.0  # background from the temporal median of the first seconds
+    bg_init_frames: int = 31  # ... of at most this many frames, evenly spaced (0 s: frame 0;
+    # `still.peek_background`)
 
 
 @dataclass(frozen=True)
@@ -70,6 +73,9 @@ class LifeOptions:
     dv_window_s: float = 0.5  # ... within this long lost its object: it ends before the change
     # (1.5 m/s in 0.5 s is 3 m/s^2: no walker turns or brakes that hard, while a patch moving
     # between two walkers crossing at right angles at 1.4 m/s changes by 2 m/s)
+    still_s: float = 5.0  # a pedestrian whose foot point stays put this long ends (0: never)
+    still_widths: float = 0.15  # ... its 1 s block means within this many W across
+    still_heights: float = 0.04  # ... and this many H up or down (`still.is_still`)
 
 
 @dataclass(frozen=True)

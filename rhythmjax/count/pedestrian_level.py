@@ -7,38 +7,33 @@ Per frame (`PedestrianLevel.update`):
    whose blob box covers `blobs.crowd_fraction` of the image (`blobs.is_crowd`: a dense crowd, a
    camera jump) is not used for detection: every pedestrian predicts, the frame is listed in
    `crowd_frames`.
-3. Pedestrians (`pedestrians`): relations are propagated through the blob graph (a pedestrian
-   related to blob i of frame i-1 becomes related to i's children; when a blob shared by several
-   pedestrians splits, they are assigned to its children by the Hungarian method on the distance
-   of their predicted foot points to the children's bottom centres); a pedestrian with no
-   related blob takes the blobs its predicted patch overlaps (re-acquisition after occlusion).
-   Each pedestrian's patch is placed (`patches.place_patch`), older pedestrians first, each
-   claiming the pixels it covers from those after it (groups). Pedestrians sharing a blob too
-   narrow to hold them side by side (< `placement.merge_widths` x their summed patch widths:
-   walking past each other) are not measured: they keep their predicted positions, so identities
-   survive the merge. One jitted call advances every filter (`patches.SlotFilter`).
-4. Refinement: blob columns no pedestrian explains (a pedestrian explains `new.walker_widths` W
-   around its foot point: a walker's blob spans its stance foot to its leading arm), at least
-   `new.min_widths` W wide, holding enough pixels and reaching the blob's bottom (feet, not
-   arms) or, lifted above it, standing `new.lifted_height` of its patch height tall (clipped at
-   the image top; a farther walker merged with a nearer object: an arm is shorter), with the
-   foot point's ground point in the config's detection range (range_min to range_max m: where
-   `rhythmjax track` detects; `new.in_range`), start new pedestrians, one per
-   `new.walker_widths` W of the run, side by side (groups); a new pedestrian gets an id after
-   `life.confirm_hits` measured frames (dropped if it misses `life.tentative_misses` before); a
-   pedestrian without measurement predicts for the config's predict_timeout_s, then ends; with
-   the "3d" dynamics one whose ground velocity changes by more than `life.max_dv_mps` within
-   `life.dv_window_s` s has lost its walker (its patch slid onto another object or down a merged
-   blob: no walker or cyclist turns or brakes that fast) and ends without those frames
-   (`track.toolkit.velocity_jump`), so neither the wrong stretch nor its wrong stride reaches
-   the track, and stitching sees a clean end; two whose foot points are within
-   `life.duplicate_widths` W with the same image velocity for `life.duplicate_frames` frames are
-   one: the younger ends. Relations for the next frame: the blobs the placed patch overlaps.
-Every frame each pedestrian samples the rhythm signal I(k) in window B at its foot point
+3. Pedestrians: relations propagate through the blob graph (related to blob i of frame i-1:
+   related to i's children; a shared blob that splits: its pedestrians go to its children by
+   the Hungarian method on predicted foot point to bottom centre); one with no related blob
+   takes the blobs its predicted patch overlaps (re-acquisition). Patches are placed
+   (`patches.place_patch`) older first, each claiming its pixels from those after it (groups).
+   Pedestrians sharing a blob too narrow for them side by side (< `placement.merge_widths` x
+   their summed widths: walking past each other) keep their predictions (identities survive
+   the merge). One jitted call advances every filter (`patches.SlotFilter`).
+4. Refinement: blob columns no pedestrian explains (`new.walker_widths` W around each foot
+   point: a walker's blob spans its stance foot to its leading arm), at least `new.min_widths` W
+   wide, full enough and reaching the blob's bottom (feet, not arms) or, lifted above it,
+   `new.lifted_height` of its patch tall (a farther walker merged with a nearer object), with
+   the foot point's ground point in the detection range (`new.in_range`), start pedestrians, one
+   per `new.walker_widths` W of the run; confirmed after `life.confirm_hits` measured frames
+   (dropped at `life.tentative_misses` misses). One ends: after predicting for
+   predict_timeout_s; ("3d") when its ground velocity changes by more than `life.max_dv_mps`
+   within `life.dv_window_s` s (no walker or cyclist turns or brakes that fast: it lost its
+   walker and ends without those frames, `track.toolkit.velocity_jump`); when its foot point
+   stayed put for `life.still_s` s (`still.is_still`: a ghost or a stopped object, copied into
+   the background under its patch); two within `life.duplicate_widths` W with the same image
+   velocity for `life.duplicate_frames` frames are one: the younger ends. Relations for the next
+   frame: the blobs the placed patch overlaps. The background starts from `background` (the
+   first seconds' median, `still.peek_background`), else from the first frame.
+Every frame each pedestrian samples I(k) in window B at its foot point
 (`detect.window_b_intensity` on the frame difference, W = its patch width) and keeps its ground
-state (`Pedestrian.ground`: x, y, vx, vy; the EKF's for "3d") for stitching. A pedestrian that ends
-loses its trailing predicted frames; `finish` hands the ended tracks to `count`, which stitches
-fragments of one walker, judges and counts them.
+state (`Pedestrian.ground`) for stitching; an ended one loses its trailing predicted frames, and
+`count` stitches, judges and counts the ended tracks.
 """
 
 from __future__ import annotations
@@ -65,6 +60,7 @@ from .patches import (
     place_patch,
 )
 from .rows import BlobRow, BoxRow, GroundRow
+from .still import is_still
 from .widths import measured_width
 
 
@@ -107,8 +103,12 @@ class PedestrianLevel:
     that frame's images and blobs levels, which so run while the jitted step computes; the same
     results, but `snapshot` then lags a frame (count_frames defers without an overlay)."""
 
-    def __init__(self, cfg: Config, opt: CountOptions, defer: bool = False):
+    def __init__(self, cfg: Config, opt: CountOptions, defer: bool = False,
+                 background: np.ndarray | None = None):
         self.cfg, self.opt = cfg, opt
+        self.bg_init, self.absorb = background, []  # first background; boxes to absorb
+        fps = float(cfg.camera.fps)  # `still.is_still` over still_s s in 1 s blocks
+        self.still_rows, self.block = round(opt.life.still_s * fps), max(1, round(fps))
         self.shape = ShapeModel.from_config(cfg, opt.dynamics)
         self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
         self.coast_s = float(cfg.thresholds.predict_timeout)
@@ -123,7 +123,7 @@ class PedestrianLevel:
         self.crowd_frames: list[int] = []
         self.missing_frames: list[int] = []
         self.full_frames: list[int] = []  # frames where a new pedestrian found no free slot
-        self.stitched = 0  # tracks joined onto an earlier one at the end (count.stitch_level)
+        self.stitched = self.ghosts = 0  # tracks joined (count.stitch_level), never moved
         self.detections: list[BlobRow] = []
         self.image_shape: tuple[int, int] | None = None
         self._dv_frames = dv_frames(opt.life.dv_window_s, float(cfg.camera.fps))
@@ -139,7 +139,8 @@ class PedestrianLevel:
         opt = self.opt
         if gray is not None and self.bg is None:
             b = opt.blobs
-            self.bg = BackgroundModel(gray, alpha=b.bg_alpha, threshold=b.bg_threshold,
+            first = gray if self.bg_init is None else self.bg_init
+            self.bg = BackgroundModel(first, alpha=b.bg_alpha, threshold=b.bg_threshold,
                                       open_px=b.open_px, close_px=b.close_px)
             self.prev, self.last_t, self.image_shape = gray, t, gray.shape
             return
@@ -150,6 +151,8 @@ class PedestrianLevel:
         if gray is None:
             self.missing_frames.append(index)
         else:
+            while self.absorb:  # still pedestrians' patches (`_after`)
+                self.bg.absorb(gray, self.absorb.pop())
             mask = self.bg.apply(gray)
             D, self.prev = frame_difference(self.prev, gray), gray
             blobs, labels = find_blobs(mask, min_area=opt.blobs.min_area)
@@ -374,11 +377,20 @@ class PedestrianLevel:
         H, Wi = self.image_shape
         u, v = p.est_uv
         outside = not (math.isfinite(w) and -0.5 * w <= u <= Wi + 0.5 * w and 0 <= v <= H + h)
-        jump = self._velocity_jump(p)
+        still = self._still(p)  # a ghost or a stopped object: no walker's frames, its patch
+        jump = self.still_rows if still else self._velocity_jump(p)  # into the background
         if jump:  # lost its object: the implausible frames go, the track ends before them
             p.rows, p.boxes, p.ground = p.rows[:-jump], p.boxes[:-jump], p.ground[:-jump]
+        if still:
+            self.absorb.append((u - w, v - 1.2 * h, u + w, v + 0.1 * h))
         if p.coast > self.coast_s or outside or jump:
             self._end(p)
+
+    def _still(self, p: Pedestrian) -> bool:
+        """Its measured foot points stayed put for `life.still_s` s (`still.is_still`)."""
+        n, lf = self.still_rows, self.opt.life
+        return 0 < n <= len(p.rows) and is_still([(r.u, r.v) for r in p.rows[-n:]], p.size,
+                                                 self.block, lf.still_widths, lf.still_heights)
 
     def _velocity_jump(self, p: Pedestrian) -> int:
         """"3d": the rows to drop when its EKF ground velocity changed by more than

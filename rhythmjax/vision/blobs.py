@@ -128,11 +128,34 @@ class BackgroundModel:
             cv2.accumulateWeighted(gray, self._bg, self.slow_alpha, mask=mask)
         self.n_frames += 1
 
+    def absorb(self, gray: np.ndarray, box: tuple[float, float, float, float]) -> None:
+        """B <- I inside `box` (x0, y0, x1, y1 px, clipped to the image): a still foreground
+        region (a ghost left where an object stood when B was learnt, or an object that stopped)
+        becomes background at once instead of after ~1 / slow_alpha frames."""
+        _check_image(gray, "gray")
+        H, W = self._bg.shape
+        x0, y0 = max(0, int(np.floor(box[0]))), max(0, int(np.floor(box[1])))
+        x1, y1 = min(W, int(np.ceil(box[2]))), min(H, int(np.ceil(box[3])))
+        if x1 > x0 and y1 > y0:
+            self._bg[y0:y1, x0:x1] = gray[y0:y1, x0:x1]
+
     def apply(self, gray: np.ndarray) -> np.ndarray:
         """The (H, W) uint8 0/1 foreground mask of `gray` (uint8 grey); then updates B."""
         mask = self.foreground(gray)
         self.update(gray, mask)
         return mask
+
+
+def median_background(grays: Sequence[np.ndarray]) -> np.ndarray:
+    """The per-pixel temporal median (uint8; for an even count the mean of the two middle
+    values, truncated to an integer grey level) of equally shaped uint8 frames: a background with no
+    object that stood in fewer than half of them (`BackgroundModel(median_background(...))`
+    starts without the ghosts of objects present in the first frame)."""
+    if not grays:
+        raise ValueError("median_background needs at least one frame")
+    for k, g in enumerate(grays):
+        _check_image(g, f"grays[{k}]")
+    return np.median(np.stack(grays), axis=0).astype(np.uint8)
 
 
 @dataclass(frozen=True)
