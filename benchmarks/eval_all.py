@@ -43,6 +43,7 @@ import numpy as np
 from eval_all_score import (
     HEADER,
     apply_set,
+    casia_row,
     count_row,
     dev_camera,
     dev_truth,
@@ -50,6 +51,7 @@ from eval_all_score import (
     parse_set,
     read_gt,
     table_line,
+    ucsd_row,
     verdict_row,
 )
 
@@ -258,10 +260,7 @@ def run_ucsd(sets, quick, log) -> dict:
         for g in total:
             for k, n in r[g].items():
                 total[g][k] = total[g].get(k, 0) + n
-    a = total["anomaly"]
-    return {"total": total, "verdicts": {
-        "others": sum(a.values()), "others_pedestrian": a.get("pedestrian", 0),
-        "others_judged": a.get("pedestrian", 0) + a.get("non-pedestrian", 0)}}
+    return {"total": total, "verdicts": ucsd_row(total)}
 
 
 def run_casia(sets, quick, log) -> dict:
@@ -280,8 +279,7 @@ def run_casia(sets, quick, log) -> dict:
             v = str(verdicts["verdict"][[int(t) for t in verdicts["track_id"]].index(
                 int(ids[int(np.argmax(n))]))])
         rows[path.stem] = v
-    return {"verdicts": verdict_row([{"kind": "pedestrian", "verdict": v}
-                                     for v in rows.values()]), "clips": rows}
+    return {"verdicts": casia_row(rows), "clips": rows}
 
 
 RUNNERS = {"synthetic": run_synthetic, "count": run_count, "dev": run_dev,
@@ -304,6 +302,16 @@ def available(name: str) -> str | None:
     return None
 
 
+def rescore(out: dict) -> dict:
+    """A saved run's rows recomputed from what it kept (CASIA's clips, UCSD's totals)."""
+    src = out["sources"]
+    if "clips" in src.get("casia", {}):
+        src["casia"]["verdicts"] = casia_row(src["casia"]["clips"])
+    if "total" in src.get("ucsd", {}):
+        src["ucsd"]["verdicts"] = ucsd_row(src["ucsd"]["total"])
+    return out
+
+
 def print_table(out: dict) -> None:
     print(HEADER)
     for name, r in out["sources"].items():
@@ -324,7 +332,16 @@ def main(argv=None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                    help="config override for every source (repeatable)")
     p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("--table", nargs="+", metavar="JSON", help="print the table of saved runs "
+                   "(later files' sources win) and exit")
     a = p.parse_args(argv)
+    if a.table:
+        merged: dict = {"sources": {}}
+        for path in a.table:
+            with open(path) as fh:
+                merged["sources"].update(rescore(json.load(fh))["sources"])
+        print_table(merged)
+        return 0
     names = SOURCES if not a.only else tuple(s.strip() for s in a.only.split(","))
     bad = [n for n in names if n not in RUNNERS]
     try:

@@ -93,6 +93,24 @@ def count_row(clips: list[dict]) -> dict:
     return out
 
 
+def ucsd_row(total: dict) -> dict:
+    """UCSD's columns from the tracks' verdict counts {"anomaly": {verdict: n}, "other": ...}
+    (benchmarks/eval_real_video.py's score_ucsd): tracks on the cyclists' and the cart's boxes
+    are the non-walkers; the other tracks (no truth: mostly walkers) fill the walker columns."""
+    a, o = total.get("anomaly", {}), total.get("other", {})
+    return {"others": sum(a.values()), "others_pedestrian": a.get("pedestrian", 0),
+            "others_judged": a.get("pedestrian", 0) + a.get("non-pedestrian", 0),
+            "walkers_pedestrian": o.get("pedestrian", 0),
+            "walkers_judged": o.get("pedestrian", 0) + o.get("non-pedestrian", 0)}
+
+
+def casia_row(clips: dict) -> dict:
+    """CASIA-B's columns from {clip: verdict of its longest track}: every clip but the
+    background clip (`*bkgrd*`, nobody in it) holds one walker."""
+    return verdict_row([{"kind": "pedestrian", "verdict": v} for c, v in clips.items()
+                        if "bkgrd" not in c])
+
+
 def _frac(a, b) -> str:
     return "-" if not b else f"{a}/{b} ({100 * a / b:.0f} %)"
 

@@ -131,3 +131,13 @@ def test_pets_boxes_row_guarded(monkeypatch):
     monkeypatch.setattr(eval_all, "has_rhythm_verb", lambda: False)  # the verb absent
     r = eval_all.run_pets_boxes([], True, lambda s: None)
     assert r == {"skipped": "not yet (rhythmjax rhythm --boxes absent)"}
+
+
+def test_ucsd_and_casia_rows():
+    u = es.ucsd_row({"anomaly": {"non-pedestrian": 1, "unclassified": 1, "pedestrian": 1},
+                     "other": {"pedestrian": 9, "unclassified": 9, "non-pedestrian": 5}})
+    assert (u["others"], u["others_judged"], u["others_pedestrian"]) == (3, 2, 1)
+    assert (u["walkers_pedestrian"], u["walkers_judged"]) == (9, 14)
+    c = es.casia_row({"001-nm-01-090": "pedestrian", "001-nm-05-090": "non-pedestrian",
+                      "001-bkgrd-090": "missed", "002-nm-01-090": "unclassified"})
+    assert (c["walkers"], c["walkers_judged"], c["walkers_pedestrian"]) == (3, 2, 1)
