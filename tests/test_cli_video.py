@@ -159,3 +159,19 @@ def test_all_tracks_too_short_gives_the_window_hint(walker_avi, tmp_path, capsys
                  "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert any("window_s" in n and "N = 150" in n for n in summary["notes"]), summary["notes"]
+
+
+def test_fps_on_the_command_line_applies_before_the_config_is_checked(walker_avi, tmp_path,
+                                                                      capsys):
+    """A window of 1.07 s is N = 16 at the config's default 15 fps (< AR order 15 + 2) but N =
+    32 at --fps 30: the check uses the rate that will run. A frame rate no video has is refused
+    naming --fps."""
+    cfg = tmp_path / "w.json"
+    cfg.write_text(json.dumps({"thresholds": {"window_s": 1.067}}))
+    out = tmp_path / "t.csv"
+    assert main(["track", walker_avi, "-o", str(out), "-c", str(cfg), "--fps", "30",
+                 "--json", "--no-camera-check"]) == 0
+    capsys.readouterr()
+    for bad in ("1e-6", "1e9"):
+        assert main(["track", walker_avi, "-o", str(out), "--fps", bad]) == 2
+        assert _one_line(capsys).startswith("rhythmjax track: error: --fps")

@@ -127,10 +127,14 @@ def open_source(args, d: dict):
     video's is replaced by it with a warning (the camera's pixels are kept as given). Checks
     that some of the detection range is in the image, then (unless --no-camera-check) the
     camera against the first frames' motion (`vision.camera_check`): its warnings are notes."""
-    from ..vision.video import open_video
+    from ..vision.video import MAX_FPS, open_video
 
-    config_or_bad_input(d, args.config or "config")  # every key checked before the video opens
+    if args.fps is not None and not 0.1 <= args.fps <= MAX_FPS:
+        raise ConfigError("--fps", f"{args.fps!r} frames/s is not a video's frame rate (give "
+                          f"0.1-{MAX_FPS:g})")
     cam = d.get("camera", {}) if isinstance(d.get("camera", {}), dict) else {}
+    early = d if args.fps is None else {**d, "camera": {**cam, "fps": args.fps}}
+    config_or_bad_input(early, args.config or "config")  # every key checked before the video
     conf_fps = cam.get("fps")
     fps = args.fps if args.fps is not None else conf_fps
     src = open_video(args.video, fps=fps)
