@@ -21,7 +21,8 @@ from .test_pedestrians import CFG, QUIET
 OLD = CountOptions(verdicts=QUIET,  # the background from frame 0, no still rule
                    blobs=dataclasses.replace(CountOptions().blobs, bg_init_s=0.0),
                    life=dataclasses.replace(CountOptions().life, still_s=0.0))
-NEW = CountOptions(verdicts=QUIET)
+NEW = CountOptions(verdicts=QUIET,  # the first 3 s' median, the still rule
+                   blobs=dataclasses.replace(CountOptions().blobs, bg_init_s=3.0))
 
 
 @pytest.fixture(scope="module")
@@ -115,3 +116,13 @@ def test_is_still_on_block_means():
     assert never_moved(gaps, (20.0, 60.0), 15, 0.15, 0.04)
     assert not never_moved(np.concatenate([walk, gaps]), (20.0, 60.0), 15, 0.15, 0.04)
     assert not is_still(ghost[:20], (20.0, 60.0), 15, 0.15, 0.04)  # under two blocks
+
+
+def test_a_track_left_without_measured_rows_is_not_kept():
+    # a still track whose every row was still: all its rows go, and nothing reaches stitching
+    from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
+
+    level = PedestrianLevel(CFG, CountOptions(verdicts=QUIET))
+    p = Pedestrian(slot=0, born=0, track_id=1)
+    level._end(p)
+    assert level.finished == []

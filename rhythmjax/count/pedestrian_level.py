@@ -420,10 +420,10 @@ class PedestrianLevel:
     def _end(self, p: Pedestrian) -> None:
         if p in self.peds:
             self.peds.remove(p)
-        if p.track_id == 0:
-            return
         last = max((i for i, r in enumerate(p.rows) if r.state == TrackState.OBSERVE),
                    default=-1)
+        if p.track_id == 0 or last < 0:  # tentative, or no measured row left (still_s)
+            return
         p.rows, p.boxes, p.ground = p.rows[:last + 1], p.boxes[:last + 1], p.ground[:last + 1]
         self.finished.append(p)
 
