@@ -126,3 +126,14 @@ def test_a_track_left_without_measured_rows_is_not_kept():
     p = Pedestrian(slot=0, born=0, track_id=1)
     level._end(p)
     assert level.finished == []
+
+
+def test_the_default_drops_the_ghost_by_the_still_rule(walk_away):
+    """The default keeps the paper's frame-0 background (the first seconds' median cost counts on
+    the project's own seeds: 55 -> 65 of 58) and ends the ghost it leaves by the still rule: the
+    spot where the walker stood in frame 0 never moves, so no ghost track is output."""
+    assert CountOptions().blobs.bg_init_s == 0.0 and CountOptions().life.still_s > 0
+    tracks = _tracks(count_frames(CFG, iter(_items(list(walk_away))),
+                                  options=CountOptions(verdicts=QUIET)))
+    assert not any(ghost for _, ghost in tracks.values()), tracks
+    assert any(moved for moved, _ in tracks.values())

@@ -30,7 +30,7 @@ class BlobOptions:
     close_px: int = 2
     min_area: int = 30  # px
     crowd_fraction: float = 0.5  # one blob box covering this fraction: no detection that frame
-    bg_init_s: float = 3.0  # background from the temporal median of the first seconds
+    bg_init_s: float = 0.0  # > 0: background from the temporal median of the first seconds
     bg_init_frames: int = 31  # ... of at most this many frames, evenly spaced (0 s: frame 0;
     # `still.peek_background`)
 
