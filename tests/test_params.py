@@ -101,14 +101,14 @@ def test_bad_config_values_name_the_key(d, match):
 
 def test_window_hop_and_harmonic_ratio_round_trip():
     """0 (the default) means N/2; the paper's back-to-back windows are hop = N; the half-pace
-    rule's default 0.25 and 0 (off, the paper's (13)-(15))."""
+    rule off by default (0, the paper's (13)-(15)) and 0.25 when asked for."""
     t = config_to_dict(Config())["thresholds"]
-    assert (t["window_hop_samples"], t["harmonic_max_ratio"]) == (0, 0.25)
+    assert (t["window_hop_samples"], t["harmonic_max_ratio"]) == (0, 0.0)
     assert Config().thresholds.hop_samples == 32
-    cfg = config_from_dict({"thresholds": {"window_hop_samples": 64, "harmonic_max_ratio": 0}})
-    assert (cfg.thresholds.hop_samples, float(cfg.thresholds.harmonic_ratio)) == (64, 0.0)
+    cfg = config_from_dict({"thresholds": {"window_hop_samples": 64, "harmonic_max_ratio": 0.25}})
+    assert (cfg.thresholds.hop_samples, float(cfg.thresholds.harmonic_ratio)) == (64, 0.25)
     d = config_to_dict(cfg)["thresholds"]
-    assert (d["window_hop_samples"], d["harmonic_max_ratio"]) == (64, 0.0)
+    assert (d["window_hop_samples"], d["harmonic_max_ratio"]) == (64, 0.25)
 
 
 def test_roll_key_round_trips_and_defaults_to_the_paper():

@@ -175,8 +175,9 @@ class Thresholds(eqx.Module):
     hop: samples between the starts of successive rhythm windows (N: the paper's back-to-back
     windows; 0, the default: N/2, each sample in two windows); harmonic_ratio: a peak that
     passes (14) is refused when a peak within 10 % of twice its frequency holds at least this
-    fraction of its power (a trotting dog's half-pace component; 0: off, the paper's (13)-(15)
-    exactly); see `rhythm.half_pace`.
+    fraction of its power (a trotting dog's half-pace component; 0, the default: off, the
+    paper's (13)-(15) exactly; 0.25 was the default until issue 16: it helped on the project's
+    own scenes only); see `rhythm.half_pace`.
     """
 
     p_thr: Float[Array, ""] = eqx.field(converter=_f32, default=10.0)
@@ -187,7 +188,7 @@ class Thresholds(eqx.Module):
     range_min: Float[Array, ""] = eqx.field(converter=_f32, default=3.0)
     range_max: Float[Array, ""] = eqx.field(converter=_f32, default=20.0)
     predict_timeout: Float[Array, ""] = eqx.field(converter=_f32, default=1.0)
-    harmonic_ratio: Float[Array, ""] = eqx.field(converter=_f32, default=0.25)
+    harmonic_ratio: Float[Array, ""] = eqx.field(converter=_f32, default=0.0)
     n: int = eqx.field(static=True, default=64)
     m: int = eqx.field(static=True, default=15)
     hop: int = eqx.field(static=True, default=0)
