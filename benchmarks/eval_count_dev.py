@@ -87,7 +87,8 @@ def main(argv=None) -> int:
            "sum_abs_count_error_rel": sum(abs(r["count_error"]) for r in rows) / nw,
            "mota_mean": float(np.mean([r["mota"] for r in rows])),
            "idf1_mean": float(np.mean([r["idf1"] for r in rows]))}
-    print("| clip | walkers | counted | counts | MOTA | IDF1 | IDSW |\n|---|---|---|---|---|---|---|")
+    print("| clip | walkers | counted | counts | MOTA | IDF1 | IDSW |")
+    print("|---|---|---|---|---|---|---|")
     for r in rows:
         c = r["counts"]
         rng = f" [{c['walkers_low']}, {c['walkers_high']}]" if "walkers_low" in c else ""
