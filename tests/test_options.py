@@ -78,6 +78,13 @@ COUNT_DEFAULTS = [
     ("min_track_frames", "verdicts.min_track_frames", 10),
     ("online_verdicts", "verdicts.online", True),
     ("classify", "verdicts.classify", True),
+    # new in issue 16 (no old flat name): the first seconds' median background (off) and the
+    # still rule (`count.still`)
+    (None, "blobs.bg_init_s", 0.0),
+    (None, "blobs.bg_init_frames", 31),
+    (None, "life.still_s", 5.0),
+    (None, "life.still_widths", 0.15),
+    (None, "life.still_heights", 0.04),
 ]
 COUNT_REMOVED = ["height_m", "coast_s"]  # the config's width.height_m, thresholds.predict_timeout_s
 
