@@ -32,6 +32,7 @@ from rhythmjax.vision.camera_check import (
     HEIGHT_LIMITS_M,
     check_camera,
     implied_height_m,
+    judge_regions,
     moving_regions,
     sees_ground,
     stack_boxes,
@@ -300,11 +301,22 @@ need_pets = pytest.mark.skipif(D.pets_root() is None, reason="PETS 2009 data abs
 
 @need_pets
 def test_pets_tsai_camera_no_warning():
+    """The Tsai camera: no warning, the moving things as tall as adults (1.5-2.0 m; 1.76 m
+    measured). The implied height comes from the camera, not from the frames alone: the same
+    regions judged by the camera raised to twice its height are twice as tall (a pin-hole's
+    ground-plane scale is proportional to h; 0.5 % for the f of (3) in the depth)."""
+    import equinox as eqx
+
     cam = D.pets_camera()
-    got = check_camera(config_of(cam), open_video(D.pets_video(), fps=D.PETS_FPS))
+    regions = moving_regions(open_video(D.pets_video(), fps=D.PETS_FPS))
+    got = judge_regions(config_of(cam), regions)
     assert got.warnings == ()
-    assert 1.5 < got.median_height_m < 2.0  # 1.76 m measured
+    assert 1.5 < got.median_height_m < 2.0
     assert got.share_outside < 0.1
+    high = eqx.tree_at(lambda c: c.h, cam, 2.0 * cam.h)
+    twice = judge_regions(config_of(high), regions)
+    assert twice.median_height_m == pytest.approx(2.0 * got.median_height_m, rel=5e-3)
+    assert twice.warnings == ()  # 3.5 m: within the 0.5-5 m a crowd's regions may span
 
 
 @need_pets

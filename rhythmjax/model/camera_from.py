@@ -30,6 +30,7 @@ import numpy as np
 from .camera_np import HostCamera, project_3d
 from .lens import Pinhole, TsaiCalibration, opencv_distortion
 from .params import Camera, ConfigError, config_from_dict
+from .view import horizon_row
 
 
 MAX_GROUND_M = 200.0  # m: ground points farther from the camera's foot are left out of residuals
@@ -130,10 +131,9 @@ def host_camera(section: dict) -> HostCamera:
 
 
 def horizon_of(section: dict) -> float:
-    """The horizon's row (px) at the principal point's column, Vc - b f tan(theta) / cos(roll)
-    (`view.horizon_row` of the section's camera, in float64)."""
-    c = host_camera(section)
-    return c.vc - c.b * c.f * math.tan(c.theta) / math.cos(c.roll)
+    """The horizon's row (px) at the principal point's column (`view.horizon_row` of the
+    section's float64 camera)."""
+    return horizon_row(host_camera(section))
 
 
 # ----------------------------------------------------------------------------------------------

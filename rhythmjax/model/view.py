@@ -16,7 +16,8 @@ import math
 
 import numpy as np
 
-from .camera_np import camera_tuple, ground_of_pixels, project_3d
+from .camera import MIN_DEPTH_M
+from .camera_np import camera_tuple, depth_3d, ground_of_pixels, project_3d
 from .params import Camera, host_float
 
 
@@ -25,20 +26,20 @@ NEAR_FLOOR_M = 0.1  # m: the derived range starts no nearer (the config's range 
 PERSON_HEIGHT_M = 1.7  # m: WidthModel.height's default, the person of the report
 
 
-def focal_px(camera: Camera) -> tuple[float, float]:
+def focal_px(camera: Camera | tuple) -> tuple[float, float]:
     """(a f, b f): the horizontal and vertical focal lengths in px."""
     c = camera_tuple(camera)
     return c.a * c.f, c.b * c.f
 
 
-def horizon_row(camera: Camera) -> float:
+def horizon_row(camera: Camera | tuple) -> float:
     """Image row (px) of the horizon at the principal point's column, Vc - b f tan(theta) /
     cos(roll) (rows above it see no ground)."""
     c = camera_tuple(camera)
     return c.vc - c.b * c.f * math.tan(c.theta) / math.cos(c.roll)
 
 
-def ground_distance_at_row(camera: Camera, v: float) -> float:
+def ground_distance_at_row(camera: Camera | tuple, v: float) -> float:
     """Ground distance y (m, ahead of the camera's foot) seen at row v (px) of the principal
     point's column; inf on or above the horizon."""
     c = camera_tuple(camera)
@@ -46,22 +47,23 @@ def ground_distance_at_row(camera: Camera, v: float) -> float:
     return float(y) if ok else math.inf
 
 
-def row_of_distance(camera: Camera, y_m: float | int) -> float:
+def row_of_distance(camera: Camera | tuple, y_m: float | int) -> float:
     """Image row (px) of the ground point y_m m straight ahead (x = 0)."""
     return float(project_3d(camera, 0.0, float(y_m), 0.0)[1])
 
 
-def person_height_px(camera: Camera, y_m: float | int, height_m: float = PERSON_HEIGHT_M) -> float:
+def person_height_px(camera: Camera | tuple, y_m: float | int,
+                     height_m: float = PERSON_HEIGHT_M) -> float:
     """Image height (px) of an upright person height_m m tall standing y_m m straight ahead;
     NaN when the head or the feet are behind the camera."""
     feet = project_3d(camera, 0.0, float(y_m), 0.0)[1]
     head = project_3d(camera, 0.0, float(y_m), float(height_m))[1]
-    c = camera_tuple(camera)
-    deep = c.f + y_m * math.cos(c.theta) + (c.h - height_m) * math.sin(c.theta)
-    return float(feet - head) if deep > 1e-3 else math.nan
+    ok = min(depth_3d(camera, y_m, 0.0), depth_3d(camera, y_m, height_m)) > MIN_DEPTH_M
+    return float(feet - head) if ok else math.nan
 
 
-def distance_of_person_px(camera: Camera, px: float, height_m: float = PERSON_HEIGHT_M) -> float:
+def distance_of_person_px(camera: Camera | tuple, px: float,
+                          height_m: float = PERSON_HEIGHT_M) -> float:
     """The farthest ground distance (m) at which a person height_m tall is still `px` px tall;
     inf when even 1 km away the person is taller, 0 when nowhere. Near the foot of a high camera
     a person's image height first grows with distance (seen from above), then falls: a scan on
