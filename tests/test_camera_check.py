@@ -197,6 +197,18 @@ def test_right_camera_no_warning():
     assert 7.5 < got.foot_range_m[0] < got.foot_range_m[1] < 17.5
 
 
+def test_camera_shake_no_warning():
+    """Each frame moved by a random whole-pixel shift of up to 2 px (camera shake): the frames
+    are aligned onto the first (vision.stabilise), so the shake's edges are no moving regions."""
+    cam = street_camera()
+    rng = np.random.default_rng(7)
+    shaken = ((k, t, np.roll(f, tuple(rng.integers(-2, 3, 2)), axis=(0, 1)))
+              for k, t, f in draw_frames(cam))
+    got = check_camera(config_of(cam), shaken)
+    assert got.warnings == ()
+    assert abs(got.median_height_m - 1.7) < 0.17
+
+
 def test_bgr_frames_as_grey():
     cam = street_camera()
     a = check_camera(config_of(cam), draw_frames(cam, 30))

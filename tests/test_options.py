@@ -15,6 +15,8 @@ from rhythmjax.track.options import BodyOptions, TrackerOptions, with_changes
 TRACKER_DEFAULTS = [
     ("diff_threshold", "motion.diff_threshold", 15.0),
     ("global_change_fraction", "motion.global_change_fraction", 0.5),
+    ("(new: issue 16 item 2)", "motion.stabilise", True),
+    ("(new: issue 16 item 2)", "motion.stabilise_min_shift_px", 0.3),
     ("window_widths", "window.widths", 2.5),
     ("window_heights", "window.heights", 1.45),
     ("window_raise", "window.raise_heights", 0.42),
@@ -75,6 +77,8 @@ COUNT_DEFAULTS = [
     ("stitch_gate_per_s", "stitch.gate_per_s", 0.5),
     ("stitch_max_dv_w", "stitch.max_dv_w", 2.0),
     ("stitch_fit_s", "stitch.fit_s", 1.0),
+    ("(new: issue 16 item 4)", "stitch.reid", False),
+    ("(new: issue 16 item 4)", "stitch.reid_max_dv_w", 2.0),
     ("min_track_frames", "verdicts.min_track_frames", 10),
     ("online_verdicts", "verdicts.online", True),
     ("classify", "verdicts.classify", True),

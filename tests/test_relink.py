@@ -105,3 +105,25 @@ def test_hidden_walker_keeps_its_id_when_relinking(hidden_walker, relink_s):
     assert fr[none].min() > 40 + 14 and fr[none].max() < 62 + 3
     assert int(verdicts["n_samples"][0]) == len(fr)
     assert list(verdicts["verdict"]) == ["pedestrian"]
+
+
+def test_a_track_lost_and_continued_in_one_frame_has_one_row_per_frame():
+    """A slot that times out in the frame whose new object (a later slot of the same step)
+    continues it had a predicted row and the new object's row at that frame, so the written
+    tracks repeated a frame and `rhythmjax classify` refused them ("frame 123 appears twice").
+    Found on an own training scene (seed 5555's third scene, by the threshold-fitting benchmark)."""
+    from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.presets import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
+
+    cfg = config_from_dict(SYNTHETIC_CONFIG)
+    spec = synth.random_spec(7555, n_walkers=4, n_bicycles=1, n_dogs=1, n_frames=180,
+                             camera=cfg.camera, **SCENE_OPTIONS)
+    tr = OnlineTracker(cfg, synthetic_options())
+    for k, f in enumerate(synth.render_scene(7555, spec).frames):
+        tr.update(k, k / 15.0, f)
+    tracks, _, _ = tr.finish()
+    assert tr.relinked >= 1
+    key = np.stack([tracks["track_id"], tracks["frame"]], axis=1)
+    assert len(np.unique(key, axis=0)) == len(key)
+    for t in np.unique(tracks["track_id"]):
+        assert np.all(np.diff(tracks["frame"][tracks["track_id"] == t]) == 1)

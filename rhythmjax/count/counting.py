@@ -18,7 +18,10 @@ of the patch, because the foot row's pixel noise is what limits both: a ground g
 is far too tight near the camera or far too loose 20 m away. Pairs are taken cheapest first,
 each track with at most one predecessor and one successor; a chain of pieces becomes one track
 (the gap frames stay without rows) and is judged as one, which also lets the rhythm classifier
-see N samples of a walker it saw only in pieces before.
+see N samples of a walker it saw only in pieces before. With `stitch.reid` (off: neutral on the
+own seeds) a pair the halfway gate refuses is joined, after every halfway pair, when the later
+track's first foot point lies where the earlier one's ground state at constant velocity puts it
+(`stitch.reid_distance`: the single-object tracker's `track.relink` gate, same ellipse).
 
 The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestrian it tracked,
 and its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged

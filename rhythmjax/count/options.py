@@ -92,6 +92,11 @@ class StitchOptions:
     gate_per_s: float = 0.5  # ... growing by this fraction per second of gap
     max_dv_w: float = 2.0  # image velocity misfit allowed, W/s
     fit_s: float = 1.0  # measured foot points fitted at a track's start (and end)
+    reid: bool = False  # also re-identify on the ground plane: a later track whose first foot
+    # point lies where the ended one's last ground state, moved on at constant velocity for the
+    # whole gap, puts it (same gate: gate_w W, gate_h H, growing gate_per_s per s of gap)
+    # continues it (`count.stitch.reid_distance`, `track.relink.gate_distance`)
+    reid_max_dv_w: float = 2.0  # ... with image velocities within this many W/s (inf: any)
 
 
 @dataclass(frozen=True)

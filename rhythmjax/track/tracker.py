@@ -33,7 +33,7 @@ from ..model.ekf_fused import predict, step
 from ..model.gates import PaperGates
 from ..model.params import Config
 from ..model.status import VERDICT_LABELS, TrackState
-from ..vision import detect
+from ..vision import detect, stabilise
 from . import relink
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
@@ -161,7 +161,9 @@ class OnlineTracker:
         D = M = None
         glitch = frame is None
         if frame is not None:
-            M, D, changed = detect.motion_image_changed(self._prev, frame,
+            prev = self._prev if not opt.motion.stabilise else stabilise.align_previous(
+                self._prev, frame, min_shift_px=opt.motion.stabilise_min_shift_px)[0]
+            M, D, changed = detect.motion_image_changed(prev, frame,
                                                         diff_threshold=opt.motion.diff_threshold)
             self._prev = frame
             if changed == 0 and detect.is_duplicate(D):
@@ -371,9 +373,12 @@ class OnlineTracker:
             return False
         old, _, (obj.win_start, obj.result, obj.decided, obj.windows_done) = self._lost.pop(i)
         self._finished.remove(old)
-        gap = relink.gap_rows(old.rows[-1], index, t, (mean[0], mean[2]))
-        obj.rows = old.rows + gap
-        obj.vel = old.vel + [NAN_VELOCITY] * len(gap)
+        kept = sum(1 for r in old.rows if r.frame < index)  # a track lost in this very frame
+        rows, vel = old.rows[:kept], old.vel[:kept]  # has a predicted row here: superseded
+        obj.win_start = min(obj.win_start, kept)
+        gap = relink.gap_rows(rows[-1], index, t, (mean[0], mean[2]))
+        obj.rows = rows + gap
+        obj.vel = vel + [NAN_VELOCITY] * len(gap)
         obj.track_id = old.track_id
         self.relinked += 1
         return True

@@ -70,6 +70,7 @@ from ..model.params import Camera, Config, host_float
 from ..model.view import PERSON_HEIGHT_M, horizon_row
 from .blobs import BackgroundModel, find_blobs, foreground_fraction
 from .detect import frame_difference
+from .stabilise import align_previous
 from .video import to_gray_u8
 
 
@@ -211,6 +212,8 @@ def moving_regions(frames: Iterable, *, max_frames: int = MAX_FRAMES,
             g = to_gray_u8(np.asarray(frame))
             if grays and g.shape != grays[0].shape:
                 continue
+            if grays:  # camera shake: onto the first frame (a fixed camera: g unchanged)
+                g = align_previous(g, grays[0])[0]
             grays.append(g)
     finally:
         close = getattr(it, "close", None)
