@@ -17,6 +17,7 @@ TRACKER_DEFAULTS = [
     ("global_change_fraction", "motion.global_change_fraction", 0.5),
     ("(new: issue 16 item 2)", "motion.stabilise", True),
     ("(new: issue 16 item 2)", "motion.stabilise_min_shift_px", 0.3),
+    ("(new: issue 16 item 2)", "motion.stabilise_screen_px", 0.2),
     ("window_widths", "window.widths", 2.5),
     ("window_heights", "window.heights", 1.45),
     ("window_raise", "window.raise_heights", 0.42),

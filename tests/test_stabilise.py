@@ -106,3 +106,26 @@ def test_alignment_never_raises_the_difference():
     D0 = detect.frame_difference(prev, cur).astype(float).sum()
     D1 = detect.frame_difference(aligned, cur).astype(float).sum()
     assert D1 <= D0
+
+
+@pytest.mark.parametrize("du,dv", [(0.5, -0.3), (-1.0, 1.5), (2.0, 0.5), (-1.25, -1.75)])
+def test_screen_reads_a_known_shift_to_fifteen_percent(du, dv):
+    """The cheap screen (one Lucas-Kanade step per tile on frames shrunk 4x) against the exact
+    shift of the analytic scene: within 15 % of the shift's size plus 0.05 px on each axis (a
+    first-order step; the estimate proper is the test above)."""
+    prev, cur = _scene(0.0, 0.0), _scene(du, dv)
+    eu, ev = stabilise.screen_shift(stabilise.shrink(prev), stabilise.shrink(cur))
+    tol = 0.15 * np.hypot(du, dv) + 0.05
+    assert abs(eu - du) < tol and abs(ev - dv) < tol
+
+
+def test_stabiliser_screens_out_a_fixed_camera_and_aligns_a_shaken_one():
+    """Over a stream: still frames give back `prev` itself (bit-identical differences, no
+    estimate run); a 1.5 px shake is aligned as `align_previous` aligns it."""
+    st = stabilise.Stabiliser()
+    a, b = _scene(0.0, 0.0), _scene(0.0, 0.0, seed=3)
+    assert st.align(a, b) is a
+    c = _scene(1.5, -1.0)
+    out = st.align(b, c)
+    assert out is not b
+    np.testing.assert_array_equal(out, stabilise.align_previous(b, c)[0])

@@ -28,7 +28,7 @@ import numpy as np
 
 from ..io import BadInput, Tracks
 from ..model.params import Config
-from ..vision import detect
+from ..vision import detect, stabilise
 from .options import MotionOptions
 
 
@@ -132,7 +132,9 @@ def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.nd
     D = |gray_k - gray_(k-1)| over W x W/5 px ending at the foot row (`window_b_intensity`).
     NaN for the first frame, a frame or predecessor that is None, a duplicate or global-change
     frame (`motion`: the online tracker's thresholds), a foot point outside the image and a
-    non-finite W. Rows at frames the stream never reaches stay NaN (the caller checks)."""
+    non-finite W. Rows at frames the stream never reaches stay NaN (the caller checks). Camera
+    shake is compensated as in the tracker (`motion.stabilise`, `vision.stabilise.Stabiliser`),
+    on the frames with rows to sample (a fixed camera's D is unchanged)."""
     frame = np.asarray(frame, np.int64)
     out = np.full(frame.shape, np.nan)
     order = np.argsort(frame, kind="stable")
@@ -141,13 +143,16 @@ def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.nd
     rows = {int(fs[c]): order[c:e] for c, e in zip(cuts, np.r_[cuts[1:], len(fs)])}
     last = int(fs[-1]) if len(fs) else -1
     prev, n, glitch, bad = None, 0, [], []
+    steady = None if not motion.stabilise else stabilise.Stabiliser(
+        min_shift_px=motion.stabilise_min_shift_px, screen_px=motion.stabilise_screen_px)
     for index, _t, gray in frames:
         n = index + 1
         if gray is None:
             bad.append(index)
         here = rows.get(index)
         if here is not None and gray is not None and prev is not None:
-            D = detect.frame_difference(prev, gray)
+            D = detect.frame_difference(
+                prev if steady is None else steady.align(prev, gray), gray)
             changed = int(np.count_nonzero(D > motion.diff_threshold))
             if detect.is_duplicate(D) or detect.is_global_change(
                     D, motion.diff_threshold, motion.global_change_fraction, changed=changed):

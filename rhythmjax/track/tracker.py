@@ -127,6 +127,9 @@ class OnlineTracker:
         self._next_uv = np.full((S, 2), np.nan)
         self._next_W = np.full(S, np.nan)  # W (px) at the predicted ground point
         self._prev: np.ndarray | None = None
+        self._stabiliser = stabilise.Stabiliser(
+            min_shift_px=self.opt.motion.stabilise_min_shift_px,
+            screen_px=self.opt.motion.stabilise_screen_px) if self.opt.motion.stabilise else None
         self._last_t: float | None = None
         self._next_id = 1
         thr = cfg.thresholds  # host copies: a float() of a device scalar costs ~0.1 ms a frame
@@ -161,8 +164,8 @@ class OnlineTracker:
         D = M = None
         glitch = frame is None
         if frame is not None:
-            prev = self._prev if not opt.motion.stabilise else stabilise.align_previous(
-                self._prev, frame, min_shift_px=opt.motion.stabilise_min_shift_px)[0]
+            prev = self._prev if self._stabiliser is None else self._stabiliser.align(
+                self._prev, frame)
             M, D, changed = detect.motion_image_changed(prev, frame,
                                                         diff_threshold=opt.motion.diff_threshold)
             self._prev = frame
