@@ -5,7 +5,8 @@ points + an image-to-ground homography.
 
 Exit codes: 0 fitted and written; 1 the solver failed or the fit is ill-determined (the result
 code and the best point are printed, the output config is not written); 2 bad input (one line
-naming the file).
+naming the file; an unusable output is refused before the fit); 130 interrupted (Ctrl-C), 143
+terminated (SIGTERM), nothing written.
 """
 
 from __future__ import annotations
@@ -22,7 +23,30 @@ from fit.calibrate import UNITS, fit_footprints
 
 EPILOG = """\
 exit codes: 0 fitted and written, 1 solver failure or ill-determined fit (nothing written),
-2 bad input (one line naming the file)."""
+2 bad input (one line naming the file), 130 interrupted, 143 terminated."""
+
+
+def _at_least(low: int):
+    """argparse type: a whole number >= `low`."""
+    def parse(text: str) -> int:
+        try:
+            n = int(text) if len(text) <= 20 else None
+        except ValueError:
+            n = None
+        if n is None or n < low:
+            raise argparse.ArgumentTypeError(f"{text[:24]!r} is not a whole number >= {low}")
+        return n
+    return parse
+
+
+def _fraction(text: str) -> float:
+    try:
+        f = float(text)
+    except ValueError:
+        f = math.nan
+    if not 0.0 < f < 1.0:
+        raise argparse.ArgumentTypeError(f"{text[:24]!r} is not a fraction between 0 and 1")
+    return f
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -62,22 +86,22 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--units", choices=tuple(UNITS), default="m",
                    help="units of x, y in the file (scaled to metres on reading)")
     c.add_argument("--loss", choices=("l2", "huber", "cauchy"), default="l2")
-    c.add_argument("--max-steps", type=int, default=256)
+    c.add_argument("--max-steps", type=_at_least(1), default=256)
     n = sub.add_parser("noise", help="fit Q and R by the EKF's innovation likelihood")
     n.add_argument("tracks", help="tracks .csv/.parquet")
     n.add_argument("--fit-init-speed", action="store_true",
                    help="also fit the initial speed spread")
-    n.add_argument("--max-gap-frames", type=int, default=5)
-    n.add_argument("--max-steps", type=int, default=200)
+    n.add_argument("--max-gap-frames", type=_at_least(1), default=5)
+    n.add_argument("--max-steps", type=_at_least(1), default=200)
     w = sub.add_parser("walking", help="fit the walking and width models and P_thr, R_thr, "
                        "k_sigma3 from labelled tracks (balanced accuracy, held-out split)")
     w.add_argument("tracks", help="tracks .csv/.parquet with a 'label' column ('pedestrian' is "
                    "the positive class, every other label the negative one)")
-    w.add_argument("--test-fraction", type=float, default=0.3,
+    w.add_argument("--test-fraction", type=_fraction, default=0.3,
                    help="share of each class held out for the reported accuracy (default 0.3)")
-    w.add_argument("--seed", type=int, default=0, help="seed of the held-out split")
-    w.add_argument("--max-gap-frames", type=int, default=5)
-    w.add_argument("--max-iter", type=int, default=20,
+    w.add_argument("--seed", type=_at_least(0), default=0, help="seed of the held-out split")
+    w.add_argument("--max-gap-frames", type=_at_least(1), default=5)
+    w.add_argument("--max-iter", type=_at_least(1), default=20,
                    help="re-centring iterations of the walking model")
     for s in (c, n, w):
         s.add_argument("--config", "-c", metavar="C", help="config JSON (default: Table 1)")
@@ -238,10 +262,10 @@ def make_footprints(args):
 
 def _footprints_main(args) -> int:
     from fit.footprints import write_footprints
-    from rhythmjax.io import BadInput, check_writable, dumps_json
+    from rhythmjax.io import BadInput, check_output, dumps_json
 
     try:
-        check_writable(args.output)
+        check_output(args.output, _inputs(args))
         made = make_footprints(args)
         write_footprints(args.output, made)
     except BadInput as e:
@@ -254,14 +278,43 @@ def _footprints_main(args) -> int:
 
 # ----------------------------------------------------------------------------------------------
 
+def _inputs(args) -> list:
+    return [getattr(args, k, None) for k in ("config", "footprints", "tracks", "boxes", "points",
+                                              "positions", "homography")]
+
+
+def failure(r) -> str:
+    """What failed, in words: the solver (its result code) or the checks of an ill-determined fit
+    (their reasons, with the numbers), never both contradicting each other."""
+    if not r.success:
+        what = f"the solver failed ({r.result or 'no result code'})"
+        return what + ("; also " + "; ".join(r.reasons) if r.reasons else "")
+    if r.reasons:
+        return "the solver converged but the fit is ill-determined: " + "; ".join(r.reasons)
+    return "the fit gave no config"
+
+
 def main(argv: list[str] | None = None) -> int:
-    from rhythmjax.io import BadInput, atomic_write, dumps_json, write_config
-    from rhythmjax.model.view import format_report
+    from rhythmjax.io import Terminated, raise_on_sigterm
 
     args = _parser().parse_args(argv)
-    if args.cmd == "footprints":
-        return _footprints_main(args)
+    raise_on_sigterm()  # SIGTERM cleans up as Ctrl-C does
     try:
+        return _footprints_main(args) if args.cmd == "footprints" else _fit_main(args)
+    except Terminated:
+        print("rhythmjax-fit: terminated (SIGTERM); nothing written", file=sys.stderr)
+        return 143
+    except KeyboardInterrupt:
+        print("rhythmjax-fit: interrupted; nothing written", file=sys.stderr)
+        return 130
+
+
+def _fit_main(args) -> int:
+    from rhythmjax.io import BadInput, atomic_write, check_output, dumps_json, write_config
+    from rhythmjax.model.view import format_report
+
+    try:
+        check_output(args.output, _inputs(args))  # before the fit
         r, new, run = {"camera": _camera, "noise": _noise, "walking": _walking}[args.cmd](args)
     except BadInput as e:
         print(f"rhythmjax-fit: {e}", file=sys.stderr)
@@ -278,8 +331,8 @@ def main(argv: list[str] | None = None) -> int:
     for w in run.warnings if run is not None else ():
         print(f"rhythmjax-fit: warning: {w}", file=sys.stderr)
     if bad:
-        print(f"rhythmjax-fit: fit failed or ill-determined ({r.result or 'successful'}); the "
-              f"best point is shown above; {args.output} not written", file=sys.stderr)
+        print(f"rhythmjax-fit: {failure(r)}; the best point is shown above; {args.output} not "
+              "written", file=sys.stderr)
         return 1
     try:
         if run is not None:  # the config as given, with the fitted camera
@@ -287,6 +340,9 @@ def main(argv: list[str] | None = None) -> int:
                 f.write(json.dumps(run.config_dict, indent=2, allow_nan=False) + "\n")
         else:
             write_config(args.output, new)
+    except BadInput as e:
+        print(f"rhythmjax-fit: {e}", file=sys.stderr)
+        return 2
     except OSError as e:
         print(f"rhythmjax-fit: {args.output}: cannot write: {e.strerror}", file=sys.stderr)
         return 1

@@ -134,3 +134,14 @@ def test_config_prints_valid_json_defaults(capsys):
     d = json.loads(capsys.readouterr().out)
     assert d["walking"]["pace_mean_hz"] == pytest.approx(2.05)
     assert d["thresholds"]["ar_order"] == 15
+
+
+def test_a_camera_that_sees_none_of_the_tracks_is_said(tracks_csv, tmp_path, capsys):
+    """theta 89 deg from 5 cm up: no foot point is on the ground in the range (issue 17)."""
+    cfg = tmp_path / "blind.json"
+    cfg.write_text(json.dumps({"camera": {"theta_deg": 89, "h_m": 0.05},
+                               "thresholds": {"range_min_m": 3, "range_max_m": 20}}))
+    assert main(["classify", str(tracks_csv), "-c", str(cfg), "-o",
+                 str(tmp_path / "v.csv")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: the config's camera sees none of the" in err and "Traceback" not in err

@@ -29,6 +29,16 @@ def walker_avi(tmp_path_factory):
     return path
 
 
+def _usage_error(argv, capsys) -> str:
+    """The last stderr line of an argument refused by argparse (exit 2, before any work)."""
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err, err
+    return err.strip().splitlines()[-1]
+
+
 def _one_line(capsys) -> str:
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "Traceback" not in err, err
@@ -75,8 +85,12 @@ def test_missing_and_empty_videos_exit_2_naming_the_file(verb, tmp_path, capsys)
 
 
 def test_fps_zero_and_a_camera_that_misses_the_image_exit_2(walker_avi, tmp_path, capsys):
-    assert main(["run", walker_avi, "-o", str(tmp_path / "a"), "--fps", "0"]) == 2
-    assert "fps" in _one_line(capsys)
+    with pytest.raises(SystemExit) as e:  # refused by argparse, before any work
+        main(["run", walker_avi, "-o", str(tmp_path / "a"), "--fps", "0"])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --fps: 0 frames/s is not a video's frame rate" in err.splitlines()[-1], err
+    assert "Traceback" not in err and not (tmp_path / "a").exists()
     cfg = tmp_path / "up.json"  # looking up: the given 3-20 m range projects above the image
     cfg.write_text(json.dumps({"camera": {"vc_px": -2000},
                                "thresholds": {"range_min_m": 3, "range_max_m": 20}}))
@@ -129,8 +143,8 @@ def test_one_fps_rule_and_the_image_size_follow_the_video(walker_avi, tmp_path, 
 
 def test_max_objects_is_settable(walker_avi, tmp_path, capsys):
     out = tmp_path / "t.csv"
-    assert main(["track", walker_avi, "-o", str(out), "--max-objects", "0"]) == 2
-    assert "--max-objects" in _one_line(capsys)
+    line = _usage_error(["track", walker_avi, "-o", str(out), "--max-objects", "0"], capsys)
+    assert "argument --max-objects: 0 is not a whole number >= 1" in line
     assert main(["track", walker_avi, "-o", str(out), "--max-objects", "2", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["n_tracks"] >= 1
 
@@ -173,5 +187,5 @@ def test_fps_on_the_command_line_applies_before_the_config_is_checked(walker_avi
                  "--json", "--no-camera-check"]) == 0
     capsys.readouterr()
     for bad in ("1e-6", "1e9"):
-        assert main(["track", walker_avi, "-o", str(out), "--fps", bad]) == 2
-        assert _one_line(capsys).startswith("rhythmjax track: error: --fps")
+        line = _usage_error(["track", walker_avi, "-o", str(out), "--fps", bad], capsys)
+        assert line.startswith("rhythmjax track: error: argument --fps:"), line

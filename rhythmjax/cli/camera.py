@@ -11,7 +11,7 @@ import copy
 import json
 import math
 
-from ..io import BadInput, atomic_write, check_writable, read_config_dict
+from ..io import BadInput, atomic_write, check_output, read_config_dict
 from ..io.calibration import bad_camera, read_homography, read_opencv, read_tsai
 from ..model.camera_from import (
     CONVENTIONS,
@@ -190,7 +190,8 @@ def cmd_camera(args) -> int:
     in px over the image. The image size and fps come from --video unless given."""
     src = _source(args)
     if args.output:
-        check_writable(args.output)
+        check_output(args.output, [getattr(args, k, None) for k in (
+            "config", "tsai", "opencv", "homography", "points", "video")])
     if args.window_s is not None and not (math.isfinite(args.window_s) and args.window_s > 0):
         raise ConfigError("--window-s", f"must be > 0 s, got {args.window_s:g}")
     notes: list[str] = []

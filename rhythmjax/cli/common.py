@@ -5,21 +5,30 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import sys
 
 import numpy as np
 
-from ..io import BadInput, config_or_bad_input, dumps_json, read_config_dict
+from ..io import (
+    BadInput,
+    OutputSet,
+    config_or_bad_input,
+    dumps_json,
+    make_output_dir,
+    read_config_dict,
+)
 from ..model.params import Config, ConfigError
 
 
-__all__ = ["EPILOG", "TRACK_ORDER", "VERDICT_ORDER", "Formatter", "add_camera_check", "add_common",
-           "check_config_fits_image", "emit_json", "load_config", "load_config_dict",
-           "open_source", "overlay_writer", "print_verdicts", "say"]
+__all__ = ["EPILOG", "TRACK_ORDER", "VERDICT_ORDER", "Formatter", "add_camera_check",
+           "add_common", "add_strict", "amount_arg", "check_config_fits_image", "count_arg",
+           "emit_json", "fps_arg", "load_config", "load_config_dict", "open_source",
+           "output_set", "overlay_writer", "print_verdicts", "reading_check", "say", "seed_arg"]
 
 EPILOG = """\
 exit codes: 0 success, 1 internal or I/O error, 2 bad input (the message names the file
-and the line, column, key or track), 130 interrupted.
+and the line, column, key or track), 130 interrupted, 143 terminated (SIGTERM).
 formats: tracks are .csv or .parquet with columns track_id, frame, t, u, v, width_px,
 intensity (optional label, x, y); configs are JSON (see `rhythmjax config`)."""
 
@@ -40,6 +49,25 @@ def add_camera_check(p: argparse.ArgumentParser) -> None:
                    "range, or implausibly tall or small by the camera; about 5 ms a frame)")
 
 
+def add_strict(p: argparse.ArgumentParser) -> None:
+    """--strict, for the verbs that read a video."""
+    p.add_argument("--strict", action="store_true", help="a video read short of the frames it "
+                   "announces, or with frames skipped (undecodable, mis-sized), is an error "
+                   "(exit 2, nothing written) instead of a warning")
+
+
+def reading_check(args, src, notes=None) -> None:
+    """After the video's pass: what was lost (frames read of frames announced, frames skipped
+    and why) as one warning line on stderr, always; an error (`BadInput`) with --strict. Its
+    notes are left out of `notes` (the list of the setup's notes shown) to say it once."""
+    lost = src.shortfall()
+    if lost is None:
+        return
+    if getattr(args, "strict", False):
+        raise BadInput(args.video, f"{lost} (--strict)")
+    print(f"warning: {args.video}: {lost}", file=sys.stderr)
+
+
 def add_common(p: argparse.ArgumentParser, *, config: bool = True) -> None:
     """--config (unless `config` is False), --json, --quiet, --debug."""
     if config:
@@ -49,6 +77,66 @@ def add_common(p: argparse.ArgumentParser, *, config: bool = True) -> None:
                    "stdout")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or notes")
     p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+
+
+def count_arg(text: str) -> int:
+    """argparse type: a whole number >= 1 (frames, walkers in a demo, tracks per chunk...)."""
+    return _int_arg(text, 1, "a whole number >= 1")
+
+
+def amount_arg(text: str) -> int:
+    """argparse type: a whole number >= 0 (objects of one kind in a scene...)."""
+    return _int_arg(text, 0, "a whole number >= 0")
+
+
+def seed_arg(text: str) -> int:
+    """argparse type: a seed, a whole number >= 0 (below 2**63)."""
+    return _int_arg(text, 0, "a seed: a whole number >= 0")
+
+
+def _int_arg(text: str, low: int, what: str) -> int:
+    try:
+        if len(text) > 20:
+            raise ValueError
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:24]!r} is not {what}") from None
+    if not low <= n < 2 ** 63:
+        raise argparse.ArgumentTypeError(f"{n} is not {what}")
+    return n
+
+
+def fps_arg(text: str) -> float:
+    """argparse type: a video's frame rate, 0.1-1000 frames/s."""
+    from ..vision.video import MAX_FPS
+
+    try:
+        f = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:24]!r} is not a frame rate") from None
+    if not 0.1 <= f <= MAX_FPS:
+        raise argparse.ArgumentTypeError(f"{text[:24]} frames/s is not a video's frame rate "
+                                         f"(give 0.1-{MAX_FPS:g})")
+    return f
+
+
+def output_set(out_dir, names, *, extra=(), inputs=(), drop=(), overlay=None) -> OutputSet:
+    """The outputs `names` (file names in `out_dir`; none when `out_dir` is None), the paths
+    `extra` and the annotated video `overlay` (its extension checked now) as one set
+    (`io.OutputSet`): `out_dir` is created now (and removed again if the run fails before
+    writing), every path checked against the `inputs` and for writability before any work."""
+    if overlay is not None:
+        from ..vision.video import WRITER_FOURCC
+
+        suffix = os.path.splitext(overlay)[1].lower()
+        if suffix not in WRITER_FOURCC:
+            raise BadInput(overlay, f"cannot write video: unknown extension '{suffix}' (use "
+                           ".mp4 with mp4v or .avi with MJPG)")
+        extra = (*extra, overlay)
+    made = out_dir is not None and make_output_dir(out_dir)
+    j = lambda n: os.path.join(out_dir, n)
+    return OutputSet([j(n) for n in names] + list(extra), inputs=inputs,
+                     drop=[j(n) for n in drop], made=out_dir if made else None)
 
 
 def load_config_dict(path) -> dict:

@@ -9,7 +9,7 @@ import sys
 
 from ..count.counting import count_frames
 from ..count.options import CountOptions, VerdictOptions
-from ..io import atomic_write, check_writable, dumps_json, make_output_dir, write_table
+from ..io import atomic_write, dumps_json, write_table
 from ..io.mot import VELOCITY_COLUMNS, write_mot
 from ..model.params import ConfigError
 from .common import (
@@ -17,14 +17,19 @@ from .common import (
     VERDICT_ORDER,
     add_camera_check,
     add_common,
+    add_strict,
+    fps_arg,
     load_config_dict,
     open_source,
+    output_set,
     overlay_writer,
+    reading_check,
     say,
 )
 from .overlay import draw_count_frame
 
 
+COUNT_OUTPUTS = ("mot.txt", "mot_velocity.txt", "tracks.parquet", "verdicts.csv", "counts.json")
 GUESS_COLUMNS = ("track_speed_mps", "too_fast", "width_m", "width_ok", "counted")
 
 
@@ -59,39 +64,43 @@ def cmd_count(args) -> int:
     measured width at the foot point), width_ok (inside the width gate (10)), and counted) and
     DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
     unjudged_plausible, walkers, walkers_low, walkers_high; the rule in words; the run summary
-    with ghosts_dropped).
+    with ghosts_dropped). The files (and --overlay) replace the previous set together, only
+    when the run succeeds.
     Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
     (dense crowd, camera jump) is not used for detection (pedestrians predict) and the summary
     says how many there were."""
-    if args.min_frames < 1:
+    if args.min_frames < 1:  # checked here, not by argparse: one line naming the option
         raise ConfigError("--min-frames", f"must be >= 1, got {args.min_frames}")
-    make_output_dir(args.output)
-    check_writable(os.path.join(args.output, "counts.json"))
     if args.max_pedestrians < 1:
         raise ConfigError("--max-pedestrians", f"must be >= 1, got {args.max_pedestrians}")
     opt = CountOptions(dynamics=args.dynamics, max_pedestrians=args.max_pedestrians,
                        verdicts=VerdictOptions(min_track_frames=args.min_frames))
-    src, cfg, setup_notes = open_source(args, load_config_dict(args.config))
-    for note in setup_notes:
-        say(args, note if note.startswith("warning") else f"note: {note}")
-    with src, overlay_writer(args.overlay, src.fps, (src.width, src.height)) as overlay:
-        draw = None if overlay is None else \
-            (lambda frame, index, snapshot: overlay.write(draw_count_frame(frame, snapshot, index)))
-        res = count_frames(cfg, src, options=opt, n_frames=src.n_frames, on_frame=draw,
-                           progress=not (args.quiet or args.json))
-        notes = setup_notes + [n for n in src.notes if n not in setup_notes] + \
-            res.summary.get("notes", [])
-        summary = {"video": args.video, "output": args.output, "counts": res.counts,
-                   **{k: v for k, v in res.summary.items() if k != "notes"},
-                   "bad_frames": len(src.bad_frames), "notes": notes}
-        write_mot(os.path.join(args.output, "mot.txt"), res.mot)
-        write_mot(os.path.join(args.output, "mot_velocity.txt"), res.mot, VELOCITY_COLUMNS)
-        write_table(os.path.join(args.output, "tracks.parquet"), res.tracks,
-                    TRACK_ORDER + list(VELOCITY_COLUMNS))
-        write_table(os.path.join(args.output, "verdicts.csv"), res.verdicts,
-                    VERDICT_ORDER + list(GUESS_COLUMNS))
-        with atomic_write(os.path.join(args.output, "counts.json"), "w") as f:
-            f.write(dumps_json(summary, indent=2) + "\n")
+    out = lambda name: os.path.join(args.output, name)
+    with output_set(args.output, COUNT_OUTPUTS, overlay=args.overlay,
+                    inputs=[args.video, args.config]) as outs:
+        src, cfg, setup_notes = open_source(args, load_config_dict(args.config))
+        for note in setup_notes:
+            say(args, note if note.startswith("warning") else f"note: {note}")
+        overlay_path = outs.path(args.overlay) if args.overlay else None
+        with src, overlay_writer(overlay_path, src.fps, (src.width, src.height)) as overlay:
+            draw = None if overlay is None else (lambda frame, index, snapshot: overlay.write(
+                draw_count_frame(frame, snapshot, index)))
+            res = count_frames(cfg, src, options=opt, n_frames=src.n_frames, on_frame=draw,
+                               progress=not (args.quiet or args.json))
+            reading_check(args, src)
+            notes = setup_notes + [n for n in src.notes if n not in setup_notes] + \
+                res.summary.get("notes", [])
+            summary = {"video": args.video, "output": args.output, "counts": res.counts,
+                       **{k: v for k, v in res.summary.items() if k != "notes"},
+                       "bad_frames": len(src.bad_frames), "notes": notes}
+            write_mot(outs.path(out("mot.txt")), res.mot)
+            write_mot(outs.path(out("mot_velocity.txt")), res.mot, VELOCITY_COLUMNS)
+            write_table(outs.path(out("tracks.parquet")), res.tracks,
+                        TRACK_ORDER + list(VELOCITY_COLUMNS))
+            write_table(outs.path(out("verdicts.csv")), res.verdicts,
+                        VERDICT_ORDER + list(GUESS_COLUMNS))
+            with atomic_write(outs.path(out("counts.json")), "w") as f:
+                f.write(dumps_json(summary, indent=2) + "\n")
     if args.json:
         print(json.dumps(json.loads(dumps_json(summary))))
         return 0
@@ -101,8 +110,10 @@ def cmd_count(args) -> int:
           f"{c['walkers_low']}-{c['walkers_high']}: judged only to every unjudged track; "
           f"{c['non_pedestrians']} judged non-pedestrian, {c['too_fast']} unjudged too fast, "
           f"{c['tracks']} tracks); wrote {args.output}/", file=sys.stderr)
+    lost = src.shortfall() or ""  # said once, by reading_check
     for note in notes[len(setup_notes):]:  # the setup's were shown before the run
-        say(args, f"note: {note}")
+        if note not in lost:
+            say(args, f"note: {note}")
     return 0
 
 
@@ -117,10 +128,11 @@ def register(sub, formatter=None) -> None:
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--overlay", metavar="OUT.mp4", help="also write an annotated video (boxes, "
                    "ids, online verdicts)")
-    p.add_argument("--fps", type=float, help="frame rate (frames/s); the rule in every verb: "
+    p.add_argument("--fps", type=fps_arg, help="frame rate (frames/s); the rule in every verb: "
                    "--fps, else the config's camera.fps, else the file's (a note says when they "
                    "disagree); needed for a frame folder without camera.fps")
     add_camera_check(p)
+    add_strict(p)
     p.add_argument("--max-pedestrians", type=int, default=CountOptions().max_pedestrians,
                    metavar="K", help="pedestrian slots tracked at once (a full frame's extra "
                    "pedestrians wait, and the summary says so)")

@@ -2,7 +2,8 @@
 count (`cli.count`) registered explicitly.
 
 Exit codes: 0 success, 2 bad input (one line naming the file and the row, column, key or track),
-1 internal or I/O failure, 130 interrupted. `--debug` shows tracebacks.
+1 internal or I/O failure, 130 interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupted
+run leaves the previous outputs whole and no temp file. `--debug` shows tracebacks.
 """
 
 from __future__ import annotations
@@ -16,9 +17,12 @@ import numpy as np
 from .. import __version__
 from ..io import (
     BadInput,
-    check_writable,
+    Terminated,
+    check_output,
     dumps_json,
+    raise_on_sigterm,
     read_tracks,
+    table_suffix,
     to_batch,
     write_config,
     write_table,
@@ -27,7 +31,18 @@ from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
 from ..model.params import ConfigError, config_to_dict
 from ..sim.tracks import make_tracks
 from .camera import register as register_camera
-from .common import EPILOG, Formatter, add_common, emit_json, load_config, print_verdicts, say
+from .common import (
+    EPILOG,
+    Formatter,
+    add_common,
+    amount_arg,
+    count_arg,
+    emit_json,
+    load_config,
+    print_verdicts,
+    say,
+    seed_arg,
+)
 from .count import register as register_count
 from .rhythm import register as register_rhythm
 from .video import register as register_video
@@ -37,6 +52,8 @@ from .video import register as register_video
 def cmd_config(args) -> int:
     """Print the full config (defaults, or the given file merged over them)."""
 
+    if args.output:
+        check_output(args.output, [args.config])
     cfg = load_config(args.config)
     if args.output:
         write_config(args.output, cfg)
@@ -49,7 +66,8 @@ def cmd_config(args) -> int:
 def cmd_simulate(args) -> int:
     """Write a synthetic tracks file with known labels (see `rhythmjax.simtracks`)."""
 
-    check_writable(args.output)
+    table_suffix(args.output)
+    check_output(args.output, [args.config])
     cfg = load_config(args.config)
     cols, truth = make_tracks(n_walkers=args.walkers, n_bicycles=args.bicycles,
                               n_dogs=args.dogs, n_cars=args.cars, n_short=args.short,
@@ -70,9 +88,13 @@ def cmd_classify(args) -> int:
     """Batch-classify stored tracks: EKF with the paper's gates, MEM spectrum, (13)-(15)."""
 
     if args.output:
-        check_writable(args.output)
+        table_suffix(args.output)
+        check_output(args.output, [args.tracks, args.config])
     cfg = load_config(args.config)
     tracks = read_tracks(args.tracks, fps=cfg.camera.fps)
+    blind = blind_camera_note(cfg, tracks)
+    if blind:
+        tracks.notes.append(blind)
     n = cfg.thresholds.n
     batch = to_batch(tracks, max_gap_frames=max(1, round(float(cfg.thresholds.predict_timeout)
                                                          * cfg.camera.fps)), min_len=n)
@@ -97,8 +119,28 @@ def cmd_classify(args) -> int:
              f"{v['non-pedestrian']} non-pedestrian, {v['unclassified']} unclassified"
              + (f"; wrote {args.output}" if args.output else ""))
         for note in tracks.notes:
-            say(args, f"note: {note}")
+            say(args, note if note.startswith("warning") else f"note: {note}")
     return 0
+
+
+def blind_camera_note(cfg, tracks) -> str | None:
+    """A warning when the config's camera sees none of the tracks' foot points (u, v) on the
+    ground inside the detection range: every track would be cut by the gates and left
+    unclassified (as `run` checks the camera against the video)."""
+    from ..model.camera_np import ground_of_pixels
+
+    have = np.isfinite(tracks.u) & np.isfinite(tracks.v)
+    if not have.any():
+        return None
+    _, y, ok = ground_of_pixels(cfg.camera, tracks.u[have], tracks.v[have])
+    thr = cfg.thresholds
+    lo, hi = float(thr.range_min), float(thr.range_max)
+    if np.any(ok & (y >= lo) & (y <= hi)):
+        return None
+    return (f"warning: the config's camera sees none of the {int(have.sum())} foot points on "
+            f"the ground within the detection range {lo:g}-{hi:g} m ({int(np.sum(ok))} below "
+            "the horizon at all): every track will be unclassified; check camera.h_m, "
+            "theta_deg, vc_px (`rhythmjax camera`)")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -122,12 +164,12 @@ def build_parser() -> argparse.ArgumentParser:
                        "labelled tracks file", description=cmd_simulate.__doc__)
     p.add_argument("-o", "--output", required=True, metavar="TRACKS",
                    help="output tracks file (.csv or .parquet)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--walkers", type=int, default=20)
-    p.add_argument("--bicycles", type=int, default=5)
-    p.add_argument("--dogs", type=int, default=5)
-    p.add_argument("--cars", type=int, default=3)
-    p.add_argument("--short", type=int, default=2, help="walkers tracked < N frames")
+    p.add_argument("--seed", type=seed_arg, default=0)
+    p.add_argument("--walkers", type=amount_arg, default=20)
+    p.add_argument("--bicycles", type=amount_arg, default=5)
+    p.add_argument("--dogs", type=amount_arg, default=5)
+    p.add_argument("--cars", type=amount_arg, default=3)
+    p.add_argument("--short", type=amount_arg, default=2, help="walkers tracked < N frames")
     add_common(p)
     p.set_defaults(func=cmd_simulate)
 
@@ -136,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("tracks", metavar="TRACKS", help="tracks file (.csv or .parquet)")
     p.add_argument("-o", "--output", metavar="VERDICTS", help="verdicts file (.csv or "
                    ".parquet); printed as a table when omitted")
-    p.add_argument("--chunk", type=int, default=256, help="tracks per jitted chunk")
+    p.add_argument("--chunk", type=count_arg, default=256, help="tracks per jitted chunk")
     add_common(p)
     p.set_defaults(func=cmd_classify)
 
@@ -164,6 +206,7 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     _enable_compilation_cache()
+    raise_on_sigterm()  # SIGTERM cleans up as Ctrl-C does: no temp file, the old outputs whole
     try:
         return args.func(args)
     except (BadInput, ConfigError) as e:
@@ -171,8 +214,12 @@ def main(argv=None) -> int:
             raise
         print(f"rhythmjax {args.command}: error: {e}", file=sys.stderr)
         return 2
+    except Terminated:
+        print(f"rhythmjax {args.command}: terminated (SIGTERM); no output replaced",
+              file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
-        print("rhythmjax: interrupted", file=sys.stderr)
+        print(f"rhythmjax {args.command}: interrupted; no output replaced", file=sys.stderr)
         return 130
     except BrokenPipeError:
         devnull = os.open(os.devnull, os.O_WRONLY)

@@ -10,9 +10,7 @@ import numpy as np
 
 from ..io import (
     BadInput,
-    check_writable,
     dumps_json,
-    make_output_dir,
     read_tracks,
     to_batch,
     write_table,
@@ -21,7 +19,18 @@ from ..io.mot import read_mot_numbered
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
 from ..model.params import ConfigError
 from ..track.boxes import box_intensities, check_in_image, tracks_from_mot, window_widths
-from .common import add_camera_check, add_common, load_config_dict, open_source, print_verdicts, say
+from .common import (
+    add_camera_check,
+    add_common,
+    add_strict,
+    fps_arg,
+    load_config_dict,
+    open_source,
+    output_set,
+    print_verdicts,
+    reading_check,
+    say,
+)
 
 
 TABLE_SUFFIXES = (".csv", ".parquet")
@@ -66,11 +75,18 @@ def cmd_rhythm(args) -> int:
     spectrum, (13)-(15)). The config is resolved for the video as `run` does.
 
     Writes DIR/tracks.parquet (the tracks format with intensity) and DIR/verdicts.csv; prints
-    the verdicts (or a --json summary). Nothing is written when the input is bad."""
+    the verdicts (or a --json summary). The two replace the previous pair together, and nothing
+    is written when the input is bad or the run is interrupted."""
     if args.box_scale is None or not (np.isfinite(args.box_scale) and args.box_scale > 0):
         raise ConfigError("--box-scale", f"must be a number > 0, got {args.box_scale}")
     out_tracks = os.path.join(args.output, "tracks.parquet")
     out_verdicts = os.path.join(args.output, "verdicts.csv")
+    with output_set(args.output, ("tracks.parquet", "verdicts.csv"),
+                    inputs=[args.video, args.boxes, args.config]) as outs:
+        return _rhythm(args, outs, out_tracks, out_verdicts)
+
+
+def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
     src, cfg, notes = open_source(args, load_config_dict(args.config))
     with src:
         tracks, mot = read_boxes(args.boxes, fps=float(src.fps), frame_base=args.frame_base,
@@ -78,6 +94,7 @@ def cmd_rhythm(args) -> int:
         check_in_image(tracks, src.width, src.height, mot, args.box_scale)
         W = window_widths(cfg, tracks.u, tracks.v)
         sig = box_intensities(src, tracks.frame, tracks.u, tracks.v, W)
+        reading_check(args, src)
     late = np.flatnonzero(tracks.frame >= sig.n_frames)
     if late.size:
         k = int(late[0])
@@ -95,16 +112,14 @@ def cmd_rhythm(args) -> int:
     if labels is not None:
         verdicts["label"] = labels
         order.append("label")
-    make_output_dir(args.output)
-    check_writable(out_verdicts)
     cols = {"track_id": tracks.track_id, "frame": tracks.frame, "t": tracks.t, "u": tracks.u,
             "v": tracks.v, "width_px": tracks.width_px, "intensity": tracks.intensity}
     track_order = list(cols)
     if tracks.label is not None:
         cols["label"] = tracks.label
         track_order.append("label")
-    write_table(out_tracks, cols, track_order)
-    write_table(out_verdicts, verdicts, order)
+    write_table(outs.path(out_tracks), cols, track_order)
+    write_table(outs.path(out_verdicts), verdicts, order)
     sampled = int(np.sum(np.isfinite(sig.intensity)))
     notes = notes + list(tracks.notes) + [n for n in src.notes if n not in notes]
     summary = {"video": args.video, "boxes": args.boxes, "output": args.output,
@@ -119,8 +134,10 @@ def cmd_rhythm(args) -> int:
     say(args, f"{summary['n_tracks']} box tracks: {v['pedestrian']} pedestrian, "
         f"{v['non-pedestrian']} non-pedestrian, {v['unclassified']} unclassified; I(k) sampled "
         f"in {sampled} of {summary['n_rows']} rows; wrote {args.output}/")
+    lost = src.shortfall() or ""  # said once, by reading_check
     for note in notes:
-        say(args, note if note.startswith("warning") else f"note: {note}")
+        if note not in lost:
+            say(args, note if note.startswith("warning") else f"note: {note}")
     return 0
 
 
@@ -140,8 +157,9 @@ def register(sub, formatter=None) -> None:
                    "a tracks file)")
     p.add_argument("--box-scale", type=float, default=1.0, metavar="S", help="boxes are at S "
                    "times smaller resolution than the video: their px are multiplied by S")
-    p.add_argument("--fps", type=float, help="frame rate (frames/s): --fps, else the config's "
+    p.add_argument("--fps", type=fps_arg, help="frame rate (frames/s): --fps, else the config's "
                    "camera.fps, else the file's; needed for a frame folder without camera.fps")
     add_camera_check(p)
+    add_strict(p)
     add_common(p)
     p.set_defaults(func=cmd_rhythm)

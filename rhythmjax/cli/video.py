@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from ..io import check_writable, make_output_dir, write_table
+from ..io import table_suffix, write_table
 from ..model.params import ConfigError, config_from_dict
 from ..sim.evaluate import deciding_windows, score
 from ..sim.presets import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
@@ -19,12 +19,18 @@ from .common import (
     VERDICT_ORDER,
     add_camera_check,
     add_common,
+    add_strict,
+    count_arg,
     emit_json,
+    fps_arg,
     load_config_dict,
     open_source,
+    output_set,
     overlay_writer,
     print_verdicts,
+    reading_check,
     say,
+    seed_arg,
 )
 from .overlay import draw_frame, spectrum_figure
 
@@ -50,10 +56,12 @@ def _options(args) -> TrackerOptions:
     return TrackerOptions(max_objects=args.max_objects)
 
 
-def _write_outputs(out_dir, cfg, tracks, verdicts, objs, *, tracks_name="tracks.parquet"):
-    write_table(os.path.join(out_dir, tracks_name), tracks, TRACK_ORDER)
-    write_table(os.path.join(out_dir, "verdicts.csv"), verdicts, VERDICT_ORDER)
-    spectrum_figure(os.path.join(out_dir, "spectra.png"), cfg, tracks, verdicts, objs)
+def _write_outputs(outs, out_dir, cfg, tracks, verdicts, objs):
+    """tracks.parquet, verdicts.csv and spectra.png of `out_dir`, to the temp paths of `outs`."""
+    at = lambda name: outs.path(os.path.join(out_dir, name))
+    write_table(at("tracks.parquet"), tracks, TRACK_ORDER)
+    write_table(at("verdicts.csv"), verdicts, VERDICT_ORDER)
+    spectrum_figure(at("spectra.png"), cfg, tracks, verdicts, objs)
 
 
 def _summary(tracker, verdicts, src=None) -> dict:
@@ -96,34 +104,46 @@ def _report(args, summary, verdicts, cfg=None) -> None:
 
 def cmd_track(args) -> int:
     """Track the moving objects of a video (Fig. 3 state machine, EKF + gates (10)(11)) and
-    write the tracks file; classification happens as in `run` and is in the summary."""
-    check_writable(args.output)
+    write the tracks file; classification happens as in `run` and is in the summary. The tracks
+    file and the overlay are replaced together, only when the run succeeds."""
+    table_suffix(args.output)
     options = _options(args)
-    src, cfg, notes = open_source(args, load_config_dict(args.config))
-    _notes(args, notes)
-    with src, overlay_writer(args.overlay, src.fps, (src.width, src.height)) as overlay:
-        tracks, verdicts, objs, tracker = track_frames(
-            cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
-            progress=not (args.quiet or args.json), options=options)
-        write_table(args.output, tracks, TRACK_ORDER)
+    with output_set(None, (), extra=[args.output], overlay=args.overlay,
+                    inputs=[args.video, args.config]) as outs:
+        src, cfg, notes = open_source(args, load_config_dict(args.config))
+        _notes(args, notes)
+        overlay_path = outs.path(args.overlay) if args.overlay else None
+        with src, overlay_writer(overlay_path, src.fps, (src.width, src.height)) as overlay:
+            tracks, verdicts, objs, tracker = track_frames(
+                cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
+                progress=not (args.quiet or args.json), options=options)
+            reading_check(args, src, notes)
+            write_table(outs.path(args.output), tracks, TRACK_ORDER)
     _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
     return 0
 
 
+RUN_OUTPUTS = ("tracks.parquet", "verdicts.csv", "spectra.png")
+
+
 def cmd_run(args) -> int:
     """The main job: track and classify the objects of a video; writes DIR/tracks.parquet,
-    DIR/verdicts.csv, DIR/spectra.png and DIR/overlay.mp4 (annotated video)."""
-    make_output_dir(args.output)
-    check_writable(os.path.join(args.output, "verdicts.csv"))
+    DIR/verdicts.csv, DIR/spectra.png and DIR/overlay.mp4 (annotated video) as one set: they
+    replace the previous set together, only when the run succeeds (an old overlay.mp4 is
+    removed with --no-overlay)."""
     options = _options(args)
-    src, cfg, notes = open_source(args, load_config_dict(args.config))
-    _notes(args, notes)
-    path = None if args.no_overlay else os.path.join(args.output, "overlay.mp4")
-    with src, overlay_writer(path, src.fps, (src.width, src.height)) as overlay:
-        tracks, verdicts, objs, tracker = track_frames(
-            cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
-            progress=not (args.quiet or args.json), options=options)
-        _write_outputs(args.output, cfg, tracks, verdicts, objs)
+    names = RUN_OUTPUTS + (() if args.no_overlay else ("overlay.mp4",))
+    with output_set(args.output, names, inputs=[args.video, args.config],
+                    drop=("overlay.mp4",) if args.no_overlay else ()) as outs:
+        src, cfg, notes = open_source(args, load_config_dict(args.config))
+        _notes(args, notes)
+        path = None if args.no_overlay else outs.path(os.path.join(args.output, "overlay.mp4"))
+        with src, overlay_writer(path, src.fps, (src.width, src.height)) as overlay:
+            tracks, verdicts, objs, tracker = track_frames(
+                cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
+                progress=not (args.quiet or args.json), options=options)
+            reading_check(args, src, notes)
+            _write_outputs(outs, args.output, cfg, tracks, verdicts, objs)
     _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
     return 0
 
@@ -133,23 +153,23 @@ def cmd_demo(args) -> int:
     camera, 15 Hz, 512x512), run the whole pipeline (config: SYNTHETIC_CONFIG), print the
     verdicts beside the truth, and write tracks, verdicts, truth, an annotated video and the
     spectra to DIR."""
-    make_output_dir(args.output)
-    check_writable(os.path.join(args.output, "verdicts.csv"))
-    cfg = config_from_dict(SYNTHETIC_CONFIG)
-    spec = random_spec(args.seed, n_walkers=args.walkers, n_bicycles=1, n_dogs=1,
-                       n_frames=args.frames, camera=cfg.camera, **SCENE_OPTIONS)
-    scene = render_scene(args.seed, spec)
-    truth_cols = scene_to_tracks_truth(scene)
-    frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
-    size = (scene.frames.shape[2], scene.frames.shape[1])
-    path = None if args.no_overlay else os.path.join(args.output, "overlay.mp4")
-    with overlay_writer(path, scene.fps, size) as overlay:
-        tracks, verdicts, objs, tracker = track_frames(
-            cfg, frames, n_frames=len(scene.frames), on_frame=_drawer(overlay, cfg),
-            progress=not (args.quiet or args.json), options=synthetic_options())
-        _write_outputs(args.output, cfg, tracks, verdicts, objs)
-        write_table(os.path.join(args.output, "truth.csv"), truth_cols,
-                    ["track_id", "frame", "t", "u", "v", "width_px", "label", "x", "y"])
+    names = RUN_OUTPUTS + ("truth.csv",) + (() if args.no_overlay else ("overlay.mp4",))
+    with output_set(args.output, names, drop=("overlay.mp4",) if args.no_overlay else ()) as outs:
+        cfg = config_from_dict(SYNTHETIC_CONFIG)
+        spec = random_spec(args.seed, n_walkers=args.walkers, n_bicycles=1, n_dogs=1,
+                           n_frames=args.frames, camera=cfg.camera, **SCENE_OPTIONS)
+        scene = render_scene(args.seed, spec)
+        truth_cols = scene_to_tracks_truth(scene)
+        frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
+        size = (scene.frames.shape[2], scene.frames.shape[1])
+        path = None if args.no_overlay else outs.path(os.path.join(args.output, "overlay.mp4"))
+        with overlay_writer(path, scene.fps, size) as overlay:
+            tracks, verdicts, objs, tracker = track_frames(
+                cfg, frames, n_frames=len(scene.frames), on_frame=_drawer(overlay, cfg),
+                progress=not (args.quiet or args.json), options=synthetic_options())
+            _write_outputs(outs, args.output, cfg, tracks, verdicts, objs)
+            write_table(outs.path(os.path.join(args.output, "truth.csv")), truth_cols,
+                        ["track_id", "frame", "t", "u", "v", "width_px", "label", "x", "y"])
     result = score(tracks, verdicts, scene.truth, windows=deciding_windows(objs))
     summary = {**_summary(tracker, verdicts), "output": args.output,
                **{k: v for k, v in result.items() if k != "objects"},
@@ -179,11 +199,11 @@ def register(sub, formatter=None) -> None:
     p = sub.add_parser("demo", formatter_class=formatter, help="the built-in default: a "
                        "synthetic scene through the whole pipeline", description=cmd_demo.__doc__)
     p.add_argument("-o", "--output", default="demo_out", metavar="DIR", help="output directory")
-    p.add_argument("--seed", type=int, default=4, help="scene seed (default 4: a scene where "
+    p.add_argument("--seed", type=seed_arg, default=4, help="scene seed (default 4: a scene where "
                    "every object is judged right; seeds 0-3 and 5 show the failure modes: a "
                    "walker tracked too briefly to judge, a walker or a dog misjudged)")
-    p.add_argument("--walkers", type=int, default=4, help="walkers in the scene")
-    p.add_argument("--frames", type=int, default=180, help="frames at 15 Hz")
+    p.add_argument("--walkers", type=count_arg, default=4, help="walkers in the scene")
+    p.add_argument("--frames", type=count_arg, default=180, help="frames at 15 Hz")
     p.add_argument("--no-overlay", action="store_true", help="skip the annotated video")
     add_common(p, config=False)
     p.set_defaults(func=cmd_demo)
@@ -214,8 +234,10 @@ FPS_HELP = ("frame rate (frames/s); the rule in every verb: --fps, else the conf
 
 
 def _video_flags(p) -> None:
-    p.add_argument("--fps", type=float, help=FPS_HELP)
+    p.add_argument("--fps", type=fps_arg, help=FPS_HELP)
+    add_strict(p)
     add_camera_check(p)
-    p.add_argument("--max-objects", type=int, default=TrackerOptions().max_objects, metavar="K",
+    p.add_argument("--max-objects", type=count_arg, default=TrackerOptions().max_objects,
+                   metavar="K",
                    help="object slots tracked at once (more cost time per frame; 24 for a "
                    "crowd such as PETS09)")

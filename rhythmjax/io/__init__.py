@@ -2,6 +2,12 @@
 Parquet (`tables`), atomic writes (`atomic`), MOTChallenge text (`mot`) and the one-line input
 error (`errors`). Imports `model` only (for the config)."""
 
+from .atomic import (
+    OutputSet as OutputSet,
+    Terminated as Terminated,
+    check_output as check_output,
+    raise_on_sigterm as raise_on_sigterm,
+)
 from .errors import BadInput as BadInput, PathLike as PathLike
 from .files import (
     LABELS as LABELS,
@@ -24,3 +30,4 @@ from .files import (
     write_config as write_config,
     write_table as write_table,
 )
+from .tables import table_suffix as table_suffix

@@ -8,7 +8,9 @@ import contextlib
 import errno
 import os
 import secrets
-from collections.abc import Iterator
+import signal
+import threading
+from collections.abc import Iterable, Iterator
 from typing import IO, Any
 
 from .errors import BadInput, PathLike
@@ -82,11 +84,14 @@ def atomic_path(path: PathLike) -> Iterator[str]:
         raise
 
 
-def make_output_dir(path: PathLike) -> None:
-    """Create the output directory `path` (and its parents) if needed; a path that cannot be a
-    directory (a file in the way, no permission) is a `BadInput` naming it."""
+def make_output_dir(path: PathLike) -> bool:
+    """Create the output directory `path` (and its parents) if needed; True if it was created
+    now. A path that cannot be a directory (a file in the way, no permission) is a `BadInput`
+    naming it."""
+    existed = os.path.isdir(path)
     try:
         os.makedirs(path, exist_ok=True)
+        return not existed
     except OSError as e:
         raise BadInput(os.fspath(path), f"cannot create the output directory: "
                                         f"{e.strerror or e}") from None
@@ -106,6 +111,9 @@ def _open_temp(final: str, mode: str) -> tuple[IO[Any], str]:
     d = os.path.dirname(os.path.abspath(final))
     if os.path.isdir(final):
         raise BadInput(final, "is a directory, not an output file")
+    if os.path.exists(final) and not os.path.isfile(final):
+        raise BadInput(final, "is not a regular file (a device, FIFO or socket); give a file "
+                              "to write")
     if not os.path.isdir(d):
         raise BadInput(final, f"output directory '{d}' does not exist")
     text = "b" not in mode
@@ -118,3 +126,117 @@ def _open_temp(final: str, mode: str) -> tuple[IO[Any], str]:
             continue
         except OSError as e:
             raise BadInput(final, f"cannot write in '{d}': {e.strerror or e}") from None
+
+
+# -- outputs that are one set, interrupts --------------------------------------------------------
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread by the handler `raise_on_sigterm` installs, so the
+    cleanup of the atomic writers runs as for Ctrl-C; a command line exits 143 for it."""
+
+
+def raise_on_sigterm() -> None:
+    """Make SIGTERM raise `Terminated` (the application's choice; call it from a main thread)."""
+    def handler(signum, frame):  # noqa: ARG001 - the signal module's signature
+        raise Terminated("terminated (SIGTERM)")
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, handler)
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """SIGINT and SIGTERM held back (delivered after the block) while a set is renamed in."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    main = threading.current_thread() is threading.main_thread()
+    if main and hasattr(signal, "pthread_sigmask"):
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+        try:
+            yield
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    else:
+        yield
+
+
+def check_output(path: PathLike, inputs: Iterable[PathLike | None] = ()) -> None:
+    """Before any work: `path` can be written (see `check_writable`: its directory exists and is
+    writable, it is not a directory, device, FIFO or socket) and is none of `inputs` (the same
+    file by `os.path.samefile`, or the same resolved path). A `BadInput` naming `path`."""
+    p = os.fspath(path)
+    for src in inputs:
+        if src is None:
+            continue
+        s = os.fspath(src)
+        same = os.path.realpath(p) == os.path.realpath(s)
+        with contextlib.suppress(OSError):
+            same = same or os.path.samefile(p, s)
+        if same:
+            raise BadInput(p, f"is the input '{s}'; give another output, the input would be "
+                              "overwritten")
+    check_writable(p)
+
+
+class OutputSet:
+    """Files written as one set: each is written to a temp file beside it
+    (``.<stem>.<random>.tmp<suffix>``; `path(name)` gives it to the writer), and only when the
+    block succeeds are all renamed over the old ones, with SIGINT and SIGTERM held back for the
+    renames, and the `drop` files (members of an older set this run does not write) removed. An
+    exception (Ctrl-C, SIGTERM through `raise_on_sigterm`) removes the temp files and the
+    directory `made` when it was created for this run and is empty, leaving the previous set
+    whole. Every path is checked with `check_output` against `inputs` when the set is made."""
+
+    def __init__(self, paths: Iterable[PathLike], *, inputs: Iterable[PathLike | None] = (),
+                 drop: Iterable[PathLike] = (), made: PathLike | None = None):
+        inputs, paths = list(inputs), [os.fspath(p) for p in paths]
+        self.finals = {p: _target(p) for p in paths}
+        self.drop = [os.fspath(p) for p in drop if os.fspath(p) not in self.finals]
+        self.made = None if made is None else os.fspath(made)
+        try:
+            real = [os.path.realpath(p) for p in paths]
+            twice = [p for p, r in zip(paths, real, strict=True) if real.count(r) > 1]
+            if twice:
+                raise BadInput(twice[0], "is given as two of the outputs")
+            for p in list(self.finals) + self.drop:
+                check_output(p, inputs)
+        except BaseException:
+            self._remove_made()
+            raise
+        self.temps = {p: _temp_name(f) for p, f in self.finals.items()}
+
+    def path(self, name: PathLike) -> str:
+        """The temp path to write for the output `name` (one of the set's paths)."""
+        return self.temps[os.fspath(name)]
+
+    def __enter__(self) -> OutputSet:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is not None:
+            self.abort()
+            return
+        try:
+            for tmp in self.temps.values():
+                if not os.path.isfile(tmp):
+                    raise FileNotFoundError(errno.ENOENT, "the writer created no file", tmp)
+                _fsync(tmp)
+            with _signals_deferred():
+                for name, tmp in self.temps.items():
+                    _commit(tmp, self.finals[name])
+                for p in self.drop:
+                    with contextlib.suppress(FileNotFoundError):
+                        os.unlink(p)
+        except BaseException:
+            self.abort()
+            raise
+
+    def abort(self) -> None:
+        """Remove the temp files (and the directory made for this run, if empty)."""
+        for tmp in self.temps.values():
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+        self._remove_made()
+
+    def _remove_made(self) -> None:
+        if self.made is not None:
+            with contextlib.suppress(OSError):
+                os.rmdir(self.made)

@@ -52,6 +52,12 @@ class Table(dict):
                         **({"line": n} if self.unit == "line" else {"row": n}))
 
 
+def table_suffix(path: PathLike) -> str:
+    """The table format of `path` by its extension (".csv" or ".parquet"); any other is a
+    `BadInput` naming it (checked before any work)."""
+    return _table_suffix(os.fspath(path))
+
+
 def _table_suffix(p: str) -> str:
     suffix = os.path.splitext(p)[1].lower()
     if suffix not in TABLE_SUFFIXES:
@@ -245,6 +251,8 @@ def _slow_numbers(values: np.ndarray, null: np.ndarray, kind: str):
         if kind == "int":
             if not (math.isfinite(x) and x == int(x)):
                 return i, f"{s!r} is not an integer"
+            if abs(x) >= 2.0 ** 63:
+                return i, f"{s!r} is out of range (at most 2^63 in size)"
             x = int(x)
         out[i] = x
     return out
@@ -311,6 +319,10 @@ def _parquet_column(p: str, col: pa.Array, name: str, kind: str | None, required
         if frac.any():
             i = _first(frac)
             return i, f"{float(values[i])!r} is not an integer"
+        big = np.abs(values) >= 2.0 ** 63
+        if big.any():
+            i = _first(big)
+            return i, f"{float(values[i])!r} is out of range (at most 2^63 in size)"
         ints = values.astype(np.int64)
     return ints if kind == "int" else np.asarray([str(v) for v in ints.tolist()], dtype=object)
 

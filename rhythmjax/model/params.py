@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import reprlib
 from typing import Any, final
 
 import equinox as eqx
@@ -260,24 +261,43 @@ def config_to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
     }
 
 
-def _num(sec: str, key: str, v: Any, *, lo=None, hi=None, lo_open=True, integer=False) -> Any:
+# ranges beyond the types (issue 17): no number above MAGNITUDE (float32 holds it and products
+# stay finite); the window at most MAX_SAMPLES (100 s at 1000 fps); image, timeout, fps bounds
+MAGNITUDE, MAX_SAMPLES, MAX_IMAGE_PX, MAX_TIMEOUT_S, MAX_FPS = 1e12, 100_000, 100_000, 86_400.0, 1e3
+_REPR = reprlib.Repr()  # a config value in a message, cut short (long lists, deep nesting)
+_REPR.maxstring = _REPR.maxother = _REPR.maxlong = 40
+_short = _REPR.repr
+_PIXEL = {"lo": -MAX_IMAGE_PX, "hi": MAX_IMAGE_PX, "lo_open": False, "hi_open": False}
+
+
+def _num(sec: str, key: str, v: Any, *, lo=None, hi=None, lo_open=True, hi_open=True,
+         integer=False) -> Any:
+    """The number `v` of config key `sec.key`, checked: a JSON number (not a bool), finite,
+    within +/-MAGNITUDE, an integer if `integer`, and in (lo, hi) (`lo_open`/`hi_open` False:
+    that end included); else a `ConfigError` naming the key."""
     name = f"{sec}.{key}"
     if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ConfigError(name, f"expected a number, got {v!r}")
+        raise ConfigError(name, f"expected a number, got {_short(v)}")
+    if isinstance(v, int) and abs(v) > MAGNITUDE:
+        raise ConfigError(name, f"an integer of ~{int(v.bit_length() * 0.30103) + 1} digits is "
+                          f"out of range "
+                          f"(at most {MAGNITUDE:g} in size)")
     if not math.isfinite(v):
         raise ConfigError(name, f"must be finite, got {v!r}")
+    if abs(v) > MAGNITUDE:
+        raise ConfigError(name, f"{v!r} is out of range (at most {MAGNITUDE:g} in size)")
     if integer and float(v) != int(v):
         raise ConfigError(name, f"expected an integer, got {v!r}")
     if lo is not None and (v <= lo if lo_open else v < lo):
         raise ConfigError(name, f"must be {'>' if lo_open else '>='} {lo}, got {v!r}")
-    if hi is not None and v >= hi:
-        raise ConfigError(name, f"must be < {hi}, got {v!r}")
+    if hi is not None and (v >= hi if hi_open else v > hi):
+        raise ConfigError(name, f"must be {'<' if hi_open else '<='} {hi}, got {v!r}")
     return int(v) if integer else float(v)
 
 
 def _pair(sec: str, key: str, v: Any) -> tuple[float, float]:
     if not isinstance(v, (list, tuple)) or len(v) != 2:
-        raise ConfigError(f"{sec}.{key}", f"expected a list of two numbers, got {v!r}")
+        raise ConfigError(f"{sec}.{key}", f"expected a list of two numbers, got {_short(v)}")
     return (_num(sec, key, v[0], lo=0.0), _num(sec, key, v[1], lo=0.0))
 
 
@@ -305,14 +325,19 @@ def config_from_dict(d: Any) -> Config:
     # The principal point defaults to the centre of the image (256, 256 for the default 512 x 512).
     for key, size in (("uc_px", "image_width_px"), ("vc_px", "image_height_px")):
         if key not in given_c:
-            c[key] = _num("camera", size, c[size], lo=0, integer=True) / 2.0
+            c[key] = _num("camera", size, c[size], lo=0, hi=MAX_IMAGE_PX, hi_open=False,
+                          integer=True) / 2.0
     # The rhythm window is a duration: N = round(window_s * fps) unless n_samples is given.
     if "window_s" in given_t and "n_samples" in given_t:
         raise ConfigError("thresholds.window_s", "give the rhythm window as window_s or as "
                           "n_samples, not both")
     if "n_samples" not in given_t:
         window_s = _num("thresholds", "window_s", given_t.get("window_s", WINDOW_S), lo=0.0)
-        t["n_samples"] = max(4, round(window_s * _num("camera", "fps", c["fps"], lo=0.0)))
+        fps = _num("camera", "fps", c["fps"], lo=0.0, hi=MAX_FPS, hi_open=False)
+        t["n_samples"] = max(4, round(window_s * fps))
+        if t["n_samples"] > MAX_SAMPLES:
+            raise ConfigError("thresholds.window_s", f"{window_s:g} s at {fps:g} fps is "
+                              f"{t['n_samples']} samples; at most {MAX_SAMPLES}")
 
     theta_deg = _num("camera", "theta_deg", c["theta_deg"], lo=0.0, hi=90.0)
     if "theta_deg" in d.get("camera", {}) and theta_deg < 0.6:
@@ -322,11 +347,14 @@ def config_from_dict(d: Any) -> Config:
         theta=math.radians(theta_deg),
         a=_num("camera", "a_px_per_m", c["a_px_per_m"], lo=0.0),
         b=_num("camera", "b_px_per_m", c["b_px_per_m"], lo=0.0),
-        uc=_num("camera", "uc_px", c["uc_px"]), vc=_num("camera", "vc_px", c["vc_px"]),
+        uc=_num("camera", "uc_px", c["uc_px"], **_PIXEL), vc=_num("camera", "vc_px", c["vc_px"],
+                                                                   **_PIXEL),
         roll=math.radians(_num("camera", "roll_deg", c["roll_deg"], lo=-45.0, hi=45.0)),
-        fps=_num("camera", "fps", c["fps"], lo=0.0),
-        image_width=_num("camera", "image_width_px", c["image_width_px"], lo=0, integer=True),
-        image_height=_num("camera", "image_height_px", c["image_height_px"], lo=0, integer=True),
+        fps=_num("camera", "fps", c["fps"], lo=0.0, hi=MAX_FPS, hi_open=False),
+        image_width=_num("camera", "image_width_px", c["image_width_px"], lo=0, hi=MAX_IMAGE_PX,
+                         hi_open=False, integer=True),
+        image_height=_num("camera", "image_height_px", c["image_height_px"], lo=0,
+                          hi=MAX_IMAGE_PX, hi_open=False, integer=True),
     )
     noise = Noise(
         q_std=_pair("noise", "q_std_mps_per_sqrt_s", n["q_std_mps_per_sqrt_s"]),
@@ -343,7 +371,8 @@ def config_from_dict(d: Any) -> Config:
         stride_mean=_num("walking", "stride_mean_m", k["stride_mean_m"], lo=0.0),
         stride_std=_num("walking", "stride_std_m", k["stride_std_m"], lo=0.0),
     )
-    n_samples = _num("thresholds", "n_samples", t["n_samples"], lo=3, integer=True)
+    n_samples = _num("thresholds", "n_samples", t["n_samples"], lo=3, hi=MAX_SAMPLES,
+                     hi_open=False, integer=True)
     ar_order = _num("thresholds", "ar_order", t["ar_order"], lo=0, integer=True)
     if ar_order >= n_samples - 1:
         raise ConfigError("thresholds.ar_order",
@@ -357,12 +386,13 @@ def config_from_dict(d: Any) -> Config:
         k_sigma2=_num("thresholds", "k_sigma2", t["k_sigma2"], lo=0.0),
         k_sigma3=_num("thresholds", "k_sigma3", t["k_sigma3"], lo=0.0),
         range_min=rmin, range_max=rmax,
-        predict_timeout=_num("thresholds", "predict_timeout_s", t["predict_timeout_s"], lo=0.0),
+        predict_timeout=_num("thresholds", "predict_timeout_s", t["predict_timeout_s"], lo=0.0,
+                             hi=MAX_TIMEOUT_S, hi_open=False),
         harmonic_ratio=_num("thresholds", "harmonic_max_ratio", t["harmonic_max_ratio"], lo=0.0,
                             lo_open=False),
         n=n_samples, m=ar_order,
         hop=_num("thresholds", "window_hop_samples", t["window_hop_samples"], lo=0, lo_open=False,
-                 integer=True),
+                 hi=n_samples, hi_open=False, integer=True),
     )
     return Config(camera, noise, width, walking, thresholds)
 

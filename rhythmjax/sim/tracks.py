@@ -26,7 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..model.camera import image_width, project
-from ..model.params import Camera
+from ..model.params import Camera, ConfigError
 
 
 KINDS = ("pedestrian", "bicycle", "dog", "car")
@@ -60,15 +60,19 @@ def _kind_params(kind: str, rng: np.random.Generator) -> tuple[float, float, flo
     return math.nan, math.nan, rng.uniform(2.0, 3.5), 0.0
 
 
+PLACE_TRIES = 3000  # 200 failed for 1 in ~1000 objects (issue 17: 1000-object scenes)
+
+
 def _swing(phase: np.ndarray) -> np.ndarray:
     p = np.mod(phase, 1.0)
     return np.where(p < 0.8, np.sin(np.pi * np.clip(p / 0.8, 0, 1)) ** 1.5, 0.0)
 
 
 def _path(camera: Camera, rng, speed, n_frames, y_range, radial):
-    """A straight path that stays in view and in the detection range for n_frames."""
+    """A straight path that stays in view and in the detection range for n_frames (random tries;
+    a camera that sees too little ground for one is a `ConfigError` naming the camera)."""
     dt = 1.0 / camera.fps
-    for _ in range(200):
+    for _ in range(PLACE_TRIES):
         heading = (rng.uniform(-0.35, 0.35) + rng.choice([0.5, -0.5]) * math.pi if radial
                    else rng.uniform(-math.pi, math.pi))
         y0 = rng.uniform(*y_range)
@@ -85,7 +89,9 @@ def _path(camera: Camera, rng, speed, n_frames, y_range, radial):
                   & (v < camera.image_height - 5) & (y > 3.3) & (y < 19.7))
         if inside.all():
             return x, y, heading
-    raise RuntimeError("could not place a path in view; is the camera sensible?")
+    raise ConfigError("camera", f"no straight path of {n_frames} frames stays in view and in "
+                      f"3.3-19.7 m ahead in {PLACE_TRIES} random tries; is the camera sensible "
+                      "(`rhythmjax camera`)?")
 
 
 def make_tracks(

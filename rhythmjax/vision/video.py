@@ -87,6 +87,7 @@ class VideoSource:
         self.bad_frames: list[int] = []
         self.notes: list[str] = []
         self.n_frames_read = 0
+        self.pass_ended = False
         self._cap: Any = None
         self._first: list[np.ndarray] = []
         override = _check_fps(path, fps)
@@ -180,10 +181,12 @@ class VideoSource:
         self.n_frames_read = 0
         self.bad_frames = []
         self.notes = self.notes[:self._n_open_notes]  # a new pass reports its own reading
+        self.pass_ended = False
         frames = self._folder_frames() if self.is_folder else self._file_frames()
         for i, frame in enumerate(frames):
             self.n_frames_read = i + 1
             yield i, i / self.fps, frame
+        self.pass_ended = True  # not when the reader stopped early
 
     def _folder_frames(self) -> Iterator[np.ndarray | None]:
         for i, file in enumerate(self._files):
@@ -215,6 +218,23 @@ class VideoSource:
         if self.n_frames is not None and n < self.n_frames:
             self.notes.append(f"read {n} of {self.n_frames} frames announced")
         self.close()
+
+    def shortfall(self) -> str | None:
+        """What the last pass lost, in one line: frames read of frames announced (a truncated or
+        partly unreadable file), frames skipped and why (the first reason, then a count); None
+        when every announced frame was read and used (a pass the reader stopped early is not
+        judged short)."""
+        parts = []
+        n, announced = self.n_frames_read, self.n_frames
+        if self.pass_ended and announced is not None and n < announced:
+            parts.append(f"read {n} of {announced} frames announced (the file ends or stops "
+                         f"decoding after frame {n - 1})")
+        if self.bad_frames:
+            why = [x for x in self.notes if x.endswith("skipped")]
+            more = f"; {len(why) - 1} more" if len(why) > 1 else ""
+            parts.append(f"{len(self.bad_frames)} frame(s) skipped"
+                         + (f" ({why[0]}{more})" if why else ""))
+        return "; ".join(parts) or None
 
     def close(self) -> None:
         """Release the capture (also done when iteration ends)."""
