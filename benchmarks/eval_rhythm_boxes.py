@@ -12,6 +12,7 @@ classifier measured apart from the tracker. Nothing here is chosen on these sour
   of the silhouette box (the truth JSON's bbox, as MOT text), with the dev camera (f 0.004 m,
   a = b = 125000 px/m, h 1 m, tilt 15 deg, principal point 255.5, 255.5).
 
+`--set SECTION.KEY=VALUE` (repeatable) writes a key into every config, as in eval_all.py.
 Every run is `rhythmjax rhythm VIDEO --boxes BOXES -c CONFIG -o DIR --no-camera-check` (the check
 only adds notes). Prints one line per box track and writes eval_rhythm_boxes.json.
 """
@@ -30,6 +31,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+from eval_all_score import apply_set, parse_set  # noqa: E402
+
 from rhythmjax.cli.main import main as cli  # noqa: E402
 from rhythmjax.evaluation import datasets  # noqa: E402
 from rhythmjax.io.mot import write_mot  # noqa: E402
@@ -42,10 +45,13 @@ DEV_CAMERA = {"f_m": 0.004, "a_px_per_m": 125000.0, "b_px_per_m": 125000.0, "h_m
               "theta_deg": 15.0, "uc_px": 255.5, "vc_px": 255.5}
 
 
+SETS: list = []  # (section, key, value) of --set, written into every config
+
+
 def run(video, boxes, config: dict, work: str, name: str, fps=None) -> list[dict]:
     cfg = os.path.join(work, f"{name}.json")
     with open(cfg, "w") as f:
-        json.dump(config, f)
+        json.dump(apply_set(config, SETS), f)
     out = os.path.join(work, name)
     argv = ["rhythm", str(video), "--boxes", str(boxes), "-c", cfg, "-o", out, "--quiet",
             "--json", "--no-camera-check"] + (["--fps", str(fps)] if fps else [])
@@ -165,7 +171,10 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--only", choices=("pets", "ucsd", "dev"))
     p.add_argument("-o", "--output", default="eval_rhythm_boxes.json")
+    p.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                   help="override a config key in every run (eval_all.py's --set)")
     a = p.parse_args(argv)
+    SETS[:] = parse_set(a.set)
     out = {}
     with tempfile.TemporaryDirectory() as work:
         if a.only in (None, "pets"):
