@@ -26,7 +26,7 @@ TRACKER_DEFAULTS = [
     ("body_widths", "body.parts_widths", 1.8),
     ("fraction", "body.slice_fraction", 0.1),
     ("shared_overlap", "body.shared_overlap", 0.5),
-    ("sample_estimate", "body.sample_estimate", True),
+    ("sample_estimate", "body.sample_estimate", False),
     ("high_foot_widths", "body.high_foot_widths", 0.0),
     ("high_foot_frames", "body.high_foot_frames", 3),
     ("min_area", "new.min_area", 40),

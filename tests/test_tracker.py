@@ -152,9 +152,9 @@ def test_rhythm_window_restarts_after_missing_run():
 
 
 def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
-    """The rhythm signal is sampled in window B at the filter's foot point (its ground estimate
-    projected), not at the measured one, which scatters by more than window B's W/5 rows;
-    `body.sample_estimate=False` keeps the measured one."""
+    """With `body.sample_estimate=True` the rhythm signal is sampled in window B at the filter's
+    foot point (its ground estimate projected), not at the measured one, which scatters by more
+    than window B's W/5 rows; the default (False, the paper's) keeps the measured one."""
     import jax.numpy as jnp
 
     from rhythmjax.model.camera import project

@@ -67,9 +67,12 @@ class BodyOptions:
     # nearest its foot point (in W) when the others' are more than twice as far, else none (they
     # predict); a shared blob's frame gives no rhythm sample (NaN). New objects are not sought
     # inside a tracked object's predicted body box or its detection.
-    sample_estimate: bool = True  # window B at the filtered foot point, not the measured one:
-    # the measured one scatters ~4 px (20 px when the feet do not move) against a window B of
-    # W/5 rows (7 px at 12 m), so the window left the feet (False: the measured one, as before)
+    sample_estimate: bool = False  # window B at the measured foot point, the paper's (Sec. 4.1);
+    # True: at the filtered one (the measured one scatters ~4 px against a window B of W/5 rows).
+    # True was chosen on own seeds 779 and 777 (b02e743) and is off by default since issue 16:
+    # on sources it was not chosen on it cost walkers (PETS09 13 -> 11 of 19, UCSD 36 -> 34
+    # tracks, own seed 999001 30 -> 28 of 35) and judged a non-walker more Pedestrian on own
+    # seeds 777001 and 888001; it gained one dev walker (docs/rules.md)
     high_foot_widths: float = 0.0  # a settled track's foot point measured more than this many W
     # above its prediction is dropped (no measurement): the motion's bottom was not the feet
     # (0: off; sim.presets.SYNTHETIC_OPTIONS sets 0.25 for the synthetic scenes)
