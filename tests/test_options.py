@@ -90,6 +90,7 @@ COUNT_DEFAULTS = [
     (None, "life.still_s", 5.0),
     (None, "life.still_widths", 0.15),
     (None, "life.still_heights", 0.04),
+    (None, "verdicts.speed_fit", "lsq"),  # issue 16: Theil-Sen too-fast speed, off
 ]
 COUNT_REMOVED = ["height_m", "coast_s"]  # the config's width.height_m, thresholds.predict_timeout_s
 

@@ -27,7 +27,8 @@ The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestria
 and its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged
 non-pedestrian - unclassified tracks too fast to walk. A track the classifier cannot judge
 (unclassified: shorter than N samples, or an unusable rhythm window) is a pedestrian of the
-paper's method and is counted, unless its ground speed (`track_speed`) exceeds the fastest the
+paper's method and is counted, unless its ground speed (`track_speed`: least squares; the
+Theil-Sen slope with `verdicts.speed_fit`, off) exceeds the fastest the
 walking model's test (14) accepts for any rhythm (`walking_top_speed`: pace and stride both at
 +k_sigma3, 2.57 m/s with Table 1): any window of it would be judged non-pedestrian, so it is
 not counted (`too_fast`: short bicycle tracks). A track judged pedestrian is counted; a
@@ -54,7 +55,7 @@ from ..io.mot import VELOCITY_COLUMNS
 from ..model.params import Config
 from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
-from .options import CountOptions
+from .options import SPEED_FITS, CountOptions
 from .pedestrian_level import Pedestrian, PedestrianLevel
 from .rows import BlobRow, BoxRow, GroundRow
 from .still import never_moved, peek_background
@@ -167,16 +168,27 @@ def walking_top_speed(cfg: Config) -> float:
         (float(w.stride_mean) + k * float(w.stride_std))
 
 
-def track_speed(p: Pedestrian) -> float:
-    """Least-squares ground speed (m/s) over a track's measured rows (its ground x, y: the EKF
-    state for "3d"); NaN with fewer than 2 or a span under 0.5 s."""
+def track_speed(p: Pedestrian, fit: str = "lsq") -> float:
+    """Ground speed (m/s) over a track's measured rows (its ground x, y: the EKF state for
+    "3d"): the norm of the least-squares slope of x and y against time (`fit` "lsq"), or of
+    the Theil-Sen slope, per axis the median of (x_j - x_i) / (t_j - t_i) over all pairs i < j
+    (`fit` "theil-sen", as `model.rhythm.ground_speed` does for a rhythm window); NaN with
+    fewer than 2 or a span under 0.5 s (`verdicts.speed_fit`)."""
     from ..model.status import TrackState
 
+    if fit not in SPEED_FITS:
+        raise ValueError(f"speed fit must be one of {SPEED_FITS}, got {fit!r}")
     r = np.asarray([(q.t, q.x_est, q.y_est) for q in p.rows
                     if q.state == int(TrackState.OBSERVE)], np.float64).reshape(-1, 3)
     r = r[np.all(np.isfinite(r), axis=1)]
     if len(r) < 2 or np.ptp(r[:, 0]) < 0.5:
         return math.nan
+    if fit == "theil-sen":
+        i, j = np.triu_indices(len(r), 1)
+        dt = r[j, 0] - r[i, 0]
+        ok = dt > 0  # two rows of one instant give no slope
+        v = np.median((r[j, 1:][ok] - r[i, 1:][ok]) / dt[ok, None], axis=0)
+        return float(np.hypot(*v))
     tc = r[:, 0] - r[:, 0].mean()
     v = tc @ (r[:, 1:] - r[:, 1:].mean(axis=0)) / float(tc @ tc)
     return float(np.hypot(*v))
@@ -257,7 +269,8 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
                     "n_samples": np.asarray([len(p.rows) for p in peds], np.int64)}
     mot, detections = mot_table(peds), detections_table(level.detections)
     top = walking_top_speed(cfg)
-    speed = np.asarray([track_speed(p) for p in peds], np.float64)
+    fit = level.opt.verdicts.speed_fit
+    speed = np.asarray([track_speed(p, fit) for p in peds], np.float64)
     verdicts["track_speed_mps"], verdicts["too_fast"] = speed, speed > top
     verdicts["width_m"] = np.asarray([track_width(level, p) for p in peds], np.float64)
     w = cfg.width
