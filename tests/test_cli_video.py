@@ -189,3 +189,14 @@ def test_fps_on_the_command_line_applies_before_the_config_is_checked(walker_avi
     for bad in ("1e-6", "1e9"):
         line = _usage_error(["track", walker_avi, "-o", str(out), "--fps", bad], capsys)
         assert line.startswith("rhythmjax track: error: argument --fps:"), line
+
+
+def test_no_stabilise_gives_the_same_tracks_on_a_fixed_camera(walker_avi, tmp_path, capsys):
+    """The fixed camera of `walker_avi`: shake compensation on (the default) or off
+    (`--no-stabilise`) writes identical tracks (the screen leaves every frame as it is)."""
+    import pyarrow.parquet as pq
+
+    a, b = tmp_path / "on.parquet", tmp_path / "off.parquet"
+    assert main(["track", walker_avi, "-o", str(a), "--quiet"]) == 0
+    assert main(["track", walker_avi, "-o", str(b), "--quiet", "--no-stabilise"]) == 0
+    assert pq.read_table(a).equals(pq.read_table(b))
