@@ -237,3 +237,23 @@ def test_writer_failures_leave_nothing(tmp_path):
     with pytest.raises(BadInput, match="positive frame rate"):
         open_writer(out, 0, (W, H))
     assert os.listdir(tmp_path) == []
+
+
+def test_ffmpeg_lines_kept_off_stderr(tmp_path):
+    """A truncated MJPEG AVI: FFmpeg's own '[mjpeg @ ...] overread' line is not printed (in a
+    fresh process: FFmpeg's level is fixed when OpenCV first opens a file)."""
+    import subprocess
+    import sys
+
+    p = tmp_path / "walk.avi"
+    _write_avi(p, 30)
+    data = p.read_bytes()
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(data[: int(len(data) * 0.6) + 37])  # a frame cut in the middle
+    code = ("import os, sys; os.environ.pop('OPENCV_FFMPEG_LOGLEVEL', None)\n"
+            "from rhythmjax.vision.video import open_video\n"
+            f"src = open_video({str(cut)!r}); n = sum(1 for _ in src); print(n, src.notes)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "of 30 frames announced" in r.stdout
+    assert "overread" not in r.stderr + r.stdout and "mjpeg" not in r.stderr, r.stderr

@@ -7,6 +7,7 @@ Tables: `io_tables` (strict CSV/Parquet reading, atomic writes), re-exported her
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -72,6 +73,31 @@ class Tracks:
     def ids(self) -> list[str]:
         """Track ids in file order."""
         return [str(i) for i in self.track_id[_starts(self.track_id)]]
+
+    def by_span(self, rows: int) -> list[Tracks]:
+        """The tracks in groups to pad and classify apart: first those spanning at most `rows`
+        frames (first to last; their padded length is at most that), then each longer track on
+        its own, so that one long track does not pad every other to its length. Each group
+        keeps the file order; a group is all the tracks when none is longer."""
+        starts = _starts(self.track_id)
+        if not len(starts):
+            return [self]
+        ends = np.r_[starts[1:], len(self.frame)] - 1
+        long = np.flatnonzero(self.frame[ends] - self.frame[starts] + 1 > rows)
+        if not long.size:
+            return [self]
+        track = np.cumsum(np.r_[False, self.track_id[1:] != self.track_id[:-1]])
+        short = np.setdiff1d(np.arange(len(starts)), long)
+        groups = ([np.isin(track, short)] if short.size else []) + [track == i for i in long]
+        out = []
+        for m in groups:
+            take = lambda a, m=m: None if a is None else a[m]
+            out.append(dataclasses.replace(
+                self, track_id=take(self.track_id), frame=take(self.frame), t=take(self.t),
+                u=take(self.u), v=take(self.v), width_px=take(self.width_px),
+                intensity=take(self.intensity), line=take(self.line), label=take(self.label),
+                x=take(self.x), y=take(self.y), notes=[]))
+        return out
 
     def to_batch(self, *, max_gap_frames: int, min_len: int, bucket: bool = True,
                  fps: float | int | None = None) -> TrackBatch:

@@ -12,11 +12,13 @@ classified segment, else its first (matching goes on until Pedestrian, Sec. 4.2)
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 
 import jax.numpy as jnp
 import numpy as np
 
+from .long_tracks import SEGMENT_ROWS, classify_long_track
 from .params import Config
 from .rhythm import classify_batch
 from .segments import split_tracks
@@ -32,12 +34,30 @@ def _chunk_size(n_tracks: int, chunk: int) -> int:
     return min(chunk, max(8, 1 << max(0, int(n_tracks - 1).bit_length())))
 
 
+# Rhythm windows classified at once in one chunk, at most (about 128 KB each: ~1 GB): a chunk
+# of tracks of T rows holds rows x ((T - N) / hop + 1) windows. Tracks of up to 256 rows (7
+# windows) keep chunks of 256; 256 tracks of 4096 rows went from 32 512 windows (~4 GB) to 64
+# tracks a chunk. Measured on 40 tracks of 4000 rows: 1372 MiB with 64 a chunk, 1101 MiB with 32
+# (and 1.4x the time), hence 8192 rather than 4096.
+WINDOW_BUDGET = 8192
+
+
+def _window_rows(cfg: Config, T: int, rows: int) -> int:
+    """`rows` halved until the chunk's windows fit `WINDOW_BUDGET` (at least 8 rows)."""
+    thr = cfg.thresholds
+    windows = max(1, (T - thr.n) // thr.hop_samples + 1)
+    while rows > 8 and rows * windows > WINDOW_BUDGET:
+        rows //= 2
+    return rows
+
+
 def padded_chunks(cfg: Config, batch, chunk: int):
     """Yield (start, end, (z, width, intensity, dt, present)) over the tracks of a `TrackBatch`
-    in chunks of one fixed row count (`_chunk_size`); the last chunk is padded with empty tracks
-    (no measurement, NaN intensity, dt = 1 / fps), so one compilation serves every chunk."""
+    in chunks of one fixed row count (`_chunk_size`, fewer for long T: `_window_rows`); the last
+    chunk is padded with empty tracks (no measurement, NaN intensity, dt = 1 / fps), so one
+    compilation serves every chunk."""
     B = len(batch.ids)
-    rows = _chunk_size(B, chunk)
+    rows = _window_rows(cfg, batch.z.shape[1], _chunk_size(B, chunk))
     for s in range(0, B, rows):
         e = min(s + rows, B)
         arrays = []
@@ -90,18 +110,34 @@ def pick_segments(verdict: np.ndarray, owner: np.ndarray, n_tracks: int) -> np.n
 
 
 def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = True,
-                    split: bool = True) -> dict:
+                    split: bool = True, segment_rows: int = SEGMENT_ROWS) -> dict:
     """Classify every track of a `TrackBatch`; returns NumPy columns of the verdicts table
     (`VERDICT_COLUMNS`, verdict and reason as labels) plus `peak_*` arrays for plots and
     `n_segments` (Fig. 3 segments per track; `split` False: every track whole, one segment,
     the behaviour before the time-out and the range exit were applied). `n_samples` counts
-    the frames tracked over all of a track's segments."""
+    the frames tracked over all of a track's segments.
+
+    A track longer than `segment_rows` rows is classified by `long_tracks.classify_long_track`
+    (its filter in segments of that many rows, the carry handed on; the same verdicts), so its
+    memory does not grow with its length; the others as before, padded only to their own
+    longest (rounded up to a power of two)."""
     B = len(batch.ids)
+    long = np.flatnonzero(np.asarray(batch.length) > segment_rows) if split and B else \
+        np.zeros(0, np.int64)
+    if long.size:
+        return _with_long_tracks(cfg, batch, long, chunk=chunk, progress=progress,
+                                 segment_rows=segment_rows)
     if split:
         segs, owner = split_tracks(cfg, batch, _chunk_size(B, chunk))
     else:
         segs, owner = batch, np.arange(B)
     res = classify_each(cfg, segs, chunk, progress)
+    return _verdict_columns(batch, res, owner)
+
+
+def _verdict_columns(batch, res: dict, owner: np.ndarray) -> dict:
+    """The verdicts table from per-segment results `res` (codes) and each segment's track."""
+    B = len(batch.ids)
     pick = pick_segments(res["verdict"], owner, B) if B else np.zeros(0, np.int64)
     out = {k: v[pick] for k, v in res.items()}
     out["n_samples"] = np.bincount(owner, res["n_samples"], minlength=B) if B else \
@@ -112,6 +148,56 @@ def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = Tr
     out["reason"] = np.asarray([REASON_LABELS[int(c)] for c in out["reason"]], dtype=object)
     out["n_samples"] = out["n_samples"].astype(np.int64)
     return out
+
+
+def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progress: bool,
+                      segment_rows: int) -> dict:
+    """`classify_tracks` when the tracks `long` are longer than `segment_rows`: those one by one
+    in segments, the others as a batch truncated to their own length."""
+    B = len(batch.ids)
+    short = np.setdiff1d(np.arange(B), long)
+    n = cfg.thresholds.n
+    parts, owners = [], []
+    if short.size:
+        T = max(n, int(np.max(batch.length[short])))
+        T = 1 << (T - 1).bit_length()
+        take = lambda a: None if a is None else a[short, :T]
+        sub = dataclasses.replace(
+            batch, ids=[batch.ids[i] for i in short], z=take(batch.z), width=take(batch.width),
+            intensity=take(batch.intensity), t=take(batch.t), dt=take(batch.dt),
+            present=take(batch.present), length=batch.length[short],
+            labels=None if batch.labels is None else [batch.labels[i] for i in short],
+            xy=take(batch.xy))
+        segs, owner = split_tracks(cfg, sub, _chunk_size(len(short), chunk))
+        res = classify_each(cfg, segs, chunk, progress)
+        parts.append({k: res[k] for k in _CODES})
+        owners.append(short[owner])
+    for i in long:
+        L = int(batch.length[i])
+        pieces = classify_long_track(cfg, batch.z[i, :L], batch.width[i, :L],
+                                     batch.intensity[i, :L], batch.dt[i, :L],
+                                     segment_rows=segment_rows)
+        parts.append({k: np.asarray([p[k] for p in pieces]) for k in _CODES})
+        owners.append(np.full(len(pieces), i))
+    owner = np.concatenate(owners)
+    order = np.argsort(owner, kind="stable")  # by track, pieces in time order
+    res = {k: np.concatenate([p[k] for p in parts])[order] for k in _CODES}
+    return _verdict_columns(batch, res, owner[order])
+
+
+_CODES = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
+          "peak_freq", "peak_power", "peak_mask")
+
+
+def merge_verdicts(parts: list[dict], ids: list[str]) -> dict:
+    """The verdict columns of `classify_tracks` on groups of a file's tracks (`Tracks.by_span`)
+    as one table in the order of `ids` (the file's)."""
+    if len(parts) == 1:
+        return parts[0]
+    cols = {k: np.concatenate([np.asarray(p[k]) for p in parts]) for k in parts[0]}
+    where = {str(t): i for i, t in enumerate(cols["track_id"])}
+    order = np.asarray([where[str(t)] for t in ids], np.int64)
+    return {k: v[order] for k, v in cols.items()}
 
 
 def summarise(verdicts: dict, labels: np.ndarray | None = None) -> dict:

@@ -231,6 +231,30 @@ def classify_window(
 # One compiled program per window shape, shared by the online trackers (track, count).
 classify_window_jit = eqx.filter_jit(classify_window)
 
+
+def window_times(dt: Float[Array, " n"]) -> Float[Array, " n"]:
+    """Times (s) of a window's samples from its first: 0, dt[1], dt[1] + dt[2], ... (dt[k] the
+    step into sample k). Relative to the window, so they keep float32 precision however far
+    into a long track the window lies (a clock of 1e6 frames at 15 fps, 66 667 s, has steps of
+    0.008 s in float32: 12 % of 1/15 s, more than the 10 % jitter `bad-signal` allows)."""
+    return jnp.cumsum(jnp.where(jnp.arange(dt.shape[0]) == 0, 0.0, dt))
+
+
+@eqx.filter_jit
+def classify_windows(
+    cfg: Config,
+    intensity: Float[Array, "J n"],
+    dt: Float[Array, "J n"],
+    xy: Float[Array, "J n 2"],
+    usable: Bool[Array, " J"],
+    observed: Float[Array, "J n 2"],
+) -> RhythmResult:
+    """`classify_window` over J windows given by their rows (`window_times` of `dt` for t): the
+    per-window step of `track_windows`, for callers that hold the filter's outputs themselves
+    (`model.long_tracks`, a long track in segments)."""
+    one = lambda i, d, p, u, o: classify_window(cfg, i, window_times(d), p, u, o)
+    return jax.vmap(one)(intensity, dt, xy, usable, observed)
+
 def window_grid(T: int, n: int, hop: int, n_tracked) -> tuple[Array, Bool[Array, " J"]]:
     """Rhythm windows of a padded track of T frames: the window indices j (window j starts
     j * hop frames after the track's first, N long; as many as fit in T) and which of them lie
@@ -259,10 +283,8 @@ def track_windows(
         raise ValueError(f"tracks must be padded to at least N = {n} frames, got {T}")
     gates = PaperGates(cfg.width, cfg.thresholds)
     out = filter_track(cfg.camera, cfg.noise, gates, z, width, dt, present).steps
-    idx = jnp.arange(T)
     k0 = jnp.argmax(out.started)
     n_tracked = jnp.sum(present & out.started)
-    t = jnp.cumsum(jnp.where(idx == 0, 0.0, dt))
     xy = out.mean[:, jnp.array([0, 2])]
     observed = jnp.where(out.valid[:, None], z, jnp.nan)
     j, complete = window_grid(T, n, thr.hop_samples, n_tracked)
@@ -270,8 +292,8 @@ def track_windows(
 
     def one_window(start, usable):
         window = lambda a: jax.lax.dynamic_slice_in_dim(a, jnp.clip(start, 0, T - n), n)
-        return classify_window(cfg, window(intensity), window(t), window(xy), usable,
-                               window(observed))
+        return classify_window(cfg, window(intensity), window_times(window(dt)), window(xy),
+                               usable, window(observed))
 
     every = jax.vmap(one_window)(k0 + thr.hop_samples * j, complete)
     short = jnp.where(jnp.any(out.available), Reason.TOO_SHORT, Reason.NO_MEASUREMENTS)

@@ -39,26 +39,36 @@ def first_segment_end(cfg: Config, started, valid, y, dt, length) -> np.ndarray:
 
     `started`, `valid` (B, T) bool and `y` (B, T) m are the filter's outputs over the track
     (`ekf.StepOutput`: started, valid, mean[..., 2]), `dt` (B, T) s, `length` (B,) rows."""
-    thr = cfg.thresholds
-    timeout, lo, hi = (float(a) for a in (thr.predict_timeout, thr.range_min, thr.range_max))
     started, valid = np.asarray(started, bool), np.asarray(valid, bool)
-    y, dt = np.asarray(y, np.float64), np.asarray(dt, np.float64)
     B, T = started.shape
     k0 = np.argmax(started, axis=1)
     has = started[np.arange(B), k0]
-    end = np.full(B, -1, np.int64)
-    pt = np.zeros(B)
-    for k in range(1, T):
+    end, _ = end_steps(cfg, 1, valid[:, 1:], np.asarray(y)[:, 1:], np.asarray(dt)[:, 1:],
+                       length, k0, has, np.full(B, -1, np.int64), np.zeros(B))
+    return end
+
+
+def end_steps(cfg: Config, k_first: int, valid, y, dt, length, k0, has, end, pt):
+    """The rows k_first .. k_first + n - 1 of `first_segment_end`'s walk (valid, y, dt: (B, n),
+    those rows), from its state: `end` (B,) (-1: none yet) and `pt` (B,) s, the time since the
+    last used measurement; `k0`, `has`: each track's start row and whether it has one. Returns
+    the new (end, pt). The walk over a track given in pieces of rows, piece after piece (with
+    `k0` and `has` known once the start is seen), is the walk over the whole track."""
+    thr = cfg.thresholds
+    timeout, lo, hi = (float(a) for a in (thr.predict_timeout, thr.range_min, thr.range_max))
+    valid, y, dt = np.asarray(valid, bool), np.asarray(y, np.float64), np.asarray(dt, np.float64)
+    for i in range(valid.shape[1]):
+        k = k_first + i
         live = has & (k > k0) & (k < length) & (end < 0)
         if not live.any():
             continue
-        elapsed = pt + dt[:, k]
+        elapsed = pt + dt[:, i]
         timed_out = live & (elapsed > timeout + TIME_TOLERANCE_S)
-        left = live & ~timed_out & ~((y[:, k] >= lo) & (y[:, k] <= hi))
-        end = np.where(timed_out, np.where(valid[:, k], k - 1, k), end)
+        left = live & ~timed_out & ~((y[:, i] >= lo) & (y[:, i] <= hi))
+        end = np.where(timed_out, np.where(valid[:, i], k - 1, k), end)
         end = np.where(left, k, end)
-        pt = np.where(live, np.where(valid[:, k], 0.0, elapsed), pt)
-    return end
+        pt = np.where(live, np.where(valid[:, i], 0.0, elapsed), pt)
+    return end, pt
 
 
 def _filter(cfg: Config, batch, rows: int):

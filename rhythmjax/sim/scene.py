@@ -36,6 +36,7 @@ from ..model.camera_np import (
 )
 from ..model.params import Camera
 from . import actors as sa
+from .placement import PlacementError, check_room
 
 
 KINDS = ("pedestrian", "bicycle", "dog")
@@ -368,6 +369,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     life. Without `occlusion`, paths are re-drawn (up to 300 times) until the objects' image
     boxes never overlap; with it, overlaps are left as drawn. Deterministic given `seed`."""
     camera = camera or Camera()
+    check_room(camera, n_walkers, n_bicycles, n_dogs, n_frames, min_life, range_m)
     rng = _rng(seed)
     fps = float(camera.fps)
     kinds = ["pedestrian"] * n_walkers + ["bicycle"] * n_bicycles + ["dog"] * n_dogs
@@ -388,8 +390,8 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                           range_m, margin_px)
             if best is None:
                 if life <= 16:
-                    raise RuntimeError(f"could not place a {kind} path in view within "
-                                       f"{range_m} m")
+                    raise PlacementError("scene", f"could not place a {kind} path in view "
+                                         f"within {range_m} m")
                 life = max(16, int(0.9 * life))
         _, head, x0, y0, u, hw_px, v, h_px = best
         placed.append((alive, u, hw_px, v, h_px))
@@ -436,6 +438,7 @@ def _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion, r
     return best
 
 
-__all__ = ["KINDS", "ActorSpec", "ObjectTruth", "Scene", "SceneSpec", "bicycle", "depth_3d", "dog",
+__all__ = ["KINDS", "ActorSpec", "ObjectTruth", "PlacementError", "Scene", "SceneSpec", "bicycle",
+           "check_room", "depth_3d", "dog",
            "project_3d", "random_spec", "render_background", "render_scene",
            "scene_to_tracks_truth", "walker"]

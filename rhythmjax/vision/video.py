@@ -28,6 +28,19 @@ from ..io.errors import BadInput, PathLike
 FRAME_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
 MAX_FPS = 1000.0  # a container frame rate above this (or 0, NaN) is taken as absurd
 WRITER_FOURCC = {".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v", ".avi": "MJPG"}
+FFMPEG_LOG_LEVEL = "8"  # AV_LOG_FATAL: FFmpeg's own lines ("[mjpeg @ 0x..] overread 8") off
+
+
+def quiet_ffmpeg() -> None:
+    """Keep FFmpeg's log lines off stderr while OpenCV reads and writes videos, so a damaged
+    file gives the user our one line (frames read of frames announced, or why it does not
+    open), not decoder chatter. OpenCV's FFmpeg backend takes its level from the environment
+    variable OPENCV_FFMPEG_LOGLEVEL when it first opens a file (cv2.utils.logging does not
+    reach it; measured with opencv-python 5.0); a value the user set is kept, so
+    OPENCV_FFMPEG_LOGLEVEL=32 shows them again."""
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", FFMPEG_LOG_LEVEL)
+
+
 _TRUNCATED_HINT = ("; if the recording was interrupted the file is probably truncated ('moov atom "
                    "not found'): re-mux or repair it (e.g. ffmpeg -i in.mp4 -c copy out.mp4)")
 
@@ -124,6 +137,7 @@ class VideoSource:
         size = os.path.getsize(self.path)
         if size == 0:
             raise BadInput(self.path, "not a readable video (0 bytes)")
+        quiet_ffmpeg()
         cap = cv2.VideoCapture(self.path)
         if not cap.isOpened():
             cap.release()
@@ -276,6 +290,7 @@ class VideoWriter:
         self.size, self.fourcc, self.n_written = (w, h), WRITER_FOURCC[suffix], 0
         self._cm = atomic_path(path)  # BadInput now if the directory cannot be written
         self.temp_path: str | None = self._cm.__enter__()
+        quiet_ffmpeg()
         self._vw: Any = cv2.VideoWriter(self.temp_path, cv2.VideoWriter_fourcc(*self.fourcc), f,
                                         (w, h), True)
         if not self._vw.isOpened():
