@@ -404,8 +404,8 @@ def _report(best, fit, loss, n) -> CameraFit:
     huge = se_limits(values)
     if "roll" in fit and abs(values["roll"]) > 45.0:
         reasons.append(f"roll {values['roll']:.3g} deg beyond +-45 deg")
-    reasons += [f"standard error of {k} {se[k]:.3g} {UNITS[k]} is huge" for k in fit
-                if se[k] > huge[k]]
+    reasons += [f"standard error of {k} {se[k]:.3g} {UNITS[k]} is above its limit "
+                f"{huge[k]:.3g}" for k in fit if se[k] > huge[k]]
     raw = np.asarray(residuals(val, args[:-2] + ("l2", args[-1])))
     return CameraFit(
         camera=args[1], fitted=fit, values=values, se=se, cov=cov,

@@ -173,7 +173,8 @@ def fit_noise(
     se = {k: float(s) for k, s, m in zip(NATURAL, se_all, moves, strict=True) if m}
     for k, s in se.items():
         if k != "r_corr" and s > 0.5 * values[k]:
-            reasons.append(f"standard error of {k} {s:.3g} {UNITS[k]} is huge")
+            reasons.append(f"standard error of {k} {s:.3g} {UNITS[k]} is more than half its "
+                           f"value {values[k]:.3g}")
     if not math.isfinite(ll):
         reasons.append("log-likelihood is not finite")
     noise_out = jax.tree.map(lambda a: jnp.asarray(np.asarray(a), jnp.result_type(float))

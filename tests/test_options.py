@@ -91,6 +91,11 @@ COUNT_DEFAULTS = [
     (None, "life.still_widths", 0.15),
     (None, "life.still_heights", 0.04),
     (None, "verdicts.speed_fit", "lsq"),  # issue 16: Theil-Sen too-fast speed, off
+    # the foot-point gates of `count.foot_gate` (options a and b), off
+    (None, "placement.in_range", False),
+    (None, "placement.gate_heights", 0.0),
+    (None, "placement.lift_heights", 0.0),
+    (None, "placement.lift_keep_u", False),
 ]
 COUNT_REMOVED = ["height_m", "coast_s"]  # the config's width.height_m, thresholds.predict_timeout_s
 

@@ -46,6 +46,13 @@ class PlacementOptions:
     shared_search_widths: float = 0.3  # ... when it shares a blob with others
     merge_widths: float = 0.75  # shared blob narrower than this x summed W: predict only
     min_cover: float = 0.08  # a placement must cover this fraction of its patch
+    # gates on the placed foot point (`count.foot_gate`): a gated placement is no measurement
+    in_range: bool = False  # (a) its ground point at/above the horizon or beyond range_max
+    gate_heights: float = 0.0  # (a) > 0: its ground point this many walker heights (width.height
+    # m) or more from the predicted foot point's
+    lift_heights: float = 0.0  # (b) > 0: the blob bottom under the patch this many H above the
+    # predicted foot row (legs not visible)
+    lift_keep_u: bool = False  # (b) ... then measured across only, at the predicted foot row
 
 
 @dataclass(frozen=True)

@@ -50,6 +50,7 @@ from ..track.rows import TrackRow
 from ..track.toolkit import PendingStep, dv_frames, match_window, velocity_jump
 from ..vision.blobs import box_table, meeting
 from ..vision.detect import window_b_intensity
+from .foot_gate import gated
 from .patches import (
     FILTER_OUT,
     FilterOut,
@@ -114,17 +115,16 @@ class PedestrianLevel:
         self.coast_s = float(cfg.thresholds.predict_timeout)
         self.peds: list[Pedestrian] = []
         self.finished: list[Pedestrian] = []
-        self.bg = None
-        self.prev = None
+        self.bg = self.prev = None
         self.prev_blobs: list = []
         self.last_t: float | None = None
-        self.next_id = 1
-        self.n_frames = 0
+        self.next_id, self.n_frames = 1, 0
         self.crowd_frames: list[int] = []
         self.missing_frames: list[int] = []
         self.full_frames: list[int] = []  # frames where a new pedestrian found no free slot
         self.stitched = self.ghosts = 0  # tracks joined (count.stitch_level), never moved
         self.detections: list[BlobRow] = []
+        self.gated: dict[str, int] = {}  # placements gated by `count.foot_gate`, by reason
         self.image_shape: tuple[int, int] | None = None
         self._dv_frames = dv_frames(opt.life.dv_window_s, float(cfg.camera.fps))
         self.defer, self._pending = defer, PendingStep(FILTER_OUT, np.float64)
@@ -264,9 +264,9 @@ class PedestrianLevel:
                     max(b[3] for b in bx))
             pl = place_patch(labels, lab, claimed, self.shape, *p.next_uv, radius_px=radius,
                              v_max=v_max, min_cover=opt.placement.min_cover, bbox=bbox)
-            if pl is None:
+            if pl is None or (z := gated(self, p, pl)) is None:  # `count.foot_gate`
                 continue
-            p.z = (pl.u, pl.v)  # the object's width: its blob's run, a patch width around
+            p.z = z  # the object's width: its blob's run, a patch width around
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
             if k > 1:
                 x0, y0, x1, y1 = (int(round(q)) for q in (pl.u - pl.w / 2, pl.v - pl.h,
