@@ -1,6 +1,7 @@
 """The online tracker: Fig. 3's NONE/DETECT/OBSERVE/PREDICT state machine per object over video.
 
-Per frame (norfair's readable loop, STYLE R11): the motion image of Sec. 2; for each tracked
+Per frame (norfair's readable loop, STYLE R11): the motion image of Sec. 2, the previous frame
+first moved onto this one where the camera shook (`vision.stabilise`); for each tracked
 object a detection inside a small window centred on its predicted foot point; connected regions
 elsewhere start new objects (DETECT). Then ONE jitted call advances every object slot with the
 core's EKF step (`ekf_fused.step`: `ekf.step` entry by entry) and the paper's gates (10) and
