@@ -255,6 +255,7 @@ def classify_windows(
     one = lambda i, d, p, u, o: classify_window(cfg, i, window_times(d), p, u, o)
     return jax.vmap(one)(intensity, dt, xy, usable, observed)
 
+
 def window_grid(T: int, n: int, hop: int, n_tracked) -> tuple[Array, Bool[Array, " J"]]:
     """Rhythm windows of a padded track of T frames: the window indices j (window j starts
     j * hop frames after the track's first, N long; as many as fit in T) and which of them lie
