@@ -50,19 +50,15 @@ def _hann(w: int, h: int) -> np.ndarray:
 
 
 def estimate_shift(prev: np.ndarray, cur: np.ndarray, *, tiles: int = 4,
-                   min_response: float = 0.1, downscale: int = 1) -> tuple[float, float]:
+                   min_response: float = 0.1) -> tuple[float, float]:
     """(du, dv) px: the global translation of grey frame `cur` against `prev` (same shape), the
     per-axis median over the `tiles` x `tiles` tiles whose phase-correlation response (0-1) is at
-    least `min_response`; (0, 0) when no tile qualifies (a blank or saturated frame).
-    `downscale` > 1: on frames that many times smaller (area average), ~4x faster at 2."""
+    least `min_response`; (0, 0) when no tile qualifies (a blank or saturated frame)."""
     if prev.shape != cur.shape or prev.ndim != 2:
         raise ValueError(f"need two grey frames of one shape, got {prev.shape} and {cur.shape}")
-    if tiles < 1 or downscale < 1:
-        raise ValueError(f"tiles and downscale must be >= 1, got {tiles}, {downscale}")
+    if tiles < 1:
+        raise ValueError(f"tiles must be >= 1, got {tiles}")
     a, b = prev.astype(np.float32), cur.astype(np.float32)
-    if downscale > 1:
-        s = 1.0 / downscale
-        a, b = (cv2.resize(x, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) for x in (a, b))
     H, W = a.shape
     th, tw = H // tiles, W // tiles
     if th < 8 or tw < 8:
@@ -78,7 +74,7 @@ def estimate_shift(prev: np.ndarray, cur: np.ndarray, *, tiles: int = 4,
                 dv.append(y)
     if not du:
         return 0.0, 0.0
-    return float(np.median(du)) * downscale, float(np.median(dv)) * downscale
+    return float(np.median(du)), float(np.median(dv))
 
 
 def shift_image(img: np.ndarray, du: float, dv: float) -> np.ndarray:
