@@ -145,3 +145,95 @@ def test_a_camera_that_sees_none_of_the_tracks_is_said(tracks_csv, tmp_path, cap
                  str(tmp_path / "v.csv")]) == 0
     err = capsys.readouterr().err
     assert "warning: the config's camera sees none of the" in err and "Traceback" not in err
+
+
+# -- streaming (issue 18): the default path -------------------------------------------------
+def _shuffled_copy(src, dst, seed=0):
+    """The tracks with each track's rows in a random frame order (tracks stay contiguous)."""
+    from rhythmjax.io import write_table
+
+    cols = read_table(src, required=ORDER, types={"track_id": "id", "label": "str"})
+    tid = np.asarray(cols["track_id"]).astype(str)
+    run = np.cumsum(np.r_[False, tid[1:] != tid[:-1]])
+    order = np.lexsort((np.random.default_rng(seed).random(len(tid)), run))
+    write_table(dst, {k: np.asarray(v)[order] for k, v in cols.items()}, ORDER)
+    return dst
+
+
+@pytest.mark.parametrize("fmt, extra", [(".csv", []), (".parquet", ["--segment-rows", "96"])])
+def test_streaming_equals_the_whole_file_path(tracks_csv, tmp_path, capsys, fmt, extra):
+    """Unsorted rows within tracks, record batches and blocks cut inside the file, and (with
+    --segment-rows 96) the tracks over 96 rows through the long-track path."""
+    src = _shuffled_copy(tracks_csv, tmp_path / f"shuffled{fmt}")
+    a, b = tmp_path / "whole.csv", tmp_path / "streamed.csv"
+    assert main(["classify", str(src), "-o", str(a), "--whole-file", "-q", *extra]) == 0
+    assert main(["classify", str(src), "-o", str(b), "--json", "--block-tracks", "5",
+                 "--chunk", "8", "--devices", "1", *extra]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert a.read_bytes() == b.read_bytes()
+    assert summary["streamed"] and summary["parts"] == 6 and summary["n_tracks"] == 28
+    assert set(summary["timing"]) == {"read_s", "prepare_s", "kernel_s", "write_s", "wait_s",
+                                      "total_s"}
+    assert 0 < summary["peak_tracks_in_memory"] <= 15
+    assert "sorted by (track_id, frame)" in summary["notes"][0]
+    assert sorted(os.listdir(tmp_path)) == sorted([src.name, "whole.csv", "streamed.csv"])
+
+
+def test_dataset_output_folder(tracks_csv, tmp_path, capsys):
+    import pyarrow.dataset as ds
+
+    out = tmp_path / "verdicts"
+    assert main(["classify", str(tracks_csv), "-o", f"{out}/", "--block-tracks", "10",
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["parts"] == 3
+    v = ds.dataset(out, format="parquet").to_table()
+    assert v.num_rows == 28 and v.column_names[:2] == ["track_id", "verdict"]
+    assert main(["classify", str(tracks_csv), "-o", str(tracks_csv.parent) + "/", "-q"]) == 2
+    assert "is the input" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("devices", ["0", "two"])
+def test_bad_devices_refused_by_argparse(tracks_csv, devices, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["classify", str(tracks_csv), "--devices", devices])
+    assert e.value.code == 2
+
+
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
+def test_a_killed_run_resumes_where_it_stopped(tracks_csv, tmp_path, capsys, sig):
+    """kill -9 or SIGTERM once a part is written; the same command resumes after it."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from rhythmjax.io.parts import parts_folder
+
+    out = tmp_path / "v.csv"
+    cmd = ["classify", str(tracks_csv), "-o", str(out), "--block-tracks", "2", "--chunk", "8"]
+    env = {**os.environ, "RHYTHMJAX_CACHE_DIR": "0", "JAX_PLATFORMS": "cpu"}
+    proc = subprocess.Popen([sys.executable, "-m", "rhythmjax.cli.main", *cmd], env=env,
+                            stderr=subprocess.PIPE, text=True)
+    folder = parts_folder(out)
+    t0 = time.monotonic()
+    while proc.poll() is None and time.monotonic() - t0 < 300:
+        if os.path.isdir(folder) and any(n.startswith("part-") for n in os.listdir(folder)):
+            break
+        time.sleep(0.05)
+    proc.send_signal(getattr(signal, sig))
+    err = proc.communicate(timeout=60)[1]
+    if proc.returncode == 0:
+        pytest.skip("the run finished before the signal")
+    assert proc.returncode == (143 if sig == "SIGTERM" else -9), err
+    if sig == "SIGTERM":
+        assert "resumes from them" in err and "Traceback" not in err
+    assert not out.exists()
+    done = sorted(n for n in os.listdir(folder) if n.startswith("part-"))
+    assert done and all(not n.startswith(".") for n in done)
+    capsys.readouterr()
+    assert main(cmd) == 0
+    err = capsys.readouterr().err
+    assert f"resuming the interrupted run from {folder}" in err
+    ref = tmp_path / "ref.csv"
+    assert main(["classify", str(tracks_csv), "-o", str(ref), "--whole-file", "-q"]) == 0
+    assert out.read_bytes() == ref.read_bytes() and not os.path.exists(folder)

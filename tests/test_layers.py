@@ -1,6 +1,6 @@
 """The layering of the package, read from the source with `ast` (no import is executed).
 
-Layers, bottom to top: model < io < vision < track < count < sim < cli. A module may import
+Layers, bottom to top: model < io < vision < track < count < stream < sim < cli. A module may import
 its own subpackage and any layer below; `rhythmjax.evaluation` (benchmark and study code) may
 import the library, but nothing in the library imports it; `rhythmjax` never imports `fit`; no
 module imports a private (underscore) name from another module; the module graph has no circle.
@@ -15,7 +15,7 @@ import pytest
 
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-LAYERS = ("model", "io", "vision", "track", "count", "sim", "cli")
+LAYERS = ("model", "io", "vision", "track", "count", "stream", "sim", "cli")
 TOP_LEVEL_OK = {"rhythmjax", "rhythmjax.evaluation"}  # re-exports / evaluation code
 
 

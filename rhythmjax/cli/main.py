@@ -12,8 +12,6 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
 from .. import __version__
 from ..io import (
     BadInput,
@@ -21,15 +19,14 @@ from ..io import (
     check_output,
     dumps_json,
     raise_on_sigterm,
-    read_tracks,
     table_suffix,
-    to_batch,
     write_config,
     write_table,
 )
-from ..model.batch import VERDICT_COLUMNS, classify_tracks, merge_verdicts, summarise
+from ..io.stream import BLOCK_TRACKS
 from ..model.long_tracks import SEGMENT_ROWS
 from ..model.params import ConfigError, config_to_dict
+from ..sim.bulk import MIX_KINDS, write_bulk_tracks
 from ..sim.tracks import make_tracks
 from .camera import register as register_camera
 from .common import (
@@ -65,11 +62,20 @@ def cmd_config(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    """Write a synthetic tracks file with known labels (see `rhythmjax.simtracks`)."""
+    """Write a synthetic tracks file with known labels (`sim.tracks`; `--bulk`: `sim.bulk`)."""
 
     table_suffix(args.output)
     check_output(args.output, [args.config])
     cfg = load_config(args.config)
+    if args.bulk:  # N tracks in the proportions of the counts, block by block (sim.bulk)
+        mix = dict(zip(MIX_KINDS, (args.walkers, args.bicycles, args.dogs, args.cars, args.short)))
+        s = write_bulk_tracks(args.output, args.bulk, seed=args.seed, mix=mix, camera=cfg.camera,
+                              progress=not (args.quiet or args.json))
+        if args.json:
+            emit_json(s)
+        else:
+            say(args, f"wrote {args.output}: {s['n_tracks']} tracks, {s['n_rows']} rows")
+        return 0
     cols, truth = make_tracks(n_walkers=args.walkers, n_bicycles=args.bicycles,
                               n_dogs=args.dogs, n_cars=args.cars, n_short=args.short,
                               seed=args.seed, camera=cfg.camera)
@@ -88,71 +94,116 @@ def cmd_simulate(args) -> int:
 def cmd_classify(args) -> int:
     """Batch-classify stored tracks: EKF with the paper's gates, MEM spectrum, (13)-(15).
 
-    Memory: a track longer than --segment-rows (4096) is classified in segments
-    (`model.long_tracks`, the same verdicts) and padded apart from the other tracks, so one
-    track's work is bounded: peak RSS about 0.65 GB plus about 0.4 KB per row of the file (one
-    track of 1e5 rows 0.68-0.69 GB, of 1e6 rows 0.98-1.07 GB; docs/benchmarks.md), where
-    one track of 1e5 rows took 3.2 GB before."""
+    Streaming (the default): the tracks are read by record batches and classified in blocks of
+    whole tracks while the next block is read, each block's verdicts written as a part beside
+    the output (`.VERDICTS.parts/`) and the parts joined into VERDICTS at the end, in the
+    input's track order. Memory does not grow with the file (about 3 blocks of --block-tracks
+    tracks at once). An interrupted run (Ctrl-C, SIGTERM, kill) rerun with the same command
+    resumes after the parts done; a changed input or config starts over. A track's rows must
+    be contiguous to stream (rows of a track in any frame order); a file where a track's id
+    comes back after other tracks is read whole (a note says so). TRACKS may be several files
+    or a folder of them (a Parquet dataset); VERDICTS a folder (a path ending in '/') keeps
+    the parts there as a Parquet dataset.
 
-    if args.output:
+    A track longer than --segment-rows (4096) is classified in segments (`model.long_tracks`,
+    the same verdicts) and padded apart from the other tracks, so one track's work is bounded
+    (one track of 1e5 rows 0.68-0.69 GB, of 1e6 rows 0.98-1.07 GB; docs/benchmarks.md)."""
+
+    from ..stream.classify import classify_source, classify_whole
+
+    inputs = list(args.tracks)
+    dataset = bool(args.output) and args.output.endswith(("/", os.sep))
+    if args.output and not dataset:
         table_suffix(args.output)
-        check_output(args.output, [args.tracks, args.config])
+        check_output(args.output, [*inputs, args.config])
+    elif dataset:
+        _check_dataset_output(args.output, inputs)
+    if args.whole_file and (len(inputs) > 1 or os.path.isdir(inputs[0]) or dataset):
+        raise BadInput(inputs[0], "--whole-file reads one tracks file into one verdicts file")
+    source = inputs if len(inputs) > 1 else inputs[0]
     cfg = load_config(args.config)
-    tracks = read_tracks(args.tracks, fps=cfg.camera.fps)
-    blind = blind_camera_note(cfg, tracks)
-    if blind:
-        tracks.notes.append(blind)
-    n = cfg.thresholds.n
-    gap = max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
-    parts = []
-    for group in tracks.by_span(args.segment_rows):  # a long track pads no other
-        batch = to_batch(group, max_gap_frames=gap, min_len=n)
-        part = classify_tracks(cfg, batch, chunk=args.chunk, segment_rows=args.segment_rows,
-                               progress=not (args.quiet or args.json))
-        if batch.labels is not None:
-            part["label"] = np.asarray(batch.labels, dtype=object)
-        parts.append(part)
-    verdicts = merge_verdicts(parts, tracks.ids)
-    labels = verdicts.get("label")
-    order = list(VERDICT_COLUMNS)
-    if labels is not None:
-        order.append("label")
-    if args.output:
-        write_table(args.output, verdicts, order)
-    summary = {"input": args.tracks, "output": args.output, **summarise(verdicts, labels),
-               "notes": list(tracks.notes)}
+    progress = not (args.quiet or args.json)
+    devices = _device_count(args.devices)
+    if args.dask:
+        from ..stream.distributed import classify_dask
+
+        summary = classify_dask(cfg, source, args.output, scheduler=args.dask,
+                                n_workers=args.dask_workers, chunk=args.chunk,
+                                segment_rows=args.segment_rows, progress=progress,
+                                resume=not args.no_resume, devices=devices,
+                                log=lambda msg: say(args, msg))
+    elif args.whole_file:
+        summary = classify_whole(cfg, source, args.output, chunk=args.chunk,
+                                 segment_rows=args.segment_rows, progress=progress,
+                                 devices=devices)
+    else:
+        summary = classify_source(cfg, source, args.output, chunk=args.chunk,
+                                  segment_rows=args.segment_rows, progress=progress,
+                                  resume=not args.no_resume, devices=devices,
+                                  block_tracks=args.block_tracks,
+                                  log=lambda msg: say(args, msg))
+    verdicts = summary.pop("verdicts_table", None)
+    summary = {"input": inputs[0] if len(inputs) == 1 else inputs, "output": args.output,
+               **summary}
     if args.json:
         emit_json(summary)
     else:
-        if not args.output:
+        if not args.output and verdicts is not None:
             print_verdicts(verdicts)
         v = summary["verdicts"]
         say(args, f"{summary['n_tracks']} tracks: {v['pedestrian']} pedestrian, "
              f"{v['non-pedestrian']} non-pedestrian, {v['unclassified']} unclassified"
              + (f"; wrote {args.output}" if args.output else ""))
-        for note in tracks.notes:
+        for note in summary["notes"]:
             say(args, note if note.startswith("warning") else f"note: {note}")
     return 0
+
+
+def _device_count(devices: int | str | None) -> int | None:
+    """--devices as a count of the local devices JAX sees ('all': every one)."""
+    if devices is None:
+        return None
+    import jax
+
+    have = len(jax.local_devices())
+    if devices == "all":
+        return have
+    if devices > have:
+        raise BadInput("--devices", f"asked for {devices} devices, JAX sees {have} (on a CPU, "
+                                    f"add --host-devices {devices})")
+    return devices
+
+
+def _check_dataset_output(out: str, inputs: list[str]) -> None:
+    """A folder output: not one of the inputs (nor inside one), its parent a folder."""
+    real = os.path.realpath(out)
+    for src in inputs:
+        s = os.path.realpath(src)
+        if real == s or real.startswith(s.rstrip(os.sep) + os.sep) or \
+                s.startswith(real.rstrip(os.sep) + os.sep):
+            raise BadInput(out, f"is the input '{src}' or holds it; give another output "
+                                "folder")
+    parent = os.path.dirname(real.rstrip(os.sep)) or "."
+    if not os.path.isdir(parent):
+        raise BadInput(out, f"output directory '{parent}' does not exist")
+    if os.path.exists(real) and not os.path.isdir(real):
+        raise BadInput(out, "is a file; give a folder (ending in '/') for a dataset output")
 
 
 def blind_camera_note(cfg, tracks) -> str | None:
     """A warning when the config's camera sees none of the tracks' foot points (u, v) on the
     ground inside the detection range: every track would be cut by the gates and left
     unclassified (as `run` checks the camera against the video)."""
-    from ..model.camera_np import ground_of_pixels
+    from ..stream.classify import blind_note, camera_counts
 
-    have = np.isfinite(tracks.u) & np.isfinite(tracks.v)
-    if not have.any():
-        return None
-    _, y, ok = ground_of_pixels(cfg.camera, tracks.u[have], tracks.v[have])
-    thr = cfg.thresholds
-    lo, hi = float(thr.range_min), float(thr.range_max)
-    if np.any(ok & (y >= lo) & (y <= hi)):
-        return None
-    return (f"warning: the config's camera sees none of the {int(have.sum())} foot points on "
-            f"the ground within the detection range {lo:g}-{hi:g} m ({int(np.sum(ok))} below "
-            "the horizon at all): every track will be unclassified; check camera.h_m, "
-            "theta_deg, vc_px (`rhythmjax camera`)")
+    return blind_note(cfg, camera_counts(cfg, tracks.u, tracks.v))
+
+
+def devices_arg(text: str) -> int | str:
+    """--devices: a positive count or 'all'."""
+    if text.strip().lower() == "all":
+        return "all"
+    return count_arg(text)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -182,19 +233,41 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dogs", type=amount_arg, default=5)
     p.add_argument("--cars", type=amount_arg, default=3)
     p.add_argument("--short", type=amount_arg, default=2, help="walkers tracked < N frames")
+    p.add_argument("--bulk", type=count_arg, metavar="N", help="N tracks (1e4-1e6 and more) in "
+                   "the proportions of the counts above, generated vectorised block by block "
+                   "(`sim.bulk`; memory does not grow with N)")
     add_common(p)
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("classify", formatter_class=Formatter, help="batch-classify stored "
                        "tracks", description=cmd_classify.__doc__, epilog=EPILOG)
-    p.add_argument("tracks", metavar="TRACKS", help="tracks file (.csv or .parquet)")
+    p.add_argument("tracks", metavar="TRACKS", nargs="+", help="tracks file (.csv or "
+                   ".parquet), several, or a folder of them (a Parquet dataset)")
     p.add_argument("-o", "--output", metavar="VERDICTS", help="verdicts file (.csv or "
-                   ".parquet); printed as a table when omitted")
+                   ".parquet), or a folder ('DIR/', ending in '/') for a Parquet dataset of "
+                   "parts; printed as a table when omitted")
     p.add_argument("--chunk", type=count_arg, default=256, help="tracks per jitted chunk")
     p.add_argument("--segment-rows", type=count_arg, default=SEGMENT_ROWS, metavar="L",
                    help="a track longer than L rows is filtered L rows at a time, the filter "
                    "state carried on (same verdicts), so its memory does not grow with its "
                    "length")
+    p.add_argument("--block-tracks", type=count_arg, default=BLOCK_TRACKS, metavar="K",
+                   help="tracks per block (one part of the output; the resume step): memory "
+                   "holds about 3 blocks")
+    p.add_argument("--no-resume", action="store_true", help="start over even when an "
+                   "interrupted run with the same input and config left parts to resume from")
+    p.add_argument("--whole-file", action="store_true", help="read the whole file into "
+                   "memory first (the path before streaming; memory grows with the file)")
+    p.add_argument("--devices", type=devices_arg, default=None, metavar="N|all",
+                   help="local devices to shard each kernel call's tracks over (none given: the "
+                   "default device; all: every device JAX sees)")
+    p.add_argument("--host-devices", type=count_arg, default=None, metavar="N",
+                   help="on a CPU, show JAX N host devices (jax_num_cpu_devices), for --devices")
+    p.add_argument("--dask", nargs="?", const="local", default=None, metavar="ADDRESS",
+                   help="map the classifier over partitions with Dask: a local cluster, or "
+                   "the scheduler at ADDRESS")
+    p.add_argument("--dask-workers", type=count_arg, default=2, metavar="W",
+                   help="workers of the local Dask cluster")
     add_common(p)
     p.set_defaults(func=cmd_classify)
 
@@ -203,6 +276,26 @@ def build_parser() -> argparse.ArgumentParser:
     register_camera(sub, Formatter)
     register_rhythm(sub, Formatter)
     return parser
+
+
+def _host_devices(n: int, argv) -> bool:
+    """Show JAX `n` CPU devices (jax_num_cpu_devices; the CLI's choice, never the library's).
+    Importing rhythmjax starts JAX's backend, so from a shell (`argv` None) the command starts
+    again with JAX_NUM_CPU_DEVICES set, which JAX reads when it starts; in process it is set
+    only if the backend has not started. False when it cannot be set."""
+    if os.environ.get("JAX_NUM_CPU_DEVICES") == str(n):
+        return True
+    if argv is None:
+        env = {**os.environ, "JAX_NUM_CPU_DEVICES": str(n)}
+        os.execve(sys.executable, [sys.executable, "-c", "import sys; from rhythmjax.cli.main "
+                                   "import main; sys.exit(main())", *sys.argv[1:]], env)
+    import jax
+
+    try:
+        jax.config.update("jax_num_cpu_devices", n)
+    except RuntimeError:
+        return len(jax.devices("cpu")) == n
+    return True
 
 
 def _enable_compilation_cache() -> None:
@@ -221,6 +314,11 @@ def main(argv=None) -> int:
 
     parser = build_parser()
     args = parser.parse_args(argv)
+    if getattr(args, "host_devices", None) and not _host_devices(args.host_devices, argv):
+        print(f"rhythmjax {args.command}: error: --host-devices must reach JAX before it "
+              f"starts: run rhythmjax from a shell, or set JAX_NUM_CPU_DEVICES="
+              f"{args.host_devices}", file=sys.stderr)
+        return 2
     _enable_compilation_cache()
     raise_on_sigterm()  # SIGTERM cleans up as Ctrl-C does: no temp file, the old outputs whole
     try:

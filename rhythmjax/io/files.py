@@ -30,6 +30,7 @@ from .tables import (
     atomic_write as atomic_write,
     check_writable as check_writable,
     make_output_dir as make_output_dir,
+    map_text,
     read_table as read_table,
     write_table as write_table,
 )
@@ -40,8 +41,10 @@ OPTIONAL_TRACK_COLUMNS = ("label", "x", "y")
 LABELS = ("pedestrian", "bicycle", "dog", "car", "other")
 MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y")
 MAX_ABS = 1e12
-_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
-          "width_px": "float", "intensity": "float", "label": "str", "x": "float", "y": "float"}
+TRACK_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
+               "width_px": "float", "intensity": "float", "label": "str", "x": "float",
+               "y": "float"}
+TRACK_NOT_EMPTY = ("track_id", "frame", "t")
 
 
 @dataclass
@@ -89,15 +92,16 @@ class Tracks:
         track = np.cumsum(np.r_[False, self.track_id[1:] != self.track_id[:-1]])
         short = np.setdiff1d(np.arange(len(starts)), long)
         groups = ([np.isin(track, short)] if short.size else []) + [track == i for i in long]
-        out = []
-        for m in groups:
-            take = lambda a, m=m: None if a is None else a[m]
-            out.append(dataclasses.replace(
-                self, track_id=take(self.track_id), frame=take(self.frame), t=take(self.t),
-                u=take(self.u), v=take(self.v), width_px=take(self.width_px),
-                intensity=take(self.intensity), line=take(self.line), label=take(self.label),
-                x=take(self.x), y=take(self.y), notes=[]))
-        return out
+        return [self.take(m) for m in groups]
+
+    def take(self, rows: np.ndarray) -> Tracks:
+        """These tracks' rows `rows` (a mask or indices; whole tracks), notes left out."""
+        take = lambda a: None if a is None else a[rows]  # noqa: E731
+        return dataclasses.replace(
+            self, track_id=take(self.track_id), frame=take(self.frame), t=take(self.t),
+            u=take(self.u), v=take(self.v), width_px=take(self.width_px),
+            intensity=take(self.intensity), line=take(self.line), label=take(self.label),
+            x=take(self.x), y=take(self.y), notes=[])
 
     def to_batch(self, *, max_gap_frames: int, min_len: int, bucket: bool = True,
                  fps: float | int | None = None) -> TrackBatch:
@@ -130,8 +134,18 @@ def read_tracks(path: PathLike, *, fps: float | int | None = None) -> Tracks:
 
     `fps` (the camera's) sharpens the milliseconds check. Raises `BadInput`."""
     p = os.fspath(path)
-    tab = read_table(p, TRACK_COLUMNS, OPTIONAL_TRACK_COLUMNS, types=_TYPES,
-                     not_empty=("track_id", "frame", "t"))
+    tab = read_table(p, TRACK_COLUMNS, OPTIONAL_TRACK_COLUMNS, types=TRACK_TYPES,
+                     not_empty=TRACK_NOT_EMPTY)
+    return validated_tracks(p, tab, fps=fps)
+
+
+def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
+                     grouped: bool = False) -> Tracks:
+    """The checks of `read_tracks` on the table `tab` read from `p` (converted cells; `tab.lines`
+    the rows' lines or rows in the file, so messages name them): values, labels, rows sorted by
+    (track, frame), frames and times per track, units. `grouped`: the caller knows each track's
+    rows are contiguous (`io.stream` reads whole tracks), so only the frames within a track are
+    sorted. Raises `BadInput`."""
     bad_t = _first(~np.isfinite(tab["t"]))
     if bad_t is not None:
         raise tab.where(p, bad_t, "t", f"{float(tab['t'][bad_t])!r} is not a finite time (s)")
@@ -149,14 +163,18 @@ def read_tracks(path: PathLike, *, fps: float | int | None = None) -> Tracks:
                 raise tab.where(p, i, c, f"{float(a[i])!r} is negative")
     labels = None
     if "label" in tab:
-        labels = np.asarray([s.strip().lower() for s in tab["label"]], dtype=object)
+        labels = map_text(tab["label"], lambda s: s.strip().lower())
         i = _first(~np.isin(labels, LABELS + ("",)))
         if i is not None:
             raise tab.where(p, i, "label", f"unknown label {tab['label'][i]!r} (expected one of "
                             f"{', '.join(LABELS)}, or empty)")
     tid = np.asarray(tab["track_id"], dtype=object)
     notes: list[str] = []
-    order = _track_order(tid, tab["frame"])
+    if grouped:
+        run = np.cumsum(np.r_[False, tid[1:] != tid[:-1]]) if len(tid) else np.zeros(0, int)
+        order = np.lexsort((tab["frame"], run))
+    else:
+        order = _track_order(tid, tab["frame"])
     if np.any(order != np.arange(len(order))):
         moved = int(np.flatnonzero(order != np.arange(len(order)))[0])
         notes.append(f"{p}: rows were not grouped by track and ordered by frame (first at "
@@ -336,5 +354,5 @@ __all__: Sequence[str] = (
     "BadInput", "Footprints", "Table", "Tracks", "TrackBatch", "atomic_path", "atomic_write",
     "check_writable", "config_or_bad_input", "dumps_json", "make_output_dir", "read_config",
     "read_config_dict", "read_footprints", "read_table", "read_tracks", "to_batch",
-    "write_config", "write_table",
+    "validated_tracks", "write_config", "write_table",
 )

@@ -66,7 +66,8 @@ def _table_suffix(p: str) -> str:
     return suffix
 
 
-def _check_path(path: PathLike) -> str:
+def check_table_path(path: PathLike) -> str:
+    """The suffix of the table file `path`; a `BadInput` for another suffix, a folder or no file."""
     p = os.fspath(path)
     suffix = _table_suffix(p)
     if os.path.isdir(p):
@@ -84,7 +85,7 @@ def read_table(path: PathLike, required: Sequence[str] = (), optional: Sequence[
     returned as text) or "str"; columns without a type are inferred (CSV: int, then float, else
     text). Columns in `not_empty` must have a value in every row. With `required` or `optional`
     given, only those columns are returned (unknown extra columns are ignored)."""
-    p, suffix = os.fspath(path), _check_path(path)
+    p, suffix = os.fspath(path), check_table_path(path)
     types = dict(types or {})
     if not set(types.values()) <= set(KINDS):
         raise ValueError(f"unknown column type in {types} (use {KINDS})")
@@ -96,7 +97,7 @@ def read_table(path: PathLike, required: Sequence[str] = (), optional: Sequence[
         raise BadInput(p, f"cannot read: {e.strerror}") from None
 
 
-def _select(p: str, names: list[str], required, optional) -> list[str]:
+def select_columns(p: str, names: list[str], required, optional) -> list[str]:
     missing = [c for c in required if c not in names]
     if missing:
         found = ", ".join(names) if names else "no columns"
@@ -110,7 +111,7 @@ def _select(p: str, names: list[str], required, optional) -> list[str]:
     return [c for c in (*required, *optional) if c in names]
 
 
-def _csv_header(p: str) -> list[str]:
+def csv_header(p: str) -> list[str]:
     with open(p, "rb") as f:
         head = f.read(1 << 16)
     text = head.decode("utf-8-sig", errors="replace")
@@ -134,10 +135,51 @@ def _csv_header(p: str) -> list[str]:
     return raw
 
 
+def csv_options(raw: list[str], on_bad_row) -> dict:
+    """The pyarrow CSV options of a strict read: every column as text, `on_bad_row` recording
+    each row with the wrong number of fields, empty lines kept (their line numbers count)."""
+    return dict(parse_options=pacsv.ParseOptions(invalid_row_handler=on_bad_row,
+                                                 ignore_empty_lines=False),
+                convert_options=pacsv.ConvertOptions(
+                    column_types={n: pa.string() for n in raw}, strings_can_be_null=False,
+                    quoted_strings_can_be_null=False))
+
+
+def blank_rows(cols: Mapping[str, Any], n: int) -> np.ndarray:
+    """Rows whose every cell is empty (blank lines), dropped by the readers."""
+    blank = np.ones(n, bool)
+    for c in cols.values():
+        blank &= np.asarray(pc.equal(c, "").to_numpy(zero_copy_only=False), bool)
+    return blank
+
+
+def bad_rows_error(p: str, bad: list[tuple[int, int, int]], last: int) -> BadInput:
+    """The error for rows with the wrong number of fields: `bad` (line, expected, actual) as
+    the invalid-row handler saw them; `last` the last line holding values (for the hint)."""
+    number, expected, actual = bad[0]
+    hint = " (file truncated?)" if actual < expected and number > last else ""
+    more = ""
+    if len(bad) > 1:
+        shown = ", ".join(str(b[0]) for b in bad[1:4]) + (", ..." if len(bad) > 4 else "")
+        more = f"; {len(bad)} such rows, also line(s) {shown}"
+    return BadInput(p, f"expected {expected} fields, saw {actual}{hint}{more}", line=number)
+
+
+def convert_csv(p: str, cols: Mapping[str, Any], lines: np.ndarray, keep, types,
+                not_empty) -> Table:
+    """The `keep` columns of text `cols` (blank rows already dropped) converted by `types`;
+    `lines` each row's line. Raises `BadInput` for the earliest bad cell."""
+    table = Table({}, lines, "line")
+    results = {n: _csv_column(cols[n], n, types.get(n), n in not_empty) for n in keep}
+    _raise_first(p, table, results)
+    table.update(results)
+    return table
+
+
 def _read_csv(p: str, required, optional, types, not_empty) -> Table:
-    raw = _csv_header(p)
+    raw = csv_header(p)
     names = [n.strip() for n in raw]
-    keep = _select(p, names, required, optional)
+    keep = select_columns(p, names, required, optional)
     bad: list[tuple[int, int, int]] = []
 
     def on_bad_row(row) -> str:
@@ -145,13 +187,8 @@ def _read_csv(p: str, required, optional, types, not_empty) -> Table:
         return "skip"
 
     try:
-        tbl = pacsv.read_csv(
-            p, read_options=pacsv.ReadOptions(use_threads=False),
-            parse_options=pacsv.ParseOptions(invalid_row_handler=on_bad_row,
-                                             ignore_empty_lines=False),
-            convert_options=pacsv.ConvertOptions(
-                column_types={n: pa.string() for n in raw}, strings_can_be_null=False,
-                quoted_strings_can_be_null=False))
+        tbl = pacsv.read_csv(p, read_options=pacsv.ReadOptions(use_threads=False),
+                             **csv_options(raw, on_bad_row))
     except pa.ArrowInvalid as e:
         msg = str(e)
         if "cannot infer number of columns" in msg or "Empty CSV" in msg:  # header, no newline
@@ -165,26 +202,13 @@ def _read_csv(p: str, required, optional, types, not_empty) -> Table:
     good[[b[0] - 2 for b in bad]] = False
     lines = np.arange(2, 2 + total, dtype=np.int64)[good]
     cols = {n: tbl.column(r) for n, r in zip(names, raw, strict=True)}
-    blank = np.ones(tbl.num_rows, bool)  # blank lines read as rows of empty cells: drop them
-    for c in cols.values():
-        blank &= np.asarray(pc.equal(c, "").to_numpy(zero_copy_only=False), bool)
+    blank = blank_rows(cols, tbl.num_rows)  # blank lines read as rows of empty cells: drop them
     if bad:
-        number, expected, actual = bad[0]
-        last = int(lines[~blank].max()) if (~blank).any() else 1
-        hint = " (file truncated?)" if actual < expected and number > last else ""
-        more = ""
-        if len(bad) > 1:
-            shown = ", ".join(str(b[0]) for b in bad[1:4]) + (", ..." if len(bad) > 4 else "")
-            more = f"; {len(bad)} such rows, also line(s) {shown}"
-        raise BadInput(p, f"expected {expected} fields, saw {actual}{hint}{more}", line=number)
+        raise bad_rows_error(p, bad, int(lines[~blank].max()) if (~blank).any() else 1)
     if blank.any():
         cols = {n: c.filter(pa.array(~blank)) for n, c in cols.items()}
         lines = lines[~blank]
-    table = Table({}, lines, "line")
-    results = {n: _csv_column(cols[n], n, types.get(n), n in not_empty) for n in keep}
-    _raise_first(p, table, results)
-    table.update(results)
-    return table
+    return convert_csv(p, cols, lines, keep, types, not_empty)
 
 
 def _raise_first(p: str, table: Table, results: dict) -> None:
@@ -201,9 +225,11 @@ def _first(mask: np.ndarray) -> int | None:
     return int(idx[0]) if idx.size else None
 
 
-def _csv_column(col: pa.ChunkedArray, name: str, kind: str | None, required: bool):
+def _csv_column(col: pa.Array | pa.ChunkedArray, name: str, kind: str | None, required: bool):
     """Convert one text column. Returns an array, or (row index, message) for the first bad cell."""
-    text = pc.utf8_trim_whitespace(col.combine_chunks())
+    if isinstance(col, pa.ChunkedArray):
+        col = col.combine_chunks()
+    text = pc.utf8_trim_whitespace(col)
     null_mask = pc.is_in(text, value_set=pa.array(NULL_TOKENS))
     null = np.asarray(null_mask.to_numpy(zero_copy_only=False), bool)
     clean = pc.if_else(null_mask, pa.scalar(None, pa.string()), text)  # null tokens -> null
@@ -264,22 +290,39 @@ def _read_parquet(p: str, required, optional, types, not_empty) -> Table:
     try:
         pf = pq.ParquetFile(p)
         names = list(pf.schema_arrow.names)
-        keep = _select(p, names, required, optional)
+        keep = select_columns(p, names, required, optional)
         tbl = pf.read(columns=keep)
     except (pa.ArrowException, OSError) as e:
         if isinstance(e, PermissionError):
             raise
         raise BadInput(p, "not a valid Parquet file (truncated?)") from None
-    table = Table({}, np.arange(1, tbl.num_rows + 1, dtype=np.int64), "row")
+    return convert_parquet(p, tbl, np.arange(1, tbl.num_rows + 1, dtype=np.int64), keep,
+                           types, not_empty)
+
+
+def convert_parquet(p: str, tbl, rows: np.ndarray, keep, types, not_empty) -> Table:
+    """The `keep` columns of the Arrow table or record batch `tbl` converted by `types`; `rows`
+    each row's 1-based row in the file. Raises `BadInput` for the earliest bad cell."""
+    table = Table({}, rows, "row")
     results = {}
     for n in keep:
-        col = tbl.column(n).combine_chunks()
+        col = tbl.column(n)
+        col = col.combine_chunks() if isinstance(col, pa.ChunkedArray) else col
         if pa.types.is_dictionary(col.type):
             col = col.dictionary_decode()
         results[n] = _parquet_column(p, col, n, types.get(n), n in not_empty)
     _raise_first(p, table, results)
     table.update(results)
     return table
+
+
+def map_text(col: Any, f) -> np.ndarray:
+    """`f` (a str -> str function) of each cell of the text column `col` (an Arrow array or a
+    sequence of str, no nulls) as an object array, `f` called once per distinct value."""
+    enc = pa.array(col, pa.string()).dictionary_encode() if not isinstance(col, pa.Array) \
+        else col.dictionary_encode()
+    done = np.asarray([f(s) for s in enc.dictionary.to_pylist()] + [""], dtype=object)
+    return done[np.asarray(enc.indices.to_numpy(zero_copy_only=False), np.int64)]
 
 
 def _parquet_column(p: str, col: pa.Array, name: str, kind: str | None, required: bool):
@@ -298,8 +341,7 @@ def _parquet_column(p: str, col: pa.Array, name: str, kind: str | None, required
         raise BadInput(p, f"column '{name}' has type {t}, expected {expected}")
     null = np.asarray(col.is_null().to_numpy(zero_copy_only=False), bool)
     if is_text:
-        values = np.asarray(col.fill_null("").to_numpy(zero_copy_only=False), dtype=object)
-        values = np.asarray([s.strip() for s in values], dtype=object)
+        values = map_text(col.fill_null(""), str.strip)
         null |= values == ""
     else:
         values = col.cast(pa.float64()).to_numpy(zero_copy_only=False)
@@ -339,6 +381,15 @@ def _arrow_column(name: str, a: Any) -> pa.Array:
     return pa.array(a, from_pandas=True)  # NaN (float or object) -> null
 
 
+def arrow_table(columns: Mapping[str, Any], order: Sequence[str]) -> pa.Table:
+    """`columns` in `order` as the Arrow table `write_table` writes (NaN as null)."""
+    arrays = [_arrow_column(n, columns[n]) for n in order]
+    if len({len(a) for a in arrays}) > 1:
+        raise ValueError(f"write_table: columns differ in length: "
+                         f"{ {n: len(a) for n, a in zip(order, arrays, strict=True)} }")
+    return pa.Table.from_arrays(arrays, names=list(order))
+
+
 def write_table(path: PathLike, columns: Mapping[str, Any], order: Sequence[str]) -> None:
     """Write `columns` in `order` as CSV (UTF-8, header, NaN as an empty cell) or Parquet (NaN as
     null), chosen by the extension, atomically."""
@@ -347,11 +398,7 @@ def write_table(path: PathLike, columns: Mapping[str, Any], order: Sequence[str]
     missing = [n for n in order if n not in columns]
     if missing:
         raise ValueError(f"write_table: no column {missing[0]!r} to write")
-    arrays = [_arrow_column(n, columns[n]) for n in order]
-    if len({len(a) for a in arrays}) > 1:
-        raise ValueError(f"write_table: columns differ in length: "
-                         f"{ {n: len(a) for n, a in zip(order, arrays, strict=True)} }")
-    table = pa.Table.from_arrays(arrays, names=list(order))
+    table = arrow_table(columns, order)
     with atomic_write(p, "wb") as f:
         if suffix == ".csv":
             pacsv.write_csv(table, f, pacsv.WriteOptions(quoting_style="needed"))
