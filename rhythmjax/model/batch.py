@@ -1,13 +1,16 @@
 """Batch classification of stored tracks in fixed-shape jitted chunks (no recompilation per track).
 
-Tracks are padded to a bucketed length T (by `io.to_batch`) and cut into chunks of a fixed number
-of tracks; the last chunk is padded with empty tracks. One compilation serves every chunk of a
-bucket. A progress bar is shown on a terminal.
+Each track is first cut at Fig. 3's ends (the PREDICT time-out and the exit from the detection
+range, as the online tracker ends a track); every segment is classified on its own, and a
+track's verdict is its first segment that says Pedestrian, else its first classified segment,
+else its first (matching goes on until Pedestrian, Sec. 4.2).
 
-Each track is first cut at Fig. 3's ends (`segments.split_tracks`: the PREDICT time-out and the
-exit from the detection range, as the online tracker ends a track); every segment is classified
-on its own, and a track's verdict is its first segment that says Pedestrian, else its first
-classified segment, else its first (matching goes on until Pedestrian, Sec. 4.2).
+`classify_tracks` runs the kernel of `fast_batch` (the filter once, only the complete windows
+that can decide, the exact fast median of `windows`). `classify_tracks_reference` is the same
+classification the way the paper reads (`segments.split_tracks`, then `classify_each`:
+`rhythm.classify_batch` on every window slot of tracks padded to a bucketed length T, in chunks
+of a fixed number of tracks, the last padded with empty tracks); they give the same verdicts
+(tests/test_classify_fast.py).
 """
 
 from __future__ import annotations
@@ -18,6 +21,8 @@ import sys
 import jax.numpy as jnp
 import numpy as np
 
+from .devices import placement
+from .fast_batch import CODES, classify_fast
 from .long_tracks import SEGMENT_ROWS, classify_long_track
 from .params import Config
 from .rhythm import classify_batch
@@ -110,32 +115,54 @@ def pick_segments(verdict: np.ndarray, owner: np.ndarray, n_tracks: int) -> np.n
 
 
 def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = True,
-                    split: bool = True, segment_rows: int = SEGMENT_ROWS) -> dict:
+                    split: bool = True, segment_rows: int = SEGMENT_ROWS,
+                    devices=None) -> dict:
     """Classify every track of a `TrackBatch`; returns NumPy columns of the verdicts table
     (`VERDICT_COLUMNS`, verdict and reason as labels) plus `peak_*` arrays for plots and
     `n_segments` (Fig. 3 segments per track; `split` False: every track whole, one segment,
     the behaviour before the time-out and the range exit were applied). `n_samples` counts
     the frames tracked over all of a track's segments.
 
+    The kernel is `fast_batch.classify_fast` (the filter once, only the windows that can
+    decide, the exact fast median): per segment the verdict of `rhythm.classify_track`
+    (`classify_each` on `segments.split_tracks`' segments, the reference; tested equal).
+    `chunk` is the filter's rows per jitted call (256 measured best: 1024 cost 1.6x the EKF
+    time); `progress` is no longer drawn by the kernel (callers report by chunk). `devices`
+    (None, a device count or a `jax.sharding.Mesh`) shards every jitted call's batch axis
+    over the local devices (`devices.local_mesh`; on this 2-core CPU two CPU devices gave the
+    same verdicts and no speed-up).
+
     A track longer than `segment_rows` rows is classified by `long_tracks.classify_long_track`
     (its filter in segments of that many rows, the carry handed on; the same verdicts), so its
     memory does not grow with its length; the others as before, padded only to their own
     longest (rounded up to a power of two)."""
     B = len(batch.ids)
+    place = placement(devices)
     long = np.flatnonzero(np.asarray(batch.length) > segment_rows) if split and B else \
         np.zeros(0, np.int64)
     if long.size:
         return _with_long_tracks(cfg, batch, long, chunk=chunk, progress=progress,
-                                 segment_rows=segment_rows)
-    if split:
+                                 segment_rows=segment_rows, place=place)
+    if B == 0:
+        return verdict_columns(batch, {k: np.zeros(0) for k in CODES}, np.zeros(0, np.int64))
+    res, owner = classify_fast(cfg, batch, chunk, place, split=split)
+    return verdict_columns(batch, res, owner)
+
+
+def classify_tracks_reference(cfg: Config, batch, *, chunk: int = 256, progress: bool = False,
+                              split: bool = True) -> dict:
+    """`classify_tracks` (tracks up to `segment_rows` long) the way the paper reads, for the
+    tests and benchmarks: `segments.split_tracks`, then `classify_each` (`rhythm.classify_batch`:
+    every window slot of every segment, the float-sort medians). Slow; the same verdicts."""
+    B = len(batch.ids)
+    if split and B:
         segs, owner = split_tracks(cfg, batch, _chunk_size(B, chunk))
     else:
         segs, owner = batch, np.arange(B)
-    res = classify_each(cfg, segs, chunk, progress)
-    return _verdict_columns(batch, res, owner)
+    return verdict_columns(batch, classify_each(cfg, segs, chunk, progress), owner)
 
 
-def _verdict_columns(batch, res: dict, owner: np.ndarray) -> dict:
+def verdict_columns(batch, res: dict, owner: np.ndarray) -> dict:
     """The verdicts table from per-segment results `res` (codes) and each segment's track."""
     B = len(batch.ids)
     pick = pick_segments(res["verdict"], owner, B) if B else np.zeros(0, np.int64)
@@ -151,7 +178,7 @@ def _verdict_columns(batch, res: dict, owner: np.ndarray) -> dict:
 
 
 def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progress: bool,
-                      segment_rows: int) -> dict:
+                      segment_rows: int, place) -> dict:
     """`classify_tracks` when the tracks `long` are longer than `segment_rows`: those one by one
     in segments, the others as a batch truncated to their own length."""
     B = len(batch.ids)
@@ -168,25 +195,20 @@ def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progr
             present=take(batch.present), length=batch.length[short],
             labels=None if batch.labels is None else [batch.labels[i] for i in short],
             xy=take(batch.xy))
-        segs, owner = split_tracks(cfg, sub, _chunk_size(len(short), chunk))
-        res = classify_each(cfg, segs, chunk, progress)
-        parts.append({k: res[k] for k in _CODES})
+        res, owner = classify_fast(cfg, sub, chunk, place)
+        parts.append({k: res[k] for k in CODES})
         owners.append(short[owner])
     for i in long:
         L = int(batch.length[i])
         pieces = classify_long_track(cfg, batch.z[i, :L], batch.width[i, :L],
                                      batch.intensity[i, :L], batch.dt[i, :L],
                                      segment_rows=segment_rows)
-        parts.append({k: np.asarray([p[k] for p in pieces]) for k in _CODES})
+        parts.append({k: np.asarray([p[k] for p in pieces]) for k in CODES})
         owners.append(np.full(len(pieces), i))
     owner = np.concatenate(owners)
     order = np.argsort(owner, kind="stable")  # by track, pieces in time order
-    res = {k: np.concatenate([p[k] for p in parts])[order] for k in _CODES}
-    return _verdict_columns(batch, res, owner[order])
-
-
-_CODES = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
-          "peak_freq", "peak_power", "peak_mask")
+    res = {k: np.concatenate([p[k] for p in parts])[order] for k in CODES}
+    return verdict_columns(batch, res, owner[order])
 
 
 def merge_verdicts(parts: list[dict], ids: list[str]) -> dict:

@@ -16,8 +16,9 @@ instead:
    as there, and the filter stops at the piece's end (work linear in the length however many
    pieces).
 3. The rhythm windows of a piece (N rows from the start, one every hop rows, complete when
-   tracked) are classified `window_chunk` at a time (`rhythm.classify_windows`, the per-window
-   code of `rhythm.track_windows`) from the rows kept in 1, so a window that straddles two filter
+   tracked) are classified `window_chunk` at a time (`windows.classify_window_rows`: the
+   per-window code of `rhythm.track_windows`, the speed by the exact fast median; the complete
+   windows only) from the rows kept in 1, so a window that straddles two filter
    segments sees the rows of both. Matching stops at the first Pedestrian window (Sec. 4.2),
    which is the window `rhythm.classify_track` picks; else the first window is the result.
 
@@ -43,9 +44,10 @@ from . import ekf_fused
 from .ekf import Carry, empty_carry
 from .gates import PaperGates
 from .params import Config
-from .rhythm import N_PEAKS, classify_windows
+from .rhythm import N_PEAKS
 from .segments import end_steps
 from .status import Reason, Verdict
+from .windows import WINDOW_BLOCK, classify_window_rows
 
 
 SEGMENT_ROWS = 4096  # rows per filter segment; tracks longer than this come here
@@ -143,23 +145,20 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
     observed = np.where(valid[:, None], z, np.nan).astype(np.float32)
     first = None
     for j0 in range(0, n_windows, window_chunk):
-        j = np.arange(j0, j0 + window_chunk)
-        usable = j < n_windows
-        rows = (k0 + hop * np.minimum(j, n_windows - 1))[:, None] + np.arange(n)[None, :]
-        res = classify_windows(cfg, jnp.asarray(intensity[rows]), jnp.asarray(dt[rows]),
-                               jnp.asarray(xy[rows]), jnp.asarray(usable),
-                               jnp.asarray(observed[rows]))
-        verdict = np.asarray(res.verdict)
+        j = np.arange(j0, min(j0 + window_chunk, n_windows))
+        rows = (k0 + hop * j)[:, None] + np.arange(n)[None, :]
+        res = classify_window_rows(cfg, intensity[rows], dt[rows], xy[rows], observed[rows],
+                                   block=min(window_chunk, WINDOW_BLOCK))
         if first is None:
-            first = jax.tree.map(lambda a: np.asarray(a)[0], res)
-        hit = np.flatnonzero(usable & (verdict == Verdict.PEDESTRIAN))
+            first = {k: v[0] for k, v in res.items()}
+        hit = np.flatnonzero(res["verdict"] == Verdict.PEDESTRIAN)
         if hit.size:
-            pick = jax.tree.map(lambda a, h=int(hit[0]): np.asarray(a)[h], res)
+            pick = {k: v[int(hit[0])] for k, v in res.items()}
             break
     else:
         pick = first
-    out = {k: getattr(pick, k) for k in ("verdict", "reason", "pace_hz", "stride_m", "ratio",
-                                         "speed_mps", "peak_freq", "peak_power", "peak_mask")}
+    out = {k: pick[k] for k in ("verdict", "reason", "pace_hz", "stride_m", "ratio",
+                                "speed_mps", "peak_freq", "peak_power", "peak_mask")}
     out["n_samples"] = n_tracked
     return out
 

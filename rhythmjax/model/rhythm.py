@@ -187,13 +187,16 @@ def classify_window(
     xy: Float[Array, "n 2"],
     usable: Bool[Array, ""],
     observed: Float[Array, "n 2"] | None = None,
+    speed: Float[Array, ""] | None = None,
 ) -> RhythmResult:
     """Classify one rhythm window of N frames that the track has been tracked over.
 
     `intensity` may contain NaN (missing); `t` (s) and `xy` (m, filtered ground positions) are
     finite; `observed` (px) holds the foot points the gates accepted, NaN elsewhere (for the
     speed, `window_speed`). `usable` False marks a window that is not complete (the caller
-    sets the reason)."""
+    sets the reason). `speed` (m/s), when given, is the window's speed of (12) computed by the
+    caller (`windows.theil_sen_speed`, the same value by a faster median) instead of
+    `window_speed`."""
     thr = cfg.thresholds
     n = intensity.shape[0]
     known = jnp.isfinite(intensity)
@@ -210,7 +213,7 @@ def classify_window(
         pk.mask & nonconstant & spec.ok)
     peaks = white(spec.peaks)
     total = spectral_sum(white(mem.local_maxima(spec.psd, spec.freqs)), thr.p_thr)  # (13)
-    speed = window_speed(cfg, t, xy, observed)
+    speed = window_speed(cfg, t, xy, observed) if speed is None else speed
     verdict, reason, pace, stride, ratio = match(peaks, speed, cfg.walking, thr, total)
     bad = usable & ~signal_ok
     unclassified = ~usable | bad
@@ -251,7 +254,7 @@ def classify_windows(
 ) -> RhythmResult:
     """`classify_window` over J windows given by their rows (`window_times` of `dt` for t): the
     per-window step of `track_windows`, for callers that hold the filter's outputs themselves
-    (`model.long_tracks`, a long track in segments)."""
+    (the reference of `windows.classify_window_block`, which the kernels use)."""
     one = lambda i, d, p, u, o: classify_window(cfg, i, window_times(d), p, u, o)
     return jax.vmap(one)(intensity, dt, xy, usable, observed)
 

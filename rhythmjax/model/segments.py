@@ -20,10 +20,11 @@ outside the range ends it at row k; else pt = 0 when row k is used, elapsed othe
 from __future__ import annotations
 
 import dataclasses
+from typing import NamedTuple
 
-import jax.numpy as jnp
 import numpy as np
 
+from .devices import Placement
 from .ekf_fused import filter_batch
 from .gates import PaperGates
 from .params import Config
@@ -71,21 +72,37 @@ def end_steps(cfg: Config, k_first: int, valid, y, dt, length, k0, has, end, pt)
     return end, pt
 
 
-def _filter(cfg: Config, batch, rows: int):
-    """`ekf_fused.filter_batch` with the paper's gates over a TrackBatch, in chunks of `rows`
-    tracks (padded: one compiled shape); returns started, valid and y (B, T) as NumPy."""
+def filter_chunks(cfg: Config, batch, rows: int, place: Placement | None = None):
+    """`ekf_fused.filter_batch` with the paper's gates over a TrackBatch; returns started,
+    valid (B, T) bool and xy (B, T, 2) m (the filtered ground position) as NumPy.
+
+    The tracks go in chunks of `rows` (fewer when the batch is smaller: the next power of two,
+    at least 8) ordered by length, each chunk cut to its longest track rounded up to a multiple
+    of `thresholds.hop_samples` (the filter is causal: the rows of a track are filtered as in
+    the whole batch); the columns past a chunk's cut repeat `started`'s last and hold no
+    `valid` row. `place` puts a chunk's inputs on the devices (`devices.Placement`: the rows
+    a multiple of the device count)."""
     gates = PaperGates(cfg.width, cfg.thresholds)
-    B = len(batch.ids)
-    parts = []
+    place = place or Placement()
+    B, T = batch.z.shape[:2]
+    hop = int(cfg.thresholds.hop_samples)
+    rows = place.rows(min(rows, max(8, 1 << max(0, B - 1).bit_length())))
+    order = np.argsort(np.asarray(batch.length), kind="stable")
+    started, valid = np.zeros((B, T), bool), np.zeros((B, T), bool)
+    xy = np.full((B, T, 2), np.nan, np.float32)
     for s in range(0, B, rows):
-        e = min(s + rows, B)
-        pad = lambda a, v, e=e, s=s: np.concatenate(
-            [a[s:e], np.full((rows - (e - s),) + a.shape[1:], v, a.dtype)])
-        out = filter_batch(cfg.camera, cfg.noise, gates, jnp.asarray(pad(batch.z, np.nan)),
-                           jnp.asarray(pad(batch.width, np.nan)), jnp.asarray(pad(batch.dt, 1.0)),
-                           jnp.asarray(pad(batch.present, False))).steps
-        parts.append([np.asarray(a)[: e - s] for a in (out.started, out.valid, out.mean[..., 2])])
-    return [np.concatenate(p) for p in zip(*parts)]
+        idx = order[s:s + rows]
+        Tc = min(T, max(hop, -(-int(np.max(batch.length[idx])) // hop) * hop))
+        pad = lambda a, v, idx=idx, Tc=Tc: np.concatenate(
+            [a[idx, :Tc], np.full((rows - len(idx), Tc) + a.shape[2:], v, a.dtype)])
+        args = place.put(pad(batch.z, np.nan), pad(batch.width, np.nan), pad(batch.dt, 1.0),
+                   pad(batch.present, False))
+        out = filter_batch(cfg.camera, cfg.noise, gates, *args).steps
+        st = np.asarray(out.started)[: len(idx)]
+        started[idx, :Tc], started[idx, Tc:] = st, st[:, -1:]
+        valid[idx, :Tc] = np.asarray(out.valid)[: len(idx)]
+        xy[idx, :Tc] = np.asarray(out.mean)[: len(idx)][..., [0, 2]]
+    return started, valid, xy
 
 
 def _rows(batch, which: np.ndarray, first: np.ndarray, n: np.ndarray):
@@ -119,6 +136,41 @@ def _rows(batch, which: np.ndarray, first: np.ndarray, n: np.ndarray):
         xy=masked(batch.xy, np.nan))
 
 
+class Round(NamedTuple):
+    """One pass of `filter_rounds`: the rows `rest` (a TrackBatch: rows first[i] on of track
+    owner[i], shifted to row 0), their filter outputs (`filter_chunks`) and n[i], the rows of
+    each one's first segment (its rows 0 .. n[i] - 1 are that segment, filtered as on their
+    own)."""
+
+    owner: np.ndarray
+    first: np.ndarray
+    n: np.ndarray
+    rest: object
+    started: np.ndarray
+    valid: np.ndarray
+    xy: np.ndarray
+
+
+def filter_rounds(cfg: Config, batch, rows: int = 256, place: Placement | None = None,
+                  split: bool = True):
+    """Yield the `Round`s that cut every track of a TrackBatch at its Fig. 3 ends (module doc):
+    the first round filters every track and ends its first segment; each next round filters
+    again, from the row after an end, the tracks that go on, until none does. `split` False:
+    one round, every track one segment. `rows`, `place`: `filter_chunks`."""
+    B = len(batch.ids)
+    rest = batch
+    owner, first = np.arange(B), np.zeros(B, np.int64)  # the rest's track and its first row
+    while len(owner):
+        started, valid, xy = filter_chunks(cfg, rest, rows, place)
+        end = first_segment_end(cfg, started, valid, xy[..., 1], rest.dt, rest.length) \
+            if split else np.full(len(owner), -1, np.int64)
+        n = np.where(end >= 0, end + 1, rest.length).astype(np.int64)
+        yield Round(owner, first, n, rest, started, valid, xy)
+        more = (end >= 0) & (rest.length > n)
+        owner, first = owner[more], first[more] + n[more]
+        rest = _rows(batch, owner, first, batch.length[owner] - first)
+
+
 def split_tracks(cfg: Config, batch, rows: int = 256):
     """Cut every track of a TrackBatch at its Fig. 3 ends (module doc). Returns the segments as
     a TrackBatch (each padded to the same T, ids and labels of their track) and, per segment,
@@ -127,17 +179,7 @@ def split_tracks(cfg: Config, batch, rows: int = 256):
     B = len(batch.ids)
     if B == 0:
         return batch, np.zeros(0, np.int64)
-    rest = batch
-    owner, first = np.arange(B), np.zeros(B, np.int64)  # the rest's track and its first row
-    pieces: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # (track, first row, rows)
-    while len(owner):
-        started, valid, y = _filter(cfg, rest, rows)
-        end = first_segment_end(cfg, started, valid, y, rest.dt, rest.length)
-        n = np.where(end >= 0, end + 1, rest.length).astype(np.int64)
-        pieces.append((owner, first, n))
-        more = (end >= 0) & (rest.length > n)
-        owner, first = owner[more], first[more] + n[more]
-        rest = _rows(batch, owner, first, batch.length[owner] - first)
+    pieces = [(r.owner, r.first, r.n) for r in filter_rounds(cfg, batch, rows)]
     track = np.concatenate([p[0] for p in pieces])
     start = np.concatenate([p[1] for p in pieces])
     count = np.concatenate([p[2] for p in pieces])

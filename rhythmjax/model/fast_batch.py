@@ -1,0 +1,152 @@
+"""The classification kernel of `batch.classify_tracks`: per Fig. 3 segment the verdict of
+`rhythm.classify_track`, computing only the rhythm windows that can decide it.
+
+`rhythm.classify_batch` (the reference, kept for fit/walking and the tests) filters each padded
+track and classifies every window slot of it, complete or not, each with two float-sort medians.
+Here, in three steps:
+
+1. Filter (`segments.filter_rounds`): the EKF of (4)-(9) with the gates (10), (11) over the
+   tracks, in chunks ordered by length and cut to their longest row (rounded to a hop), and
+   Fig. 3's ends found on its output. The filter's output over a segment's rows IS the output
+   `classify_track` would compute on that segment alone (the filter is causal and a segment's
+   filter starts at its first row), so it is not run again.
+2. Windows (host, NumPy): a segment tracked over n_tracked frames from its start k0 has
+   (n_tracked - N) // hop + 1 complete windows (N frames from k0 + hop j); the others never
+   count (`rhythm.track_windows`). Matching stops at the first Pedestrian window (Sec. 4.2),
+   so window j is needed only when windows 0 .. j - 1 were not Pedestrian: the windows go in
+   phases j in [0, 1), [1, 2), [2, 4), [4, 8), ..., each phase for the segments still
+   undecided, gathered from the filter's rows into blocks of `windows.WINDOW_BLOCK`.
+3. Each block through `windows.classify_window_block` ((12)-(15), the exact fast median).
+
+The result per segment is the first Pedestrian window's, else window 0's; a segment with no
+complete window is Unclassified, `too-short` (or `no-measurements` when no row has a finite
+measurement), with empty peaks (the reference fills the masked peak slots of such a segment
+with the spectrum of an incomplete window; here they are 0).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .devices import Placement
+from .params import Config
+from .rhythm import N_PEAKS
+from .segments import filter_rounds
+from .status import Reason, Verdict
+from .windows import WINDOW_BLOCK, classify_window_rows
+
+
+CODES = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
+         "peak_freq", "peak_power", "peak_mask")
+
+
+class Segments:
+    """The segments of a batch after `filter_rounds`, in track order then time order: per
+    segment its track (`owner`), the round and row of the round's arrays that hold it, its
+    start row k0 (the filter's start), frames tracked and complete windows."""
+
+    def __init__(self, cfg: Config, rounds: list):
+        n_win, hop = int(cfg.thresholds.n), int(cfg.thresholds.hop_samples)
+        self.rounds = rounds
+        cols: dict[str, list] = {k: [] for k in ("owner", "first", "round", "row", "k0",
+                                                 "n_tracked", "windows", "measured")}
+        for r, rd in enumerate(rounds):
+            b, T = rd.started.shape
+            inside = np.arange(T)[None, :] < rd.n[:, None]
+            started = rd.started & inside
+            k0 = np.argmax(started, axis=1)
+            has = started[np.arange(b), k0]
+            n_tracked = np.sum(started & rd.rest.present, axis=1)
+            available = rd.rest.present & np.all(np.isfinite(rd.rest.z), axis=-1) & inside
+            windows = np.where(has & (n_tracked >= n_win), (n_tracked - n_win) // hop + 1, 0)
+            for k, v in (("owner", rd.owner), ("first", rd.first), ("round", np.full(b, r)),
+                         ("row", np.arange(b)), ("k0", k0), ("n_tracked", n_tracked),
+                         ("windows", windows), ("measured", available.any(axis=1))):
+                cols[k].append(np.asarray(v))
+        joined = {k: np.concatenate(v).astype(np.int64) for k, v in cols.items()}
+        order = np.lexsort((joined["first"], joined["owner"]))
+        for k, v in joined.items():
+            setattr(self, k, v[order])
+        self.n, self.hop = n_win, hop
+
+    def __len__(self) -> int:
+        return len(self.owner)
+
+    def gather(self, seg: np.ndarray, j: np.ndarray):
+        """The rows of window j of segments `seg`: intensity, dt (W, N), xy (m) and observed
+        (px, NaN where the gates used no measurement) (W, N, 2), float32."""
+        W, N = len(seg), self.n
+        out = (np.zeros((W, N), np.float32), np.zeros((W, N), np.float32),
+               np.zeros((W, N, 2), np.float32), np.zeros((W, N, 2), np.float32))
+        rnd = self.round[seg]
+        for r in np.unique(rnd):
+            w = np.flatnonzero(rnd == r)
+            rd = self.rounds[r]
+            row = self.row[seg[w]][:, None]
+            col = (self.k0[seg[w]] + self.hop * j[w])[:, None] + np.arange(N)[None, :]
+            out[0][w] = rd.rest.intensity[row, col]
+            out[1][w] = rd.rest.dt[row, col]
+            out[2][w] = rd.xy[row, col]
+            out[3][w] = np.where(rd.valid[row, col][..., None], rd.rest.z[row, col], np.nan)
+        return out
+
+
+def phases(max_windows: int):
+    """The window ranges [lo, hi) matched together: [0, 1), [1, 2), [2, 4), [4, 8), ..."""
+    lo, hi = 0, 1
+    while lo < max_windows:
+        yield lo, hi
+        lo, hi = hi, 2 * hi
+
+
+def classify_segments(cfg: Config, segs: Segments, place: Placement | None = None,
+                      block: int = WINDOW_BLOCK) -> dict[str, np.ndarray]:
+    """Per segment (codes, NumPy columns `CODES`), `rhythm.classify_track`'s result: the first
+    complete window that says Pedestrian, else window 0 (module doc, step 2)."""
+    place = place or Placement()
+    S = len(segs)
+    nan = np.float32(np.nan)
+    out = {"verdict": np.full(S, int(Verdict.UNCLASSIFIED), np.int32),
+           "reason": np.where(segs.measured > 0, int(Reason.TOO_SHORT),
+                              int(Reason.NO_MEASUREMENTS)).astype(np.int32),
+           "pace_hz": np.full(S, nan), "stride_m": np.full(S, nan), "ratio": np.full(S, nan),
+           "speed_mps": np.full(S, nan), "n_samples": segs.n_tracked.astype(np.int32),
+           "peak_freq": np.zeros((S, N_PEAKS), np.float32),
+           "peak_power": np.zeros((S, N_PEAKS), np.float32),
+           "peak_mask": np.zeros((S, N_PEAKS), bool)}
+    fields = [k for k in CODES if k != "n_samples"]
+    decided = np.zeros(S, bool)
+    block = place.rows(block)
+    for lo, hi in phases(int(segs.windows.max(initial=0))):
+        todo = np.flatnonzero(~decided & (segs.windows > lo))
+        if not todo.size:
+            break
+        count = np.minimum(segs.windows[todo], hi) - lo
+        seg = np.repeat(todo, count)
+        j = lo + np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
+        res = classify_window_rows(cfg, *segs.gather(seg, j), put=place.put, block=block)
+        ped = res["verdict"] == Verdict.PEDESTRIAN
+        # per segment, its first Pedestrian window of the phase, else (phase 0) window 0
+        take = np.zeros(len(seg), bool)
+        hit = np.flatnonzero(ped)
+        if hit.size:
+            first = np.unique(seg[hit], return_index=True)[1]
+            take[hit[first]] = True
+        if lo == 0:
+            take |= ~ped  # window 0 is the result unless a later window says Pedestrian
+        for k in fields:
+            out[k][seg[take]] = res[k][take].astype(out[k].dtype)
+        decided[seg[ped]] = True
+    return out
+
+
+def classify_fast(cfg: Config, batch, rows: int = 256, place: Placement | None = None,
+                  split: bool = True) -> tuple[dict, np.ndarray]:
+    """Cut the tracks of a TrackBatch at Fig. 3's ends and classify every segment (steps 1-3
+    of the module doc). Returns per-segment codes (`CODES`) and each segment's track, segments
+    in track then time order (as `segments.split_tracks` orders them). `split` False: every
+    track one segment."""
+    place = place or Placement()
+    rounds = list(filter_rounds(cfg, batch, rows, place, split))
+    segs = Segments(cfg, rounds)
+    return classify_segments(cfg, segs, place), segs.owner
