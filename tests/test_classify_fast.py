@@ -21,11 +21,20 @@ import numpy as np
 import pytest
 
 from rhythmjax.io import read_tracks, to_batch, write_table
+from rhythmjax.model import windows
 from rhythmjax.model.batch import classify_tracks, classify_tracks_reference
 from rhythmjax.model.fast_batch import phases
 from rhythmjax.model.params import Config
 from rhythmjax.model.rhythm import window_speed, window_times
-from rhythmjax.model.windows import float_keys, from_keys, nanmedian_exact, theil_sen_speed
+from rhythmjax.model.windows import (
+    float_keys,
+    from_keys,
+    nanmedian_exact,
+    nanmedian_select,
+    theil_sen_speed,
+    theil_sen_speed_select,
+    window_slopes,
+)
 from rhythmjax.sim.tracks import make_tracks
 
 
@@ -82,6 +91,111 @@ def _windows(seed, W=24):
     xy = np.stack([x0 + 0.7 * vx * t, y0 + 0.7 * vy * t], -1)
     dt = np.diff(t, axis=1, prepend=t[:, :1] - 1.0 / float(cam.fps))
     return [jnp.asarray(a, jnp.float32) for a in (dt, xy, uv)]
+
+
+def _assert_select_exact(x, **kw):
+    """nanmedian_select(x) against nanmedian_exact bit for bit where ok (and against
+    jnp.nanmedian by value: the two differ only in the sign of a zero median, which
+    jnp.nanmedian takes from the input order of -0 and +0); the share of rows not ok."""
+    x = jnp.asarray(x, jnp.float32)
+    got, ok = (np.asarray(a) for a in jax.jit(lambda v: nanmedian_select(v, **kw))(x))
+    want = np.asarray(jax.jit(nanmedian_exact)(x))
+    np.testing.assert_array_equal(got[ok].view(np.int32), want[ok].view(np.int32))
+    np.testing.assert_array_equal(got[ok], np.asarray(jnp.nanmedian(x, axis=-1))[ok])
+    return 1.0 - ok.mean()
+
+
+def _slope_sets(rng, p, rows=8):
+    """Rows of p values: scaled normals with NaN, +-inf, +-0; all NaN; two tied values; ties
+    from rounding; only +-0; heavy outliers (a tenth at +-1e30, Cauchy tails); constant; one
+    or two valid entries."""
+    x = (rng.normal(size=(rows + 8, p)) * 10.0 ** rng.integers(-4, 4)).astype(np.float32)
+    x[rng.random(x.shape) < 0.3] = np.nan
+    x[rng.random(x.shape) < 0.05] = np.inf
+    x[rng.random(x.shape) < 0.05] = -np.inf
+    x[rng.random(x.shape) < 0.05] = 0.0
+    x[rng.random(x.shape) < 0.05] = -0.0
+    x[0] = np.nan
+    x[1] = np.where(rng.random(p) < 0.5, np.float32(1.25), np.float32(-2.0))
+    x[2] = np.round(x[2])
+    x[3] = np.where(rng.random(p) < 0.5, np.float32(0.0), np.float32(-0.0))
+    x[4] = np.where(rng.random(p) < 0.1, np.float32(1e30) * rng.choice([-1, 1], p),
+                    rng.standard_cauchy(p)).astype(np.float32)
+    x[5] = np.float32(0.7)
+    x[6] = np.nan
+    x[6, rng.integers(p)] = 3.0
+    x[7] = np.nan
+    x[7, :2] = [-1.0, -0.0][:p]
+    return x
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_nanmedian_select_is_nanmedian_exact(seed):
+    rng = np.random.default_rng(seed)
+    for p in (1, 2, 3, 7, 64, 300, 2016):
+        _assert_select_exact(_slope_sets(rng, p))
+
+
+def test_nanmedian_select_forced_fallback_is_flagged():
+    """No interpolation pass and no spread (steps=0, spread=0): most rows stay unresolved
+    and say so; the resolved ones are still exact."""
+    rng = np.random.default_rng(7)
+    x = rng.normal(1.0, 0.3, (64, 2016)).astype(np.float32)
+    x[rng.random(x.shape) < 0.2] = np.nan
+    assert _assert_select_exact(x, steps=0, spread=0) > 0.5
+    assert _assert_select_exact(x, steps=2, spread=1, stride=128) > 0.05
+    assert _assert_select_exact(np.concatenate([x, _slope_sets(rng, 2016)]), steps=0) > 0.2
+
+
+def test_nanmedian_select_on_window_slopes():
+    """The real slopes of simulated windows (both position sets): exact, and the fallback
+    rare (benchmarks/bench_median.py measures ~3 % of windows)."""
+    dt, xy, uv = _windows(11, W=128)
+    slopes = jax.jit(jax.vmap(lambda d, p, o: window_slopes(CFG, window_times(d), p, o)[0]))(
+        dt, xy, uv)
+    assert _assert_select_exact(np.asarray(slopes).reshape(-1, slopes.shape[-1])) < 0.1
+    fast = jax.jit(jax.vmap(lambda d, p, o: theil_sen_speed_select(CFG, window_times(d), p, o)))
+    exact = jax.jit(jax.vmap(lambda d, p, o: theil_sen_speed(CFG, window_times(d), p, o)))
+    (a, ok), b = fast(dt, xy, uv), exact(dt, xy, uv)
+    ok = np.asarray(ok)
+    assert ok.mean() > 0.8
+    np.testing.assert_allclose(np.asarray(a)[ok], np.asarray(b)[ok], rtol=1e-6)
+
+
+def _window_rows(seed, W):
+    dt, xy, uv = (np.asarray(a) for a in _windows(seed, W))
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(dt, axis=1)
+    inten = (1.0 + 0.3 * np.sin(2 * np.pi * rng.uniform(1.5, 2.5, (W, 1)) * t)
+             + 0.05 * rng.normal(size=t.shape)).astype(np.float32)
+    return inten, dt, xy, uv
+
+
+def test_classify_window_rows_falls_back_exactly(monkeypatch):
+    """classify_window_rows (select speeds, the unresolved ones again by bisection from the
+    slopes, then the windows with their speeds) against classify_window_block (one program,
+    bisection) on the same windows, once as is and once with the select median forced to
+    leave most windows unresolved (steps=0, spread=0)."""
+    rows = _window_rows(12, 40)
+    want = windows.classify_window_block(CFG, *(jnp.asarray(a) for a in rows))
+
+    def check(got):
+        for f in ("verdict", "reason", "n_samples", "peak_mask"):
+            np.testing.assert_array_equal(got[f], np.asarray(getattr(want, f)), err_msg=f)
+        for f in ("pace_hz", "stride_m", "ratio", "speed_mps", "peak_freq", "peak_power"):
+            np.testing.assert_allclose(got[f], np.asarray(getattr(want, f)), rtol=1e-5,
+                                       equal_nan=True, err_msg=f)
+
+    check(windows.classify_window_rows(CFG, *rows, block=32))
+    select = windows.nanmedian_select
+    monkeypatch.setattr(windows, "nanmedian_select",
+                        lambda x: select(x, steps=0, spread=0))
+    called = []
+    exact_speed = windows.speed_from_slopes
+    monkeypatch.setattr(windows, "speed_from_slopes",
+                        lambda v, s, e, k: called.append(len(k)) or exact_speed(v, s, e, k))
+    check(windows.classify_window_rows(CFG, *rows, block=24, fallback_block=4))  # new shapes
+    assert len(called) >= 6 and set(called) == {4}
 
 
 @pytest.mark.parametrize("seed", [3, 4])
