@@ -17,7 +17,7 @@ import pytest
 
 from fit.cli import failure
 from rhythmjax.cli.common import reading_check
-from rhythmjax.io import BadInput, OutputSet, Terminated, atomic_write
+from rhythmjax.io import BadInput, OutputSet, Terminated, atomic_write, raise_on_sigterm
 from rhythmjax.vision.video import open_video
 
 
@@ -144,6 +144,40 @@ def test_atomic_write_removes_its_temp_file_on_terminated(tmp_path):
             f.write("x")
             raise Terminated("SIGTERM")
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # the drop itself
+@pytest.mark.parametrize("sig, exc", [(signal.SIGTERM, Terminated),
+                                        (signal.SIGINT, KeyboardInterrupt)])
+def test_an_interrupt_python_dropped_still_stops_the_commit(tmp_path, sig, exc):
+    """A signal whose handler runs inside a finaliser (as in JAX's garbage-collector callback,
+    seen in a full test run: the demo then finished and exit 0) has its exception printed and
+    dropped by Python; the set must still not be renamed in, and the interrupt comes back."""
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    class Finalised:
+        def __del__(self):
+            os.kill(os.getpid(), sig)
+            time.sleep(0.05)  # the handler runs here, inside __del__: its exception is dropped
+
+    target = tmp_path / "o.csv"
+    target.write_text("old\n")
+    try:
+        raise_on_sigterm()
+        Finalised()  # collected at once
+        with pytest.raises(exc):
+            with OutputSet([target]) as out:
+                with open(out.path(target), "w") as f:
+                    f.write("new\n")
+        assert os.listdir(tmp_path) == ["o.csv"] and target.read_text() == "old\n"
+        with OutputSet([target]) as out:  # delivered once: the next set commits
+            with open(out.path(target), "w") as f:
+                f.write("new\n")
+        assert target.read_text() == "new\n"
+    finally:
+        for s, h in before.items():
+            signal.signal(s, h)
 
 
 @pytest.fixture(scope="module")

@@ -134,13 +134,30 @@ class Terminated(KeyboardInterrupt):
     cleanup of the atomic writers runs as for Ctrl-C; a command line exits 143 for it."""
 
 
+# The interrupts raised by the handlers of `raise_on_sigterm` and not yet seen by an `OutputSet`.
+# Python runs a signal handler in whatever the main thread executes at that moment; when that is a
+# finaliser or a garbage-collector callback (JAX registers one), the exception is printed as
+# "Exception ignored" and lost, and the run would go on to commit its outputs. `OutputSet`
+# re-raises it before the renames instead.
+_pending: list[KeyboardInterrupt] = []
+
+
 def raise_on_sigterm() -> None:
-    """Make SIGTERM raise `Terminated` (the application's choice; call it from a main thread)."""
+    """Make SIGTERM raise `Terminated`, and Ctrl-C (where Python's default handler is in place)
+    `KeyboardInterrupt`, each remembered until an `OutputSet` sees it, so that one raised where
+    Python drops exceptions still stops the outputs' commit (the application's choice; call it
+    from the main thread, at the start of a command: it forgets older interrupts)."""
     def handler(signum, frame):  # noqa: ARG001 - the signal module's signature
-        raise Terminated("terminated (SIGTERM)")
+        exc = Terminated("terminated (SIGTERM)") if signum == signal.SIGTERM \
+            else KeyboardInterrupt()
+        _pending.append(exc)
+        raise exc
 
     if threading.current_thread() is threading.main_thread():
+        _pending.clear()
         signal.signal(signal.SIGTERM, handler)
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, handler)
 
 
 @contextlib.contextmanager
@@ -212,9 +229,15 @@ class OutputSet:
 
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is not None:
+            if issubclass(exc_type, KeyboardInterrupt):
+                _pending.clear()  # delivered
             self.abort()
             return
         try:
+            if _pending:  # an interrupt raised where Python dropped it (see `_pending`)
+                lost = _pending.pop()
+                _pending.clear()
+                raise lost
             for tmp in self.temps.values():
                 if not os.path.isfile(tmp):
                     raise FileNotFoundError(errno.ENOENT, "the writer created no file", tmp)
