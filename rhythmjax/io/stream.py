@@ -87,6 +87,19 @@ class _Seen:
         return None
 
 
+def _refuse_repeats(p: str, tab: Table, seen: _Seen, new: np.ndarray) -> None:
+    """Record the ids of the tracks beginning at rows `new` of `tab`; `NotGrouped` naming the
+    row and the track when one was met before (its rows are not contiguous)."""
+    if not new.size:
+        return
+    i = seen.add(tab["track_id"][new])
+    if i is not None:
+        k = int(new[i])
+        raise NotGrouped(p, f"rows are not contiguous: the id comes back at {tab.unit} "
+                         f"{int(tab.lines[k])} after other tracks' rows",
+                         track_id=str(tab["track_id"][k]), **_where(p, tab, k))
+
+
 def _slice(tab: Table, a: int, b: int | None = None) -> Table:
     return Table({k: v[a:b] for k, v in tab.items()}, tab.lines[a:b], tab.unit)
 
@@ -155,13 +168,7 @@ def _file_blocks(p: str, tables: Iterator[Table], seen: _Seen, block_tracks: int
         starts = _runs(tid)
         cont = bool(carry) and tid[0] == carry[0]["track_id"][0]
         new = starts[1:] if cont else starts
-        if new.size:
-            i = seen.add(tid[new])
-            if i is not None:
-                k = int(new[i])
-                raise NotGrouped(p, f"rows are not contiguous: the id comes back at {tab.unit} "
-                                 f"{int(tab.lines[k])} after other tracks' rows",
-                                 track_id=str(tid[k]), **_where(p, tab, k))
+        _refuse_repeats(p, tab, seen, new)
         if cont and len(starts) == 1:
             carry.append(tab)
             continue
@@ -263,13 +270,7 @@ def plan_partitions(source: PathLike | Sequence[PathLike], rows_per_partition: i
             starts = _runs(tid)
             if prev is not None and tid[0] == prev:
                 starts = starts[1:]
-            if starts.size:
-                i = seen.add(tid[starts])
-                if i is not None:
-                    k = int(starts[i])
-                    raise NotGrouped(p, f"rows are not contiguous: the id comes back at "
-                                     f"{tab.unit} {int(tab.lines[k])} after other tracks' rows",
-                                     track_id=str(tid[k]), **_where(p, tab, k))
+            _refuse_repeats(p, tab, seen, starts)
             bounds = tab.lines[starts] - first  # data row of each track's first row
             while True:
                 j = np.searchsorted(bounds, begin + rows_per_partition)
