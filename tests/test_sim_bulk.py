@@ -119,3 +119,22 @@ def test_make_tracks_cuts_a_walker_no_path_fits():
     assert np.all((cols["y"] > RANGE_Y_M[0]) & (cols["y"] < RANGE_Y_M[1]))
     u = cols["u"][np.isfinite(cols["u"])]
     assert u.min() > 0 and u.max() < 512
+
+
+def test_simulate_bulk_on_the_command_line(tmp_path, capsys):
+    """`rhythmjax simulate --bulk N` writes N tracks in the proportions of the counts given;
+    all counts zero is a bad input (exit 2) and writes nothing."""
+    from rhythmjax.cli.main import main
+
+    out = tmp_path / "bulk.csv"
+    assert main(["simulate", "--bulk", "300", "--walkers", "1", "--bicycles", "1", "--dogs",
+                 "0", "--cars", "0", "--short", "0", "-o", str(out), "--json"]) == 0
+    tr = read_tracks(out, fps=15)
+    labels = tr.label[np.r_[True, tr.track_id[1:] != tr.track_id[:-1]]]
+    assert len(labels) == 300 and set(labels) == {"pedestrian", "bicycle"}
+    assert abs(int(np.sum(labels == "pedestrian")) - 150) <= 1
+    capsys.readouterr()
+    bad = tmp_path / "none.csv"
+    assert main(["simulate", "--bulk", "10", "--walkers", "0", "--bicycles", "0", "--dogs", "0",
+                 "--cars", "0", "--short", "0", "-o", str(bad)]) == 2
+    assert not bad.exists()
