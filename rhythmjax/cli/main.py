@@ -190,15 +190,6 @@ def _check_dataset_output(out: str, inputs: list[str]) -> None:
         raise BadInput(out, "is a file; give a folder (ending in '/') for a dataset output")
 
 
-def blind_camera_note(cfg, tracks) -> str | None:
-    """A warning when the config's camera sees none of the tracks' foot points (u, v) on the
-    ground inside the detection range: every track would be cut by the gates and left
-    unclassified (as `run` checks the camera against the video)."""
-    from ..stream.classify import blind_note, camera_counts
-
-    return blind_note(cfg, camera_counts(cfg, tracks.u, tracks.v))
-
-
 def devices_arg(text: str) -> int | str:
     """--devices: a positive count or 'all'."""
     if text.strip().lower() == "all":

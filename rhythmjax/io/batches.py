@@ -27,6 +27,7 @@ from .tables import (
     convert_parquet,
     csv_header,
     csv_options,
+    csv_parse_error,
     select_columns,
 )
 
@@ -156,19 +157,11 @@ def _csv_batches(p, required, optional, types, not_empty, batch_rows, start, sto
         bad.append((row.number, row.expected_columns, row.actual_columns))
         return "skip"
 
-    def parse_error(e: pa.ArrowInvalid) -> BadInput | None:
-        msg = str(e)
-        if "cannot infer number of columns" in msg or "Empty CSV" in msg:  # header, no newline
-            return None
-        if "UTF8" in msg:
-            return BadInput(p, f"not UTF-8 text ({msg.splitlines()[0]})")
-        return BadInput(p, f"cannot parse as CSV: {msg.splitlines()[0]}")
-
     opts = pacsv.ReadOptions(use_threads=False, block_size=_csv_block_size(p, batch_rows))
     try:
         reader = pacsv.open_csv(p, read_options=opts, **csv_options(raw, on_bad_row))
     except pa.ArrowInvalid as e:
-        err = parse_error(e)
+        err = csv_parse_error(p, e)
         if err is None:
             return
         raise err from None
@@ -179,7 +172,7 @@ def _csv_batches(p, required, optional, types, not_empty, batch_rows, start, sto
         except StopIteration:
             break
         except pa.ArrowInvalid as e:
-            err = parse_error(e)
+            err = csv_parse_error(p, e)
             if err is None:
                 break
             raise err from None

@@ -176,6 +176,18 @@ def convert_csv(p: str, cols: Mapping[str, Any], lines: np.ndarray, keep, types,
     return table
 
 
+def csv_parse_error(p: str, e: pa.ArrowInvalid) -> BadInput | None:
+    """The `BadInput` for pyarrow's CSV parse error `e` on file `p` (text that is not UTF-8, a
+    malformed row); None for a file with a header and no data rows (pyarrow's "cannot infer the
+    number of columns" or "Empty CSV"), which the caller reads as empty."""
+    msg = str(e)
+    if "cannot infer number of columns" in msg or "Empty CSV" in msg:  # header, no newline
+        return None
+    if "UTF8" in msg:
+        return BadInput(p, f"not UTF-8 text ({msg.splitlines()[0]})")
+    return BadInput(p, f"cannot parse as CSV: {msg.splitlines()[0]}")
+
+
 def _read_csv(p: str, required, optional, types, not_empty) -> Table:
     raw = csv_header(p)
     names = [n.strip() for n in raw]
@@ -190,13 +202,10 @@ def _read_csv(p: str, required, optional, types, not_empty) -> Table:
         tbl = pacsv.read_csv(p, read_options=pacsv.ReadOptions(use_threads=False),
                              **csv_options(raw, on_bad_row))
     except pa.ArrowInvalid as e:
-        msg = str(e)
-        if "cannot infer number of columns" in msg or "Empty CSV" in msg:  # header, no newline
-            tbl = pa.table({n: pa.array([], pa.string()) for n in raw})
-        elif "UTF8" in msg:
-            raise BadInput(p, f"not UTF-8 text ({msg.splitlines()[0]})") from None
-        else:
-            raise BadInput(p, f"cannot parse as CSV: {msg.splitlines()[0]}") from None
+        err = csv_parse_error(p, e)
+        if err is not None:
+            raise err from None
+        tbl = pa.table({n: pa.array([], pa.string()) for n in raw})
     total = tbl.num_rows + len(bad)
     good = np.ones(total, bool)
     good[[b[0] - 2 for b in bad]] = False

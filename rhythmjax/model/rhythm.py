@@ -243,22 +243,6 @@ def window_times(dt: Float[Array, " n"]) -> Float[Array, " n"]:
     return jnp.cumsum(jnp.where(jnp.arange(dt.shape[0]) == 0, 0.0, dt))
 
 
-@eqx.filter_jit
-def classify_windows(
-    cfg: Config,
-    intensity: Float[Array, "J n"],
-    dt: Float[Array, "J n"],
-    xy: Float[Array, "J n 2"],
-    usable: Bool[Array, " J"],
-    observed: Float[Array, "J n 2"],
-) -> RhythmResult:
-    """`classify_window` over J windows given by their rows (`window_times` of `dt` for t): the
-    per-window step of `track_windows`, for callers that hold the filter's outputs themselves
-    (the reference of `windows.classify_window_block`, which the kernels use)."""
-    one = lambda i, d, p, u, o: classify_window(cfg, i, window_times(d), p, u, o)
-    return jax.vmap(one)(intensity, dt, xy, usable, observed)
-
-
 def window_grid(T: int, n: int, hop: int, n_tracked) -> tuple[Array, Bool[Array, " J"]]:
     """Rhythm windows of a padded track of T frames: the window indices j (window j starts
     j * hop frames after the track's first, N long; as many as fit in T) and which of them lie
