@@ -23,3 +23,24 @@ def getkey():
     """Fresh PRNG keys from a fixed seed (STYLE R14)."""
     keys = iter(jr.split(jr.PRNGKey(5678), 10_000))
     return lambda: next(keys)
+
+
+def _memory_maps() -> int:
+    """The process's memory mappings (Linux; 0 elsewhere)."""
+    try:
+        with open("/proc/self/maps") as f:
+            return sum(1 for _ in f)
+    except OSError:
+        return 0
+
+
+@pytest.fixture(autouse=True, scope="module")
+def release_compiled_programs():
+    """Each XLA CPU executable holds about 18 memory mappings until its jit cache lets it go; the
+    whole suite in one process compiles a few thousand and reached Linux's default
+    vm.max_map_count (65 530), where XLA aborts mid-compile (CI exit 139 in test_rhythm). The
+    caches are emptied after every test module, so the count stays that of one module."""
+    yield
+    jax.clear_caches()
+    if os.environ.get("RHYTHMJAX_TEST_MAPS"):
+        print(f"\n[memory maps after the module: {_memory_maps()}]")

@@ -161,8 +161,9 @@ def raise_on_sigterm() -> None:
 
 
 @contextlib.contextmanager
-def _signals_deferred() -> Iterator[None]:
-    """SIGINT and SIGTERM held back (delivered after the block) while a set is renamed in."""
+def signals_deferred() -> Iterator[None]:
+    """SIGINT and SIGTERM held back (delivered after the block) while a set is renamed in, or a
+    part and the manifest naming it are written (`io.parts`)."""
     held = {signal.SIGINT, signal.SIGTERM}
     main = threading.current_thread() is threading.main_thread()
     if main and hasattr(signal, "pthread_sigmask"):
@@ -242,7 +243,7 @@ class OutputSet:
                 if not os.path.isfile(tmp):
                     raise FileNotFoundError(errno.ENOENT, "the writer created no file", tmp)
                 _fsync(tmp)
-            with _signals_deferred():
+            with signals_deferred():
                 for name, tmp in self.temps.items():
                     _commit(tmp, self.finals[name])
                 for p in self.drop:

@@ -24,7 +24,7 @@ import json
 import os
 import shutil
 
-from .atomic import atomic_path, atomic_write
+from .atomic import atomic_path, atomic_write, signals_deferred
 from .errors import BadInput, PathLike
 from .tables import arrow_table, table_suffix
 
@@ -126,10 +126,11 @@ class VerdictParts:
             os.makedirs(self.folder)
             self._made = True
         entry = {"file": f"part-{len(self.done):06d}.parquet", "columns": list(order), **meta}
-        with atomic_path(self.part_path(entry)) as tmp:
-            pq.write_table(arrow_table(columns, order), tmp)
-        self.done.append(entry)
-        self._save()
+        with signals_deferred():  # a part is renamed in only with the manifest that names it
+            with atomic_path(self.part_path(entry)) as tmp:
+                pq.write_table(arrow_table(columns, order), tmp)
+            self.done.append(entry)
+            self._save()
         return entry
 
     def _save(self, complete: bool = False) -> None:
