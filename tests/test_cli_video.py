@@ -51,7 +51,8 @@ def test_demo_writes_its_outputs_and_a_json_summary(tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     assert summary["n_frames"] == 40 and summary["output"] == str(out)
     assert {o["kind"] for o in summary["objects"]} == {"pedestrian", "bicycle", "dog"}
-    for name in ("tracks.parquet", "verdicts.csv", "truth.csv", "spectra.png"):
+    for name in ("tracks.parquet", "verdicts.csv", "truth.csv", "spectra.png", "spectra.pdf",
+                 "report.html"):
         assert (out / name).stat().st_size > 0, name
     assert not any(p.name.startswith(".") or ".tmp" in p.name for p in out.iterdir())
 

@@ -134,6 +134,10 @@ def test_count_cli_writes_consistent_files(crossing_run):
     assert mot["frame"].min() == np.asarray(tracks["frame"]).min() + 1
     assert np.all(mot["z"] == 0.0) and np.all((mot["y"] > 3.0) & (mot["y"] < 15.0))
     assert (out / "overlay.mp4").stat().st_size > 0
+    page = (out / "report.html").read_text()  # one table row per verdict, the overlay linked
+    body = page.split('id="verdicts"', 1)[1].split("</tbody>", 1)[0]
+    assert body.count("<tr>") - 1 == len(ids)  # the header row, then one row per track
+    assert 'src="overlay.mp4"' in page and "data:image/jpeg;base64," in page
 
 
 def test_classify_rejudges_the_written_tracks(crossing_run, videos, tmp_path, capsys):

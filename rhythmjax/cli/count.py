@@ -11,7 +11,7 @@ from ..count.counting import count_frames
 from ..count.options import CountOptions, VerdictOptions
 from ..io import atomic_write, dumps_json, write_table
 from ..io.mot import VELOCITY_COLUMNS, write_mot
-from ..model.params import ConfigError
+from ..model.params import ConfigError, config_to_dict
 from .common import (
     TRACK_ORDER,
     VERDICT_ORDER,
@@ -26,7 +26,8 @@ from .common import (
     reading_check,
     say,
 )
-from .overlay import draw_count_frame
+from .overlay import FrameSampler, TrackOverlay
+from .report import REPORT_NAME, render_report, write_report
 
 
 COUNT_OUTPUTS = ("mot.txt", "mot_velocity.txt", "tracks.parquet", "verdicts.csv", "counts.json")
@@ -64,8 +65,9 @@ def cmd_count(args) -> int:
     measured width at the foot point), width_ok (inside the width gate (10)), and counted) and
     DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
     unjudged_plausible, walkers, walkers_low, walkers_high; the rule in words; the run summary
-    with ghosts_dropped). The files (and --overlay) replace the previous set together, only
-    when the run succeeds.
+    with ghosts_dropped) and DIR/report.html (the counts, the verdict table, the overlay and the
+    config on one page; --no-report skips it). The files (and --overlay) replace the previous
+    set together, only when the run succeeds.
     Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
     (dense crowd, camera jump) is not used for detection (pedestrians predict) and the summary
     says how many there were."""
@@ -76,15 +78,17 @@ def cmd_count(args) -> int:
     opt = CountOptions(dynamics=args.dynamics, max_pedestrians=args.max_pedestrians,
                        verdicts=VerdictOptions(min_track_frames=args.min_frames))
     out = lambda name: os.path.join(args.output, name)
-    with output_set(args.output, COUNT_OUTPUTS, overlay=args.overlay,
-                    inputs=[args.video, args.config]) as outs:
+    names = COUNT_OUTPUTS + (() if args.no_report else (REPORT_NAME,))
+    with output_set(args.output, names, overlay=args.overlay, inputs=[args.video, args.config],
+                    drop=(REPORT_NAME,) if args.no_report else ()) as outs:
         src, cfg, setup_notes = open_source(args, load_config_dict(args.config))
         for note in setup_notes:
             say(args, note if note.startswith("warning") else f"note: {note}")
         overlay_path = outs.path(args.overlay) if args.overlay else None
         with src, overlay_writer(overlay_path, src.fps, (src.width, src.height)) as overlay:
+            drawer, sampler = TrackOverlay("count"), FrameSampler(src.n_frames)
             draw = None if overlay is None else (lambda frame, index, snapshot: overlay.write(
-                draw_count_frame(frame, snapshot, index)))
+                sampler(index, drawer(frame, index, snapshot))))
             res = count_frames(cfg, src, options=opt, n_frames=src.n_frames, on_frame=draw,
                                progress=not (args.quiet or args.json))
             reading_check(args, src)
@@ -101,6 +105,13 @@ def cmd_count(args) -> int:
                         VERDICT_ORDER + list(GUESS_COLUMNS))
             with atomic_write(outs.path(out("counts.json")), "w") as f:
                 f.write(dumps_json(summary, indent=2) + "\n")
+            if not args.no_report:
+                write_report(outs.path(out(REPORT_NAME)), render_report(
+                    title=f"rhythmjax count {os.path.basename(args.video)}",
+                    summary={k: v for k, v in summary.items() if k != "output"},
+                    verdicts=res.verdicts, config=config_to_dict(cfg),
+                    overlay=_relative(args.overlay, args.output), outputs=list(COUNT_OUTPUTS),
+                    frames=sampler.frames))
     if args.json:
         print(json.dumps(json.loads(dumps_json(summary))))
         return 0
@@ -115,6 +126,11 @@ def cmd_count(args) -> int:
         if note not in lost:
             say(args, f"note: {note}")
     return 0
+
+
+def _relative(path, out_dir) -> str | None:
+    """`path` as a link from a page in `out_dir` (None stays None)."""
+    return None if path is None else os.path.relpath(path, out_dir).replace(os.sep, "/")
 
 
 def register(sub, formatter=None) -> None:
@@ -141,5 +157,7 @@ def register(sub, formatter=None) -> None:
                    "shape + image constant velocity; 2d = fixed size + image constant velocity")
     p.add_argument("--min-frames", type=int, default=10, help="tracks shorter than this many "
                    "frames are dropped from the outputs and counts")
+    p.add_argument("--no-report", action="store_true", help="skip report.html (the counts, "
+                   "verdict table, overlay and config on one page)")
     add_common(p)
     p.set_defaults(func=cmd_count)

@@ -107,7 +107,11 @@ def cmd_classify(args) -> int:
 
     A track longer than --segment-rows (4096) is classified in segments (`model.long_tracks`,
     the same verdicts) and padded apart from the other tracks, so one track's work is bounded
-    (one track of 1e5 rows 0.68-0.69 GB, of 1e6 rows 0.98-1.07 GB; docs/benchmarks.md)."""
+    (one track of 1e5 rows 0.68-0.69 GB, of 1e6 rows 0.98-1.07 GB; docs/benchmarks.md).
+
+    With -o, a report is written beside the verdicts when they are done: VERDICTS' stem +
+    .report.html (a folder DIR/: DIR.report.html), the summary, the first 5000 verdict rows and
+    the config on one page (--no-report skips it)."""
 
     from ..stream.classify import classify_source, classify_whole
 
@@ -118,6 +122,10 @@ def cmd_classify(args) -> int:
         check_output(args.output, [*inputs, args.config])
     elif dataset:
         _check_dataset_output(args.output, inputs)
+    if args.output and not args.no_report:
+        from .report import report_path
+
+        check_output(report_path(args.output), [*inputs, args.config])
     if args.whole_file and (len(inputs) > 1 or os.path.isdir(inputs[0]) or dataset):
         raise BadInput(inputs[0], "--whole-file reads one tracks file into one verdicts file")
     source = inputs if len(inputs) > 1 else inputs[0]
@@ -145,6 +153,8 @@ def cmd_classify(args) -> int:
     verdicts = summary.pop("verdicts_table", None)
     summary = {"input": inputs[0] if len(inputs) == 1 else inputs, "output": args.output,
                **summary}
+    if args.output and not args.no_report:
+        summary["report"] = _classify_report(args, cfg, summary)
     if args.json:
         emit_json(summary)
     else:
@@ -157,6 +167,21 @@ def cmd_classify(args) -> int:
         for note in summary["notes"]:
             say(args, note if note.startswith("warning") else f"note: {note}")
     return 0
+
+
+def _classify_report(args, cfg, summary) -> str:
+    """Write the report beside the verdicts (`report.report_path`): the summary, the first
+    verdict rows and the config; its path."""
+    from .report import read_verdicts_head, render_report, report_path, write_report
+
+    path = report_path(args.output)
+    link = os.path.relpath(args.output.rstrip("/" + os.sep), os.path.dirname(path) or ".")
+    page = render_report(title=f"rhythmjax classify {os.path.basename(str(args.tracks[0]))}",
+                         summary=summary, verdicts=read_verdicts_head(args.output),
+                         config=config_to_dict(cfg), outputs=[link],
+                         n_tracks=int(summary.get("n_tracks", 0)))
+    write_report(path, page)
+    return path
 
 
 def _device_count(devices: int | str | None) -> int | None:
@@ -259,6 +284,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "the scheduler at ADDRESS")
     p.add_argument("--dask-workers", type=count_arg, default=2, metavar="W",
                    help="workers of the local Dask cluster")
+    p.add_argument("--no-report", action="store_true", help="skip the report beside the "
+                   "verdicts (VERDICTS' stem + .report.html: summary, verdict table, config)")
     add_common(p)
     p.set_defaults(func=cmd_classify)
 

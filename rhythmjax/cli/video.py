@@ -8,8 +8,8 @@ import sys
 import numpy as np
 
 from ..io import table_suffix, write_table
-from ..model.params import ConfigError, config_from_dict
-from ..sim.evaluate import deciding_windows, score
+from ..model.params import ConfigError, config_from_dict, config_to_dict
+from ..sim.evaluate import deciding_windows, match_tracks, score, window_objects
 from ..sim.presets import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
 from ..sim.scene import random_spec, render_scene, scene_to_tracks_truth
 from ..track.driver import track_frames
@@ -32,16 +32,21 @@ from .common import (
     say,
     seed_arg,
 )
-from .overlay import draw_frame, spectrum_figure
+from .overlay import FrameSampler, TrackOverlay
+from .report import REPORT_NAME, render_report
+from .spectra import write_spectra
 
 
-def _drawer(overlay, cfg):
-    """The on_frame callback that writes the tracker's snapshot drawn on each frame."""
+def _drawer(overlay, cfg, sampler=None):
+    """The on_frame callback that writes the tracker's snapshot drawn on each frame (colour by
+    verdict, labels in words, trails, legend: `overlay.TrackOverlay`); `sampler` keeps a few
+    drawn frames for the report."""
     if overlay is None:
         return None
-    hpw = cfg.width.height_per_width()
-    return lambda frame, index, snapshot: overlay.write(
-        draw_frame(frame, snapshot, index, height_per_width=hpw))
+    draw = TrackOverlay("run", height_per_width=cfg.width.height_per_width())
+    keep = sampler or (lambda index, img: img)
+    return lambda frame, index, snapshot: overlay.write(keep(index, draw(frame, index,
+                                                                         snapshot)))
 
 
 def _notes(args, notes) -> None:
@@ -57,12 +62,28 @@ def _options(args) -> TrackerOptions:
     return with_changes(opt, {"motion.stabilise": False}) if args.no_stabilise else opt
 
 
-def _write_outputs(outs, out_dir, cfg, tracks, verdicts, objs):
-    """tracks.parquet, verdicts.csv and spectra.png of `out_dir`, to the temp paths of `outs`."""
+def _write_outputs(outs, out_dir, cfg, tracks, verdicts, objs, *, truth_ids=None):
+    """tracks.parquet, verdicts.csv, spectra.png and spectra.pdf of `out_dir`, to the temp paths
+    of `outs`; the spectra pages (PNG bytes) for the report."""
     at = lambda name: outs.path(os.path.join(out_dir, name))
     write_table(at("tracks.parquet"), tracks, TRACK_ORDER)
     write_table(at("verdicts.csv"), verdicts, VERDICT_ORDER)
-    spectrum_figure(at("spectra.png"), cfg, tracks, verdicts, objs)
+    return write_spectra(at("spectra.png"), at("spectra.pdf"), cfg, objs, truth_ids=truth_ids)
+
+
+def _write_report(outs, args, names, *, title, summary, verdicts, cfg, spectra,
+                  truth_ids=None, objects=None, sampler=None) -> None:
+    """DIR/report.html (unless --no-report): the summary, verdicts, spectra, overlay, config."""
+    if args.no_report:
+        return
+    from .report import write_report
+
+    overlay = None if args.no_overlay else "overlay.mp4"
+    page = render_report(title=title, summary=summary, verdicts=verdicts,
+                         config=config_to_dict(cfg), spectra=spectra, overlay=overlay,
+                         outputs=[n for n in names if n != REPORT_NAME], truth_ids=truth_ids,
+                         objects=objects, frames=None if sampler is None else sampler.frames)
+    write_report(outs.path(os.path.join(args.output, REPORT_NAME)), page)
 
 
 def _summary(tracker, verdicts, src=None) -> dict:
@@ -124,38 +145,57 @@ def cmd_track(args) -> int:
     return 0
 
 
-RUN_OUTPUTS = ("tracks.parquet", "verdicts.csv", "spectra.png")
+RUN_OUTPUTS = ("tracks.parquet", "verdicts.csv", "spectra.png", "spectra.pdf")
+
+
+def _names(args, extra=()) -> tuple:
+    """The output set of `run` / `demo`: RUN_OUTPUTS, `extra`, the overlay and the report."""
+    return RUN_OUTPUTS + tuple(extra) + (() if args.no_overlay else ("overlay.mp4",)) + \
+        (() if args.no_report else (REPORT_NAME,))
+
+
+def _drop(args) -> tuple:
+    """Members of an older set this run does not write (removed when it succeeds)."""
+    return (("overlay.mp4",) if args.no_overlay else ()) + \
+        ((REPORT_NAME,) if args.no_report else ())
 
 
 def cmd_run(args) -> int:
     """The main job: track and classify the objects of a video; writes DIR/tracks.parquet,
-    DIR/verdicts.csv, DIR/spectra.png and DIR/overlay.mp4 (annotated video) as one set: they
-    replace the previous set together, only when the run succeeds (an old overlay.mp4 is
-    removed with --no-overlay)."""
+    DIR/verdicts.csv, DIR/spectra.pdf (every judged track's spectrum; DIR/spectra.png its first
+    page), DIR/overlay.mp4 (annotated video) and DIR/report.html (summary, verdicts, spectra,
+    overlay, config) as one set: they replace the previous set together, only when the run
+    succeeds (an old overlay.mp4 or report.html is removed with --no-overlay, --no-report)."""
     options = _options(args)
-    names = RUN_OUTPUTS + (() if args.no_overlay else ("overlay.mp4",))
+    names = _names(args)
     with output_set(args.output, names, inputs=[args.video, args.config],
-                    drop=("overlay.mp4",) if args.no_overlay else ()) as outs:
+                    drop=_drop(args)) as outs:
         src, cfg, notes = open_source(args, load_config_dict(args.config))
         _notes(args, notes)
         path = None if args.no_overlay else outs.path(os.path.join(args.output, "overlay.mp4"))
+        sampler = FrameSampler(src.n_frames)
         with src, overlay_writer(path, src.fps, (src.width, src.height)) as overlay:
             tracks, verdicts, objs, tracker = track_frames(
-                cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
+                cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg, sampler),
                 progress=not (args.quiet or args.json), options=options)
             reading_check(args, src, notes)
-            _write_outputs(outs, args.output, cfg, tracks, verdicts, objs)
-    _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
+            spectra = _write_outputs(outs, args.output, cfg, tracks, verdicts, objs)
+            summary = {"video": args.video, **_summary(tracker, verdicts, src)}
+            _write_report(outs, args, names, title=f"rhythmjax run {os.path.basename(args.video)}",
+                          summary=summary, verdicts=verdicts, cfg=cfg, spectra=spectra,
+                          sampler=sampler)
+    del summary["video"]
+    _report(args, summary, verdicts, cfg)
     return 0
 
 
 def cmd_demo(args) -> int:
     """The built-in default: render a synthetic scene (walkers, a bicycle, a dog; the paper's
     camera, 15 Hz, 512x512), run the whole pipeline (config: SYNTHETIC_CONFIG), print the
-    verdicts beside the truth, and write tracks, verdicts, truth, an annotated video and the
-    spectra to DIR."""
-    names = RUN_OUTPUTS + ("truth.csv",) + (() if args.no_overlay else ("overlay.mp4",))
-    with output_set(args.output, names, drop=("overlay.mp4",) if args.no_overlay else ()) as outs:
+    verdicts beside the truth (each object's track ids), and write tracks, verdicts, truth, an
+    annotated video, the spectra and the report to DIR."""
+    names = _names(args, ("truth.csv",))
+    with output_set(args.output, names, drop=_drop(args)) as outs:
         cfg = config_from_dict(SYNTHETIC_CONFIG)
         spec = random_spec(args.seed, n_walkers=args.walkers, n_bicycles=1, n_dogs=1,
                            n_frames=args.frames, camera=cfg.camera, **SCENE_OPTIONS)
@@ -164,32 +204,55 @@ def cmd_demo(args) -> int:
         frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
         size = (scene.frames.shape[2], scene.frames.shape[1])
         path = None if args.no_overlay else outs.path(os.path.join(args.output, "overlay.mp4"))
+        sampler = FrameSampler(len(scene.frames))
         with overlay_writer(path, scene.fps, size) as overlay:
             tracks, verdicts, objs, tracker = track_frames(
-                cfg, frames, n_frames=len(scene.frames), on_frame=_drawer(overlay, cfg),
+                cfg, frames, n_frames=len(scene.frames), on_frame=_drawer(overlay, cfg, sampler),
                 progress=not (args.quiet or args.json), options=synthetic_options())
-            _write_outputs(outs, args.output, cfg, tracks, verdicts, objs)
+            windows = deciding_windows(objs)
+            result = score(tracks, verdicts, scene.truth, windows=windows)
+            ids = truth_links(tracks, scene.truth, windows)
+            spectra = _write_outputs(outs, args.output, cfg, tracks, verdicts, objs,
+                                     truth_ids=ids)
             write_table(outs.path(os.path.join(args.output, "truth.csv")), truth_cols,
                         ["track_id", "frame", "t", "u", "v", "width_px", "label", "x", "y"])
-    result = score(tracks, verdicts, scene.truth, windows=deciding_windows(objs))
-    summary = {**_summary(tracker, verdicts), "output": args.output,
-               **{k: v for k, v in result.items() if k != "objects"},
-               "objects": result["objects"]}
+            summary = {**_summary(tracker, verdicts), "output": args.output,
+                       **{k: v for k, v in result.items() if k != "objects"},
+                       "objects": result["objects"]}
+            for r in result["objects"]:
+                r["track_ids"] = sorted(t for t, o in ids.items() if o == r["object"])
+            _write_report(outs, args, names, title=f"rhythmjax demo (seed {args.seed})",
+                          summary={k: v for k, v in summary.items() if k != "output"},
+                          verdicts=verdicts, cfg=cfg, spectra=spectra, truth_ids=ids,
+                          objects=result["objects"], sampler=sampler)
     if args.json:
         emit_json(summary)
         return 0
     print(f"{'object':>7} {'kind':>10} {'verdict':>15} {'pace':>6} {'true':>6} {'stride':>6} "
-          f"{'true':>6} tracks")
+          f"{'true':>6} tracks  track ids")
     for r in result["objects"]:
         f = lambda x: "" if not np.isfinite(x) else f"{x:.2f}"
-        print(f"{r['object']!s:>7} {r['kind']:>10} {r['verdict']:>15} {f(r['pace']):>6} "
-              f"{f(r['pace_true']):>6} {f(r['stride']):>6} {f(r['stride_true']):>6} "
-              f"{r['tracks']:>6}")
+        mark = "*" if r["verdict"] == "non-pedestrian" and np.isfinite(r["pace"]) else " "
+        print(f"{r['object']!s:>7} {r['kind']:>10} {r['verdict']:>15} {f(r['pace']):>6}"
+              f"{mark}{f(r['pace_true']):>6} {f(r['stride']):>6}{mark}{f(r['stride_true']):>6} "
+              f"{r['tracks']:>6}  {','.join(f'#{t}' for t in r['track_ids']) or '-'}")
+    if any(r["verdict"] == "non-pedestrian" and np.isfinite(r["pace"])
+           for r in result["objects"]):
+        print("* the spectral peak of an object judged non-pedestrian: not a gait, its pace and "
+              "stride are not meaningful", file=sys.stderr)
     print(f"walkers judged pedestrian: {result['walkers_pedestrian']}/{result['walkers']}; "
           f"others judged non-pedestrian: {result['others_non_pedestrian']}/"
           f"{result['others_judged']} judged of {result['others']}; pace MAE "
           f"{result['pace_mae_hz']:.3f} Hz; wrote {args.output}/", file=sys.stderr)
     return 0
+
+
+def truth_links(tracks, truth, windows) -> dict[int, str]:
+    """{track id: the rendered object's id (ped000...)}: the object a judged track followed in
+    its deciding window, else the one the whole track followed (`sim.evaluate`)."""
+    links = {int(t): o.track_id for t, o in match_tracks(tracks, truth).items()}
+    links.update({int(t): o.track_id for t, o in window_objects(tracks, truth, windows).items()})
+    return links
 
 
 def register(sub, formatter=None) -> None:
@@ -206,6 +269,7 @@ def register(sub, formatter=None) -> None:
     p.add_argument("--walkers", type=count_arg, default=4, help="walkers in the scene")
     p.add_argument("--frames", type=count_arg, default=180, help="frames at 15 Hz")
     p.add_argument("--no-overlay", action="store_true", help="skip the annotated video")
+    add_no_report(p)
     add_common(p, config=False)
     p.set_defaults(func=cmd_demo)
 
@@ -225,6 +289,7 @@ def register(sub, formatter=None) -> None:
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     _video_flags(p)
     p.add_argument("--no-overlay", action="store_true", help="skip the annotated video")
+    add_no_report(p)
     add_common(p)
     p.set_defaults(func=cmd_run)
 
@@ -232,6 +297,12 @@ def register(sub, formatter=None) -> None:
 FPS_HELP = ("frame rate (frames/s); the rule in every verb: --fps, else the config's camera.fps, "
             "else the file's (a note says when they disagree); needed for a frame folder "
             "without camera.fps")
+
+
+def add_no_report(p) -> None:
+    """--no-report, for the verbs that write report.html."""
+    p.add_argument("--no-report", action="store_true", help="skip report.html (the summary, "
+                   "verdict table, spectra, overlay and config on one page)")
 
 
 def _video_flags(p) -> None:
