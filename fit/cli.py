@@ -19,6 +19,7 @@ import sys
 import numpy as np
 
 from fit.calibrate import UNITS, fit_footprints
+from fit.selfcal_run import add_parser as add_selfcal_parser
 
 
 EPILOG = """\
@@ -108,6 +109,7 @@ def _parser() -> argparse.ArgumentParser:
         s.add_argument("-o", "--output", required=True, metavar="C2", help="config to write")
         s.add_argument("--json", action="store_true", help="machine-readable summary on stdout")
     _footprints_parser(sub)
+    add_selfcal_parser(sub, _size, _at_least)
     return p
 
 
@@ -300,6 +302,10 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     raise_on_sigterm()  # SIGTERM cleans up as Ctrl-C does
     try:
+        if args.cmd == "selfcal":
+            from fit.selfcal_run import selfcal_main
+
+            return selfcal_main(args)
         return _footprints_main(args) if args.cmd == "footprints" else _fit_main(args)
     except Terminated:
         print("rhythmjax-fit: terminated (SIGTERM); nothing written", file=sys.stderr)

@@ -1,0 +1,388 @@
+"""Self-calibration from people walking (issue 19): the camera of (3) from unlabelled tracks.
+
+Only tracks with a clear gait peak are used (`fit.selfcal_data.gait_peaks`: a peak in the
+walking model's pace band, above P_thr (13), with R of (15) above R_thr); their pace F (Hz) does
+not depend on the camera. Everything else does, through the project's camera model: the foot
+points (u, v) px go to the ground by the inverse of (3) (`rhythmjax.model.camera.
+ground_from_image`), widths by the inverse of (10)'s image width (`camera.ground_width`). The
+cues, each a residual per track in units of its spread (`CUES`):
+
+- ``gait``: the stride of (12), T = D / (F N dt) = speed / F with the classifier's Theil-Sen
+  ground speed (`rhythmjax.model.rhythm.ground_speed`) over the whole track (every k-th
+  frame, at most `SPEED_SAMPLES`), against the walking
+  model (Table 1 or the config's): (T - stride_mean) / stride_std. Ground distances scale with
+  the camera height h, F does not: this fixes the metric scale (and, with walkers in several
+  directions and at several depths, the foreshortening).
+- ``speed``: a walker's ground speed is constant along its track. A quadratic fit of the ground
+  positions against time gives the relative change of speed over the track, (a . v) / |v|^2 at
+  the track's middle (dimensionless; 0 for the true camera). Scale-free: it fixes the horizon
+  (a combination of tilt and focal length), never h.
+- ``width``: people's ground widths follow the config's width model N(mean, std^2) whatever
+  their distance: (mean width of the track - mean) / std, and the change of log width over the
+  track (a linear fit against time, dimensionless) / its spread.
+- ``height``: foot-head heights from the blob tops; tracks files carry no top row, so this cue
+  is reported as not available.
+
+The spreads of the two shape residuals (speed change, width change) are measurement noise, not
+a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
+`SHAPE_FLOOR`. Every residual goes through Cauchy's loss (c = 2.385 spreads): bicycles and dogs
+that slip through the gait selection (a bicycle's stride is 1.4-1.9 m: 8-13 spreads) do not pull
+the scale. A hinge keeps every used foot point below the horizon. The fit is Levenberg-Marquardt
+(optimistix) over log a f, log h and the tilt (and the roll, the principal point when asked),
+in float64, from the best points of a grid over tilt and a f with h set by the median stride.
+
+Identifiability: ``speed`` alone leaves h free; ``gait`` or ``width`` fix it. Standard errors
+come from the Gauss-Newton covariance scaled by the residual variance (as `fit.camera`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.flatten_util
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from fit.camera import NAMES, UNITS, CameraParams, se_limits
+from fit.selfcal_data import camera_values, gait_peaks
+from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
+from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
+from rhythmjax.model.params import Camera, Config
+from rhythmjax.model.rhythm import ground_speed
+
+
+CUES = ("gait", "speed", "width", "height")
+CAUCHY_C = 2.385  # Cauchy's constant at 95 % efficiency, in spreads
+SHAPE_START = 0.1  # start spread of the shape residuals (relative change over a track)
+SHAPE_FLOOR = 0.02  # their spread is never below this (set a priori; seeds 0-5 checked)
+SPEED_SAMPLES = 48  # the Theil-Sen speed of a track over at most this many of its frames
+PAD_TRACKS = 8  # the used tracks are padded to a multiple of this
+MIN_WALKERS = 5  # fewer tracks with a clear gait peak: refused
+MIN_ROWS = 20  # a track needs this many measured rows
+HORIZON_MARGIN_PX = 2.0
+THETA_GRID = (3.0, 6.0, 10.0, 15.0, 20.0, 26.0, 33.0, 40.0, 50.0, 60.0)
+AF_GRID = (0.3, 0.42, 0.6, 0.8, 1.05, 1.35, 1.8, 2.4)  # x the image width
+
+
+class Data(eqx.Module):
+    """The used tracks, padded (B, T), float64: foot points z (px, 0 where `obs` is False),
+    widths (px, NaN missing), times (s from the track's middle), pace F (Hz)."""
+
+    z: jax.Array
+    width: jax.Array
+    t: jax.Array
+    obs: jax.Array
+    pace: jax.Array
+    valid: jax.Array  # False on the padding (copies of the first track, weight 0)
+
+
+class Weights(eqx.Module):
+    """Per cue: a multiplier (0 = off) and the spreads of the shape residuals."""
+
+    gait: jax.Array
+    speed: jax.Array
+    width: jax.Array
+    width_scale: jax.Array
+    sd_speed: jax.Array
+    sd_wshape: jax.Array
+
+
+def _cauchy(r):
+    """r -> sign(r) sqrt(2 rho(r)), rho Cauchy's with c = CAUCHY_C; smooth at 0."""
+    x2 = (r / CAUCHY_C) ** 2
+    small = x2 < 1e-12
+    x2s = jnp.where(small, 1.0, x2)
+    return r * jnp.sqrt(jnp.where(small, 1.0, jnp.log1p(x2s) / x2s))
+
+
+def _linear_fit(t, y, w, degree):
+    """Weighted least-squares polynomial coefficients (constant first) of y against t, per
+    track (vmapped outside); y (T, k)."""
+    A = jnp.stack([t**p for p in range(degree + 1)], -1)
+    M = (A * w[:, None]).T @ A + 1e-9 * jnp.eye(degree + 1)
+    return jnp.linalg.solve(M, (A * w[:, None]).T @ y)
+
+
+def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
+    """The cues' raw values per track (B): stride T (m), relative speed change, mean ground
+    width (m), change of log width over the track, and the horizon hinge (px)."""
+    u, v = data.z[..., 0], data.z[..., 1]
+    gx, gy, ok = ground_from_image(camera, u, v)
+    use = data.obs & ok
+    xy = jnp.stack([gx, gy], -1)
+    k = -(-data.t.shape[1] // SPEED_SAMPLES)  # every k-th frame: <= SPEED_SAMPLES samples
+    speed = jax.vmap(ground_speed)(data.t[:, ::k], jnp.where(use[..., None], xy, 0.0)[:, ::k],
+                                   use[:, ::k])
+    dur = jnp.maximum(jnp.max(jnp.where(use, data.t, -jnp.inf), 1)
+                      - jnp.min(jnp.where(use, data.t, jnp.inf), 1), 1e-3)
+    tn = data.t / dur[:, None]
+    w = use.astype(xy.dtype)
+    c = jax.vmap(lambda t, p, w: _linear_fit(t, p, w, 2))(tn, jnp.where(use[..., None], xy, 0),
+                                                          w)
+    vel, acc = c[:, 1], 2.0 * c[:, 2]
+    dspeed = jnp.sum(acc * vel, -1) / jnp.maximum(jnp.sum(vel**2, -1), 1e-12)
+    wok = use & jnp.isfinite(data.width) & (data.width > 0)
+    wid, okw = ground_width(camera, jnp.where(wok, data.width, 1.0), u, v)
+    wok = wok & okw & (wid > 0)
+    ww = wok.astype(xy.dtype)
+    nw = jnp.maximum(jnp.sum(ww, 1), 1.0)
+    wmean = jnp.sum(jnp.where(wok, wid, 0.0), 1) / nw
+    logw = jnp.log(jnp.where(wok, wid, 1.0))
+    cw = jax.vmap(lambda t, y, w: _linear_fit(t, y[:, None], w, 1))(tn, logw, ww)
+    vh = horizon_v(camera) + jnp.tan(camera.roll) * (u - camera.uc)
+    hinge = jnp.max(jnp.where(data.obs, vh + HORIZON_MARGIN_PX - v, -jnp.inf), 1)
+    return {"stride": speed / data.pace, "dspeed": dspeed, "width": wmean,
+            "dlogw": cw[:, 1, 0], "hinge": jnp.maximum(hinge, 0.0) / HORIZON_MARGIN_PX}
+
+
+def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Array:
+    """The residual vector (before the robust loss): per track, each cue in its spreads
+    (weight 0 = the cue is off), then the horizon hinges."""
+    r = raw_cues(camera, data, cfg)
+    wk, wm = cfg.walking, cfg.width
+    return data.valid.astype(wt.gait.dtype)[None, :].repeat(4, 0).ravel() * jnp.concatenate([
+        wt.gait * (r["stride"] - wk.stride_mean) / wk.stride_std,
+        wt.speed * r["dspeed"] / wt.sd_speed,
+        wt.width_scale * (r["width"] - wm.mean) / wm.std,
+        wt.width * r["dlogw"] / wt.sd_wshape])
+
+
+def residuals(dynamic: CameraParams, args) -> jax.Array:
+    """The robust residual vector of the camera (optimistix's least squares)."""
+    static, like, f, data, cfg, wt = args
+    cam = eqx.combine(dynamic, static).camera(like, f)
+    hinge = raw_cues(cam, data, cfg)["hinge"]
+    return jnp.concatenate([_cauchy(standardised(cam, data, cfg, wt)),
+                            10.0 * jnp.where(data.valid, hinge, 0.0)])
+
+
+@eqx.filter_jit
+def _solve(dynamic, args, max_steps):
+    solver = optx.LevenbergMarquardt(rtol=1e-6, atol=1e-6)
+    sol = optx.least_squares(residuals, solver, dynamic, args=args, throw=False,
+                             max_steps=max_steps)
+    return sol.value, sol.result, sol.stats["num_steps"]
+
+
+@eqx.filter_jit
+def _grid_raw(stack, like, f, data, cfg):
+    return jax.vmap(lambda p: raw_cues(p.camera(like, f), data, cfg))(stack)
+
+
+@eqx.filter_jit
+def _grid_cost(stack, static, args):
+    one = lambda d: jnp.sum(residuals(d, (static,) + args) ** 2)
+    return jax.vmap(one)(stack)
+
+
+def make_params(v: dict[str, float]) -> CameraParams:
+    """`CameraParams` (fit.camera's unconstrained form) of natural values (`fit.camera.UNITS`)."""
+    p = min(max(v["theta"], 0.5), 89.5) / 90.0
+    return CameraParams(*(jnp.asarray(x, jnp.float64) for x in (
+        math.log(v["af"]), math.log(v["bf"] / v["af"]), math.log(v["h"]),
+        math.log(p / (1 - p)), v["uc"], v["vc"], math.radians(v["roll"]), 0.0, 0.0, 0.0)))
+
+
+# ----------------------------------------------------------------------------------------------
+
+def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
+    """(used mask (B,), pace Hz (B,)) of a `rhythmjax.io.TrackBatch`: tracks with a clear gait
+    peak (`gait_peaks`) and at least `MIN_ROWS` measured foot points."""
+    peaks = gait_peaks(cfg, batch.intensity, batch.length)
+    z = np.asarray(batch.z)
+    rows = np.sum(batch.present & np.all(np.isfinite(z), -1), 1)
+    return peaks.clear & (rows >= MIN_ROWS), peaks.pace_hz
+
+
+def make_data(batch, used: np.ndarray, pace: np.ndarray) -> Data:
+    """`Data` of the used tracks of a batch, float64 (call inside ``jax.enable_x64``)."""
+    z = np.asarray(batch.z, np.float64)[used]
+    obs = batch.present[used] & np.all(np.isfinite(z), -1)
+    t = np.asarray(batch.t, np.float64)[used]
+    lo = np.min(np.where(obs, t, np.inf), 1)
+    hi = np.max(np.where(obs, t, -np.inf), 1)
+    t = np.where(obs, t - 0.5 * (lo + hi)[:, None], 0.0)
+    B = z.shape[0]
+    pad = np.r_[np.arange(B), np.zeros(-B % PAD_TRACKS, np.int64)]  # one compiled shape per
+    return Data(*(jnp.asarray(a[pad]) for a in (  # PAD_TRACKS tracks
+        np.where(obs[..., None], z, 0.0), np.asarray(batch.width, np.float64)[used], t, obs,
+        pace[used])), jnp.asarray(np.arange(pad.size) < B))
+
+
+def param_spec(fitted) -> CameraParams:
+    """The filter spec (True = fitted) of `CameraParams` for names of `fit.camera.NAMES`."""
+    return CameraParams(*(k in fitted for k in NAMES))
+
+
+def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=None) -> Weights:
+    """`Weights` of a cue set; the width's scale term is on with the width cue when
+    `width_scale` is True, or (None) only without gait (module doc)."""
+    on = lambda c: jnp.float64(1.0 if c in cues else 0.0)
+    ws = "gait" not in cues if width_scale is None else width_scale
+    scale = jnp.float64(1.0 if "width" in cues and ws else 0.0)
+    return Weights(on("gait"), on("speed"), on("width"), scale, jnp.float64(sd_speed),
+                   jnp.float64(sd_wshape))
+
+
+def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_scale=None):
+    """The best `n_best` grid points (tilt x a f) with h from the median stride (or width)."""
+    f = float(cam0.f)
+    grid = []
+    for th in THETA_GRID:
+        for k in AF_GRID:
+            af = k * cam0.image_width
+            grid.append({**values0, "af": af, "bf": af * values0["bf"] / values0["af"],
+                         "theta": th, "h": 1.0})
+    h1 = jax.tree.map(lambda *xs: jnp.stack(xs), *[make_params(g) for g in grid])
+    raw = _grid_raw(h1, cam0, jnp.float64(f), data, cfg)
+    raw = [{k: np.asarray(q[i]) for k, q in raw.items()} for i in range(len(grid))]
+    valid = np.asarray(data.valid)
+    nanmedian = lambda a: float(np.median(a[np.isfinite(a)])) if np.isfinite(a).any() else 0.0
+    for g, r in zip(grid, raw, strict=True):
+        r = {k: q[valid] for k, q in r.items()}
+        if "gait" in cues:
+            s = nanmedian(np.asarray(r["stride"]))
+            g["h"] = float(cfg.walking.stride_mean) / s if s > 0 else values0["h"]
+        elif "width" in cues:
+            s = nanmedian(np.asarray(r["width"]))
+            g["h"] = float(cfg.width.mean) / s if s > 0 else values0["h"]
+        else:
+            g["h"] = values0["h"]
+        g["h"] = float(min(max(g["h"], 0.2), 200.0)) if np.isfinite(g["h"]) else values0["h"]
+    dyns = [eqx.partition(make_params(g), spec)[0] for g in grid + [values0]]
+    static = eqx.partition(make_params(values0), spec)[1]
+    stack = jax.tree.map(lambda *xs: jnp.stack(xs), *dyns)
+    wt = cue_weights(cues, width_scale=width_scale)
+    cost = np.asarray(_grid_cost(stack, static, (cam0, jnp.float64(f), data, cfg, wt)))
+    order = [i for i in np.argsort(cost) if np.isfinite(cost[i])][:n_best]
+    return [(grid + [values0])[i] for i in order]
+
+
+def _values(val, static) -> dict[str, float]:
+    nat = np.asarray(eqx.combine(val, static).natural())
+    return dict(zip(NAMES, (float(q) for q in nat), strict=True))
+
+
+def _refused(cam0, cues, fitted, n_tracks, n_used, ids, reason) -> SelfcalFit:
+    return SelfcalFit(None, cues, (), camera_values(cam0), {}, np.zeros((0, 0)), math.inf, "",
+                      "not run", True, 0, True, [reason], n_tracks, n_used, ids)
+
+
+def fit_selfcal(cfg: Config, batch, *, cues=("gait", "speed", "width"),
+                fit=("af", "h", "theta"), max_steps: int = 200, n_starts: int = 3,
+                width_scale: bool | None = None) -> SelfcalFit:
+    """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
+    is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
+    track's first frame), with the `cues` (a subset of `CUES` but "height"). `fit` is a subset
+    of ("af", "h", "theta", "roll", "uc", "vc"); b f follows a f at the start's b/a. Refuses
+    (ill_determined with a reason, no camera) with fewer than `MIN_WALKERS` walkers; flags the
+    fit ill-determined when a fitted parameter is not determined (module doc)."""
+    cues = tuple(c for c in CUES if c in cues)
+    bad = [c for c in cues if c not in ("gait", "speed", "width")]
+    if bad or not cues:
+        raise ValueError(f"cues {list(bad) or 'none'}: choose from gait, speed, width (height "
+                         "needs the blobs' top rows, which tracks files do not carry)")
+    fitted = tuple(k for k in NAMES if k in fit)
+    if not {"af", "h", "theta"} <= set(fitted) or set(fit) - {"af", "h", "theta", "roll", "uc",
+                                                              "vc"}:
+        raise ValueError(f"fit {fit}: af, h and theta, optionally roll, uc, vc")
+    cam0 = cfg.camera
+    used, pace = select(cfg, batch)
+    ids = [i for i, u in zip(batch.ids, used, strict=True) if u]
+    n_tracks, n_used = len(batch.ids), int(used.sum())
+    if n_used < MIN_WALKERS:
+        return _refused(cam0, cues, fitted, n_tracks, n_used, ids,
+                        f"only {n_used} of {n_tracks} tracks have a clear gait peak and "
+                        f"{MIN_ROWS} measured rows; self-calibration needs at least "
+                        f"{MIN_WALKERS} walkers")
+    values0 = camera_values(cam0)
+    spec = param_spec(fitted)
+    f = float(cam0.f)
+    with jax.enable_x64(True):
+        data = make_data(batch, used, pace)
+        starts = _starts(cam0, values0, data, cfg, cues, spec, n_starts, width_scale)
+
+        def run(start, wt):
+            dyn, static = eqx.partition(make_params(start), spec)
+            args = (static, cam0, jnp.float64(f), data, cfg, wt)
+            val, res, steps = _solve(dyn, args, max_steps)
+            r = np.asarray(residuals(val, args))
+            cost = float(np.sum(r**2)) if np.all(np.isfinite(r)) else math.inf
+            return cost, val, static, args, res, int(steps)
+
+        wt = cue_weights(cues, width_scale=width_scale)
+        best = min((run(s, wt) for s in starts), key=lambda t: t[0])
+        # the shape residuals' spreads from the data (1.4826 MAD), then the final fit
+        raw = raw_cues(eqx.combine(best[1], best[2]).camera(cam0, f), data, cfg)
+        mad = lambda a: 1.4826 * float(np.median(np.abs(a - np.median(a))))
+        sd_s = max(mad(np.asarray(raw["dspeed"])[:n_used]), SHAPE_FLOOR)
+        sd_w = max(mad(np.asarray(raw["dlogw"])[:n_used]), SHAPE_FLOOR)
+        wt = cue_weights(cues, sd_s, sd_w, width_scale)
+        best = run(_values(best[1], best[2]), wt)
+        cost, val, static, args, res, steps = best
+        J, G, r = jacobians(residuals, val, static, args, fitted)
+        n_eff = n_used * (("gait" in cues) + ("speed" in cues) + ("width" in cues)
+                          + int(float(wt.width_scale) > 0))
+        cov, se, cond, weak = report(J, G, r, fitted, n_eff)
+        values = _values(val, static)
+        std = np.asarray(standardised(eqx.combine(val, static).camera(cam0, f), data, cfg, wt))
+    nb = std.size // 4
+    parts = {"gait": std[:n_used], "speed": std[nb:nb + n_used],
+             "width": np.r_[std[2 * nb:2 * nb + n_used], std[3 * nb:3 * nb + n_used]]}
+    cue_rms = {k: float(np.sqrt(np.mean(parts[k] ** 2))) for k in cues}
+    msg = optx.RESULTS[res]
+    success = res == optx.RESULTS.successful
+    if res == optx.RESULTS.nonlinear_max_steps_reached:
+        cos = stationarity(J, r)
+        success = cos <= STATIONARY_COS
+        msg = (f"stationary at max_steps (largest |cos(J_i, r)| {cos:.1e})" if success else
+               f"{max_steps} steps without converging (largest |cos(J_i, r)| {cos:.1e})")
+    out = SelfcalFit(camera_of(values, cam0), cues, fitted, values, se, cov, cond, weak,
+                     "" if res == optx.RESULTS.successful else msg, bool(success), steps,
+                     False, [], n_tracks, n_used, ids,
+                     {"speed_change": sd_s, "log_width_change": sd_w}, cue_rms)
+    det = out.determination()
+    if not success:
+        out.reasons.append(f"solver: {msg}")
+    if not 0.5 < values["theta"] < 89.5:
+        out.reasons.append(f"theta {values['theta']:.3f} deg at the edge of (0, 90)")
+    if values["af"] < 0.1 * cam0.image_width:
+        out.reasons.append(f"a f {values['af']:.3g} px under a tenth of the image width: a "
+                           "near-orthographic camera, which makes every track's speed constant "
+                           "while the robust loss discounts every stride")
+    lim = se_limits({**{k: 0.0 for k in NAMES}, **values})
+    out.reasons += [f"{k} not determined by the cues {', '.join(cues)} (SE {se[k]:.3g} "
+                    f"{UNITS[k]}, limit {lim[k]:.3g})" for k in fitted
+                    if det[k] == "not determined"]
+    if out.reasons and radial(out.camera, batch, used):
+        out.reasons.append("every walker moves along the optical axis (within 15 deg): "
+                           "lateral and radial distances cannot be compared")
+    out.ill_determined = bool(out.reasons)
+    return out
+
+
+def camera_of(values: dict[str, float], like: Camera) -> Camera:
+    """The `Camera` of natural values (`fit.camera.UNITS`), f and static fields of `like`."""
+    f = float(like.f)
+    return Camera(f=f, h=values["h"], theta=math.radians(values["theta"]), a=values["af"] / f,
+                  b=values["bf"] / f, uc=values["uc"], vc=values["vc"],
+                  roll=math.radians(values["roll"]), fps=like.fps,
+                  image_width=like.image_width, image_height=like.image_height)
+
+
+def radial(camera: Camera, batch, used: np.ndarray, within_deg: float = 15.0) -> bool:
+    """Whether every used track's ground heading (first to last measured foot point through
+    `camera`) lies within `within_deg` of the optical axis's ground direction (y)."""
+    z = np.asarray(batch.z, np.float64)[used]
+    ok = np.all(np.isfinite(z), -1)
+    first, last = np.argmax(ok, 1), z.shape[1] - 1 - np.argmax(ok[:, ::-1], 1)
+    i = np.arange(z.shape[0])
+    with jax.enable_x64(True):
+        ends = [ground_from_image(camera, jnp.asarray(z[i, k, 0]), jnp.asarray(z[i, k, 1]))
+                for k in (first, last)]
+    dx, dy = (np.asarray(ends[1][j]) - np.asarray(ends[0][j]) for j in (0, 1))
+    ang = np.degrees(np.arctan2(np.abs(dx), np.abs(dy)))
+    return bool(np.all(ang <= within_deg))

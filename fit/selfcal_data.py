@@ -1,0 +1,148 @@
+"""What self-calibration (`fit.selfcal`) reads from tracks: each track's gait peak, and synthetic
+scenes of walkers (and bicycles, dogs) seen by random cameras for its tests and benchmark.
+
+The gait peak does not depend on the camera: the pace F of (12) is a peak of the MEM spectrum of
+the rhythm signal I(k) (window B, Sec. 4.1), computed here exactly as the classifier computes it
+(`rhythmjax.model.rhythm`: gaps filled, the window normalised, Burg's spectrum of order M relative
+to the white-noise level, S of (13) over every local maximum), on windows of N samples from each
+track's first frame, one every `hop_samples`. A track has a *clear gait peak* when one of its
+windows holds a peak in the walking model's pace band (|F - pace_mean| <= k_sigma3 pace_std,
+(14)'s pace half), above P_thr (13), with R of (15) above R_thr. Its pace is that peak's
+frequency (the window with the largest R). Stride, speed and widths do depend on the camera and
+are left to the fit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from rhythmjax.model import mem
+from rhythmjax.model.params import Camera, Config
+from rhythmjax.model.rhythm import (
+    MAX_MISSING_FRACTION,
+    N_FREQS,
+    N_PEAKS,
+    fill_gaps,
+    normalise_window,
+    spectral_sum,
+)
+
+
+@dataclass
+class GaitPeaks:
+    """Per track (B): pace F (Hz, NaN without a clear peak), its power (x the white level), R of
+    (15), and whether the peak is clear (module doc)."""
+
+    pace_hz: np.ndarray
+    power: np.ndarray
+    ratio: np.ndarray
+    clear: np.ndarray
+
+
+def _window_peak(cfg: Config, x, dt):
+    """(F Hz, power, R) of the best in-band peak of one window (NaN, 0, 0 when none)."""
+    thr, wk = cfg.thresholds, cfg.walking
+    known = jnp.isfinite(x)
+    enough = jnp.sum(~known) <= MAX_MISSING_FRACTION * x.shape[0]
+    xn, nonconstant = normalise_window(fill_gaps(x, known))
+    spec = mem.spectrum(xn, dt, thr.m, n_freqs=N_FREQS, n_peaks=N_PEAKS)
+    ok = nonconstant & spec.ok & enough
+
+    def white(pk):
+        mask = pk.mask & ok
+        return mem.Peaks(pk.freq, jnp.where(mask, pk.power / dt, 0.0), mask)
+
+    peaks = white(spec.peaks)
+    total = spectral_sum(white(mem.local_maxima(spec.psd, spec.freqs)), thr.p_thr)
+    ratio = peaks.power / jnp.where(total > 0, total, 1.0)
+    band = jnp.abs(peaks.freq - wk.pace_mean) <= thr.k_sigma3 * wk.pace_std
+    good = peaks.mask & band & (peaks.power > thr.p_thr)
+    k = jnp.argmax(jnp.where(good, ratio, -1.0))
+    has = good[k]
+    return (jnp.where(has, peaks.freq[k], jnp.nan), jnp.where(has, peaks.power[k], 0.0),
+            jnp.where(has, ratio[k], 0.0))
+
+
+@eqx.filter_jit
+def _track_peaks(cfg: Config, intensity, length, dt):
+    n, hop = cfg.thresholds.n, cfg.thresholds.hop_samples
+    T = intensity.shape[1]
+    starts = jnp.arange(max(1, (T - n) // hop + 1)) * hop
+
+    def one(x, L):
+        def win(s):
+            w = jax.lax.dynamic_slice_in_dim(x, jnp.clip(s, 0, max(T - n, 0)), n)
+            f, p, r = _window_peak(cfg, w, dt)
+            inside = s + n <= L
+            return jnp.where(inside, f, jnp.nan), jnp.where(inside, p, 0.0), jnp.where(
+                inside, r, 0.0)
+        f, p, r = jax.vmap(win)(starts)
+        k = jnp.argmax(r)
+        return f[k], p[k], r[k]
+
+    return jax.vmap(one)(intensity, length)
+
+
+def gait_peaks(cfg: Config, intensity: np.ndarray, length: np.ndarray) -> GaitPeaks:
+    """Clear gait peaks (module doc) of padded tracks: `intensity` (B, T) I(k) from each track's
+    first frame (NaN missing), `length` (B,) frames; the sample interval is 1 / camera.fps."""
+    n = cfg.thresholds.n
+    x = np.asarray(intensity, np.float32)
+    if x.shape[1] < n:
+        x = np.pad(x, ((0, 0), (0, n - x.shape[1])), constant_values=np.nan)
+    f, p, r = (np.asarray(a, np.float64) for a in _track_peaks(
+        cfg, jnp.asarray(x), jnp.asarray(length, jnp.int32), jnp.float32(1.0 / cfg.camera.fps)))
+    clear = np.isfinite(f) & (r > float(cfg.thresholds.r_thr))
+    return GaitPeaks(np.where(clear, f, np.nan), p, r, clear)
+
+
+# ----------------------------------------------------------------------------------------------
+# synthetic scenes with random cameras (the tests and benchmarks/eval_selfcal.py)
+
+SIZES = ((640, 480), (720, 576), (800, 600), (1024, 768), (1280, 720), (1920, 1080))
+F_M = 0.008  # m, the config's default f
+
+
+def random_camera(rng: np.random.Generator, fps: float = 15.0) -> Camera:
+    """h 2-10 m, tilt 5-40 deg, a f = b f 400-1500 px, an image size of `SIZES`, principal
+    point at the image centre, roll 0 (what a config giving only the image size holds). Not
+    checked for view: `scene` redraws when the simulator cannot place its paths."""
+    w, hh = SIZES[rng.integers(len(SIZES))]
+    af = rng.uniform(400.0, 1500.0)
+    return Camera(f=F_M, h=rng.uniform(2.0, 10.0), theta=math.radians(rng.uniform(5.0, 40.0)),
+                  a=af / F_M, b=af / F_M, uc=w / 2, vc=hh / 2, fps=fps, image_width=w,
+                  image_height=hh)
+
+
+def camera_values(cam: Camera) -> dict[str, float]:
+    """a f (px), h (m), theta (deg), uc, vc (px), roll (deg) of a camera."""
+    f = float(cam.f)
+    return {"af": float(cam.a) * f, "bf": float(cam.b) * f, "h": float(cam.h),
+            "theta": math.degrees(float(cam.theta)), "uc": float(cam.uc),
+            "vc": float(cam.vc), "roll": math.degrees(float(cam.roll))}
+
+
+def scene(rng: np.random.Generator, *, walkers: int = 20, bicycles: int = 0, dogs: int = 0,
+          cars: int = 0, tries: int = 50, **camera_kw):
+    """(camera, tracks columns, truth) of a random camera (`random_camera`) and
+    `rhythmjax.sim.tracks.make_tracks` on it (1.5 px foot-point noise, 3 % gaps, 72-110 frames
+    at 15 fps); redrawn while the simulator cannot place the paths in view (a camera that sees
+    too little of the 3-20 m ground)."""
+    from fit.walking import make_labelled
+    from rhythmjax.model.params import ConfigError
+
+    for _ in range(tries):
+        cam = random_camera(rng, **camera_kw)
+        try:
+            cols, truth = make_labelled(n_walkers=walkers, n_bicycles=bicycles, n_dogs=dogs,
+                                        n_cars=cars, seed=int(rng.integers(2**31)), camera=cam)
+        except ConfigError:
+            continue
+        return cam, cols, truth
+    raise RuntimeError(f"no camera of {tries} draws could hold the scene")

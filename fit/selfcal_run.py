@@ -1,0 +1,167 @@
+"""`rhythmjax-fit selfcal TRACKS -o CONFIG`: the command around `fit.selfcal.fit_selfcal`.
+
+It reads a tracks file (the format `rhythmjax track`, `run` and `simulate` write) and the start
+config (`-c`; its camera is the start and what it gives of the image size, fps, principal point
+and roll is held), fits the camera from the people walking in it, prints the values with their
+standard errors, what the data determine, the walkers used and the camera screen, and writes the
+config with its camera section replaced (atomically). Exit codes: 0 written; 1 refused (too few
+walkers, a parameter the cues do not determine, a failed solve: the reason and the best point
+are printed, nothing is written); 2 bad input (one line naming the file).
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import sys
+
+
+CUE_HELP = ("comma-separated cues (default gait,speed,width): gait (stride of (12) against the "
+            "walking model: the scale), speed (constant ground speed along a track: the horizon),"
+            " width (ground widths independent of distance; also the scale without gait), "
+            "height (needs blob top rows: not in tracks files, reported as not available)")
+
+
+def add_parser(sub, size_type, at_least) -> None:
+    """The `selfcal` subcommand's arguments (`size_type`, `at_least`: fit.cli's parsers)."""
+    s = sub.add_parser("selfcal", help="fit h, tilt and focal length from people walking "
+                       "(gait, constant speed, widths) in a tracks file")
+    s.add_argument("tracks", help="tracks .csv/.parquet (track_id, frame, t, u, v, width_px, "
+                   "intensity)")
+    s.add_argument("--cues", default="gait,speed,width", help=CUE_HELP)
+    s.add_argument("--image-size", type=size_type, metavar="WxH",
+                   help="the image size (px; wins over the config's); needed when the config "
+                   "does not give it")
+    s.add_argument("--fps", type=float, help="frame rate (wins over the config's and the "
+                   "tracks' own)")
+    s.add_argument("--fit-roll", action="store_true", help="fit the roll too (else held at the "
+                   "config's, 0 by default)")
+    s.add_argument("--fit-center", action="store_true", help="fit the principal point too "
+                   "(else held at the config's, or the image centre)")
+    s.add_argument("--max-steps", type=at_least(1), default=200)
+    s.add_argument("--config", "-c", metavar="C", help="start config JSON (default: Table 1's "
+                   "camera on the image size)")
+    s.add_argument("-o", "--output", required=True, metavar="C2", help="config to write")
+    s.add_argument("--json", action="store_true", help="machine-readable summary on stdout")
+
+
+def parse_cues(text: str) -> tuple[tuple[str, ...], list[str]]:
+    """(usable cues, notes) of the --cues text; raises ValueError for an unknown name."""
+    from fit.selfcal import CUES
+
+    names = [c.strip() for c in text.split(",") if c.strip()]
+    bad = [c for c in names if c not in CUES]
+    if bad or not names:
+        raise ValueError(f"--cues {text!r}: unknown cue(s) {bad or 'none'}; choose from "
+                         f"{', '.join(CUES)}")
+    notes = (["cue height: not available (tracks files carry no blob top rows)"]
+             if "height" in names else [])
+    return tuple(c for c in names if c != "height"), notes
+
+
+def start_config(args, d: dict, fps_tracks):
+    """(start Config, the dict with image size and fps settled) from the config file's dict."""
+    from rhythmjax.io import BadInput, config_or_bad_input
+
+    d = copy.deepcopy(d)
+    cam = d.setdefault("camera", {})
+    cpath = args.config or args.tracks
+    if not isinstance(cam, dict):
+        raise BadInput(cpath, "expected an object", key="camera")
+    if args.image_size is not None:
+        cam["image_width_px"], cam["image_height_px"] = (int(q) for q in args.image_size)
+    if "image_width_px" not in cam or "image_height_px" not in cam:
+        raise BadInput(cpath, "the image size is unknown: give --image-size WxH (or "
+                       "camera.image_width_px and image_height_px in the config)")
+    fps = args.fps or cam.get("fps") or fps_tracks
+    if fps:
+        cam["fps"] = float(fps)
+    cam.setdefault("uc_px", cam["image_width_px"] / 2)
+    cam.setdefault("vc_px", cam["image_height_px"] / 2)
+    thr = d.get("thresholds", {}) if isinstance(d.get("thresholds"), dict) else {}
+    start = {**d, "thresholds": {**thr, "range_min_m": thr.get("range_min_m", 3.0),
+                                 "range_max_m": thr.get("range_max_m", 20.0)}}
+    return config_or_bad_input(start, cpath), d
+
+
+def selfcal_main(args) -> int:
+    """The verb: exit code as the module doc says."""
+    import numpy as np
+
+    from fit.selfcal import fit_selfcal
+    from rhythmjax.io import (
+        BadInput,
+        atomic_write,
+        check_output,
+        config_or_bad_input,
+        dumps_json,
+        read_config_dict,
+        read_tracks,
+        to_batch,
+    )
+    from rhythmjax.model.params import Config, config_to_dict
+    from rhythmjax.model.view import camera_report, format_report
+
+    try:
+        check_output(args.output, [args.config, args.tracks])
+        try:
+            cues, notes = parse_cues(args.cues)
+        except ValueError as e:
+            raise BadInput(args.tracks, str(e)) from None
+        if not cues:
+            raise BadInput(args.tracks, "--cues height alone: not available (tracks files "
+                           "carry no blob top rows); add gait, speed or width")
+        d = read_config_dict(args.config) if args.config else {}
+        tr = read_tracks(args.tracks, fps=args.fps)
+        dt = np.diff(tr.t)[np.diff(tr.frame) == 1] if len(tr) > 1 else np.zeros(0)
+        fps_tracks = tr.fps or (1.0 / float(np.median(dt)) if dt.size and np.median(dt) > 0
+                                else None)
+        cfg, d = start_config(args, d, fps_tracks)
+        batch = to_batch(tr, max_gap_frames=5, min_len=cfg.thresholds.n, fps=cfg.camera.fps)
+        fit = ("af", "h", "theta") + (("roll",) if args.fit_roll else ()) + (
+            ("uc", "vc") if args.fit_center else ())
+        r = fit_selfcal(cfg, batch, cues=cues, fit=fit, max_steps=args.max_steps)
+    except BadInput as e:
+        print(f"rhythmjax-fit: {e}", file=sys.stderr)
+        return 2
+    r.notes = notes + r.notes
+    bad = r.ill_determined or not r.success
+    written = None
+    if not bad:
+        fitted = config_to_dict(Config(camera=r.camera))["camera"]
+        d["camera"] = {**fitted, **{k: d["camera"][k] for k in ("fps", "image_width_px",
+                                                               "image_height_px")
+                                    if k in d["camera"]}}
+        written = d
+    report = camera_report(r.camera, float(cfg.width.height)) if r.camera is not None else None
+    if args.json:
+        print(dumps_json({"command": "selfcal", "written": None if bad else args.output,
+                          **r.to_dict(), "camera_report": report, "config": written}))
+    else:
+        print(r.summary())
+        if report is not None:
+            print(format_report(report))
+    if bad:
+        what = ("refused" if r.result == "not run" else
+                f"the solver failed ({r.result})" if not r.success else "ill-determined")
+        print(f"rhythmjax-fit: selfcal {what}: {'; '.join(r.reasons)}; {args.output} not "
+              "written", file=sys.stderr)
+        return 1
+    try:
+        try:
+            config_or_bad_input(written, args.output)
+        except BadInput as e:  # a range the fitted camera cannot give is derived per video
+            if not (e.key or "").startswith("thresholds"):
+                raise
+        with atomic_write(args.output, "w") as f:
+            f.write(json.dumps(written, indent=2, allow_nan=False) + "\n")
+    except BadInput as e:
+        print(f"rhythmjax-fit: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"rhythmjax-fit: {args.output}: cannot write: {e.strerror}", file=sys.stderr)
+        return 1
+    if not args.json:
+        print(f"wrote {args.output}")
+    return 0
+

@@ -1,0 +1,224 @@
+"""Self-calibration from people walking (`fit.selfcal`, `rhythmjax-fit selfcal`, issue 19).
+
+References: the simulator's truth (the camera that made the tracks, each walker's pace and
+stride), central finite differences for the gradient, and refusals on data that cannot
+determine the camera. One scene shape (1280x720 at 15 fps, tracks padded to 128 frames, 24
+track slots) so that one compilation serves every fit."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import equinox as eqx
+import jax
+import jax.flatten_util
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from fit.cli import main as fit_main
+from fit.selfcal import (
+    Data,
+    camera_of,
+    cue_weights,
+    fit_selfcal,
+    make_data,
+    make_params,
+    param_spec,
+    raw_cues,
+    residuals,
+    select,
+)
+from fit.selfcal_data import camera_values, gait_peaks
+from fit.walking import batch_of, make_labelled
+from rhythmjax.io import write_table
+from rhythmjax.model.camera import image_width, project
+from rhythmjax.model.params import Camera, Config
+from rhythmjax.sim.tracks import rhythm_per_px
+
+
+F = 0.008
+TRUE = Camera(f=F, h=5.5, theta=math.radians(21.0), a=950 / F, b=950 / F, uc=640, vc=360,
+              fps=15.0, image_width=1280, image_height=720)
+START = Config(camera=Camera(f=F, h=4.0, theta=math.radians(15.0), a=1280 / F, b=1280 / F,
+                             uc=640, vc=360, fps=15.0, image_width=1280, image_height=720))
+COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "label")
+
+
+@pytest.fixture(scope="module")
+def mixed():
+    """20 walkers, 4 bicycles, 4 dogs, 2 cars seen by TRUE (seed 11), as a batch + truth."""
+    cols, truth = make_labelled(n_walkers=20, n_bicycles=4, n_dogs=4, n_cars=2, seed=11,
+                                camera=TRUE)
+    return cols, truth, batch_of(cols, START)
+
+
+@pytest.fixture(scope="module")
+def fitted(mixed):
+    return fit_selfcal(START, mixed[2])
+
+
+def test_pace_and_stride_against_the_simulators_truth(mixed):
+    cols, truth, b = mixed
+    used, pace = select(START, b)
+    tr = {t.track_id: t for t in truth}
+    ids = [i for i, u in zip(b.ids, used, strict=True) if u]
+    walkers = [i for i in ids if tr[i].label == "pedestrian"]
+    assert len(walkers) >= 18 and not any(tr[i].label in ("dog", "car") for i in ids)
+    err = np.array([pace[b.ids.index(i)] - tr[i].pace_hz for i in walkers])
+    assert np.median(np.abs(err)) < 0.02  # Hz; the MEM peak of the rhythm signal
+    with jax.enable_x64(True):
+        raw = eqx.filter_jit(raw_cues)(camera_of(camera_values(TRUE), TRUE),
+                                       make_data(b, used, pace), START)
+    stride = np.asarray(raw["stride"])[:len(ids)]
+    rel = np.array([stride[ids.index(i)] / tr[i].stride_m - 1 for i in walkers])
+    assert np.median(np.abs(rel)) < 0.01  # (12) through the true camera
+    dspeed = np.asarray(raw["dspeed"])[:len(ids)]
+    assert np.median(np.abs(dspeed)) < 0.05  # constant speed through the true camera
+
+
+def test_recovers_the_camera_with_non_walkers_mixed_in(fitted):
+    r, tv = fitted, camera_values(TRUE)
+    assert not r.ill_determined and r.success, r.reasons
+    assert 18 <= r.n_walkers <= 22
+    # tolerances: the issue's 5 % for h; tilt and a f as the fit's own precision says (20
+    # walkers with Table 1's 12 % spread of stride: SE about 2 deg, 10 %), and 3 SE
+    for k, tol, se_max in (("h", 0.05 * tv["h"], 0.05 * tv["h"]), ("theta", 2.5, 2.5),
+                           ("af", 0.15 * tv["af"], 0.15 * tv["af"])):
+        err = abs(r.values[k] - tv[k])
+        assert err <= tol and err <= 3 * r.se[k] and r.se[k] <= se_max, (
+            k, r.values[k], tv[k], r.se[k])
+    assert r.determination()["h"] == "determined"
+
+
+def test_bicycles_do_not_pull_the_scale(mixed, fitted):
+    cols, truth, b = mixed
+    walkers = [t.track_id for t in truth if t.label == "pedestrian"]
+    keep = np.isin(cols["track_id"], walkers)
+    only = fit_selfcal(START, batch_of({k: v[keep] for k, v in cols.items()}, START))
+    assert abs(only.values["h"] / fitted.values["h"] - 1) < 0.03
+
+
+def test_gradient_matches_finite_differences(mixed):
+    _, _, b = mixed
+    used, pace = select(START, b)
+    v = {**camera_values(TRUE), "h": 5.0, "theta": 19.0, "af": 1000.0, "bf": 1000.0}
+    with jax.enable_x64(True):
+        data = make_data(b, used, pace)
+        dyn, static = eqx.partition(make_params(v), param_spec(("af", "h", "theta")))
+        args = (static, START.camera, jnp.float64(F), data, START,
+                cue_weights(("gait", "speed", "width"), 0.05, 0.03))
+        flat, unravel = jax.flatten_util.ravel_pytree(dyn)
+        cost = jax.jit(lambda q: jnp.sum(residuals(unravel(q), args) ** 2))
+        g = np.asarray(jax.grad(cost)(flat))
+        eps = 1e-6
+        fd = np.array([(cost(flat + eps * e) - cost(flat - eps * e)) / (2 * eps)
+                       for e in np.eye(flat.size)])
+    np.testing.assert_allclose(g, fd, rtol=2e-4, atol=1e-6 * np.max(np.abs(fd)))
+
+
+def test_data_is_padded_without_weight(mixed):
+    _, _, b = mixed
+    used, pace = select(START, b)
+    with jax.enable_x64(True):
+        d = make_data(b, used, pace)
+    assert isinstance(d, Data) and d.valid.shape[0] % 8 == 0
+    assert int(np.sum(np.asarray(d.valid))) == int(used.sum())
+
+
+def _radial_tracks(cam: Camera, n: int, seed: int) -> dict:
+    """Walkers that all walk straight toward or away from the camera (x constant)."""
+    rng = np.random.default_rng(seed)
+    cols = {k: [] for k in COLUMNS}
+    for i in range(n):
+        pace, stride = rng.normal(2.05, 0.15), rng.normal(0.72, 0.07)
+        k = 100
+        t = np.arange(k) / cam.fps
+        sign = rng.choice([-1, 1])
+        y = (6.0 if sign > 0 else 16.0) + sign * pace * stride * t
+        x = np.full(k, rng.uniform(-3, 3))
+        u, v = (np.asarray(a, float) for a in project(cam, jnp.asarray(x), jnp.asarray(y)))
+        w = np.asarray(image_width(cam, jnp.asarray(0.5), jnp.asarray(y)), float)
+        per = rhythm_per_px(t, pace, rng.uniform(), 0.9, 1.0, rng.standard_normal(k), 0.15,
+                            False)
+        for key, a in (("track_id", [f"w{i}"] * k), ("frame", np.arange(k)), ("t", t),
+                       ("u", u + rng.normal(0, 1.5, k)), ("v", v + rng.normal(0, 1.5, k)),
+                       ("width_px", w), ("intensity", np.maximum(per, 0) * w * w / 5),
+                       ("label", ["pedestrian"] * k)):
+            cols[key] += list(a)
+    return {k: np.asarray(v) for k, v in cols.items()}
+
+
+def _cli(tmp_path, cols, *extra):
+    tracks = tmp_path / "tracks.csv"
+    write_table(tracks, cols, COLUMNS)
+    start = tmp_path / "start.json"
+    start.write_text(json.dumps({"camera": {"image_width_px": 1280, "image_height_px": 720,
+                                            "fps": 15}}))
+    out = tmp_path / "cam.json"
+    rc = fit_main(["selfcal", str(tracks), "-c", str(start), "-o", str(out), *extra])
+    return rc, out
+
+
+def test_cli_writes_the_fitted_camera(tmp_path, mixed, fitted, capsys):
+    rc, out = _cli(tmp_path, mixed[0], "--json")
+    assert rc == 0
+    doc = json.loads(capsys.readouterr().out)
+    cam = json.loads(out.read_text())["camera"]
+    assert cam["image_width_px"] == 1280 and cam["fps"] == 15
+    assert abs(cam["h_m"] - doc["values"]["h"]) < 1e-4
+    # the CLI runs `fit_selfcal` on what it read: the same camera as the function's
+    for key, name in (("h_m", "h"), ("theta_deg", "theta")):
+        assert abs(cam[key] - fitted.values[name]) < 1e-4 * max(1.0, abs(fitted.values[name]))
+    assert doc["n_walkers"] >= 18 and doc["written"] == str(out)
+
+
+def test_cli_refuses_too_few_walkers(tmp_path, mixed, capsys):
+    cols, truth, _ = mixed
+    few = [t.track_id for t in truth if t.label == "pedestrian"][:3]
+    keep = np.isin(cols["track_id"], few + [t.track_id for t in truth if t.label != "pedestrian"
+                                            and t.label != "bicycle"])
+    rc, out = _cli(tmp_path, {k: v[keep] for k, v in cols.items()})
+    assert rc == 1 and not out.exists()
+    assert "needs at least 5 walkers" in capsys.readouterr().err
+
+
+def test_cli_refuses_a_scale_free_cue(tmp_path, mixed, capsys):
+    rc, out = _cli(tmp_path, mixed[0], "--cues", "speed", "--max-steps", "30")
+    assert rc == 1 and not out.exists()
+    assert "h not determined" in capsys.readouterr().err
+
+
+def test_cli_refuses_walkers_all_along_the_optical_axis(tmp_path, capsys):
+    rc, out = _cli(tmp_path, _radial_tracks(TRUE, 20, 3), "--max-steps", "20")
+    err = capsys.readouterr().err
+    assert rc == 1 and not out.exists()
+    assert "not determined" in err and "optical axis" in err
+
+
+@pytest.mark.parametrize("extra, message", [
+    (("--cues", "gait,smell"), "unknown cue"),
+    (("--cues", "height"), "not available"),
+])
+def test_cli_bad_cues(tmp_path, mixed, capsys, extra, message):
+    rc, out = _cli(tmp_path, mixed[0], *extra)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and not out.exists() and len(err) == 1 and message in err[0]
+    assert "tracks.csv" in err[0]
+
+
+def test_cli_needs_the_image_size(tmp_path, mixed, capsys):
+    tracks = tmp_path / "t.csv"
+    write_table(tracks, mixed[0], COLUMNS)
+    out = tmp_path / "o.json"
+    assert fit_main(["selfcal", str(tracks), "-o", str(out)]) == 2 and not out.exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "image size is unknown" in err[0] and "t.csv" in err[0]
+
+
+def test_gait_peaks_none_without_rhythm():
+    x = np.full((2, 64), 5.0)
+    x[1] = np.random.default_rng(0).normal(5, 1, 64)
+    p = gait_peaks(START, x, np.array([64, 64]))
+    assert not p.clear.any() and np.isnan(p.pace_hz).all()
