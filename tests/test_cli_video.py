@@ -63,6 +63,16 @@ def test_run_tracks_the_walker_of_a_video(walker_avi, tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     assert summary["n_frames"] == 70 and summary["n_tracks"] >= 1
     assert (out / "overlay.mp4").stat().st_size > 0 and (out / "verdicts.csv").exists()
+    # a browser-playable overlay instead: the mp4 of the previous set goes, the report links it
+    assert main(["run", walker_avi, "-o", str(out), "--overlay-format", "webm", "-q"]) == 0
+    assert not (out / "overlay.mp4").exists()
+    webm = cv2.VideoCapture(str(out / "overlay.webm"))
+    n = 0
+    while webm.read()[0]:
+        n += 1
+    assert n == 70
+    page = (out / "report.html").read_text()
+    assert 'src="overlay.webm"' in page and "MPEG-4 part 2" not in page
 
 
 def test_track_writes_the_tracks_file(walker_avi, tmp_path, capsys):

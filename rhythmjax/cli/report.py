@@ -184,8 +184,10 @@ def render_report(*, title: str, summary: dict, verdicts: dict, config: dict | N
             f' poster="data:image/jpeg;base64,{base64.b64encode(frames[0][1]).decode()}"'
         parts += ["<h2>Overlay</h2>",
                   f'<video controls preload="metadata" src="{href}"{poster}></video>',
-                  f'<p class="meta"><a href="{href}">{href}</a> (MPEG-4 part 2: most browsers '
-                  "do not play it; open it in a video player, e.g. VLC or mpv)</p>"]
+                  f'<p class="meta"><a href="{href}">{href}</a>' + (
+                      "" if overlay.lower().endswith(".webm") else " (MPEG-4 part 2: most "
+                      "browsers do not play it; open it in a video player, e.g. VLC or mpv, or "
+                      "write overlay.webm with --overlay-format webm)") + "</p>"]
         if frames:
             parts.append('<div class="stills">' + "".join(
                 f'<figure><img alt="overlay frame {i}" src="data:image/jpeg;base64,'

@@ -78,7 +78,7 @@ def _write_report(outs, args, names, *, title, summary, verdicts, cfg, spectra,
         return
     from .report import write_report
 
-    overlay = None if args.no_overlay else "overlay.mp4"
+    overlay = _overlay_name(args)
     page = render_report(title=title, summary=summary, verdicts=verdicts,
                          config=config_to_dict(cfg), spectra=spectra, overlay=overlay,
                          outputs=[n for n in names if n != REPORT_NAME], truth_ids=truth_ids,
@@ -148,31 +148,44 @@ def cmd_track(args) -> int:
 RUN_OUTPUTS = ("tracks.parquet", "verdicts.csv", "spectra.png", "spectra.pdf")
 
 
+OVERLAY_NAMES = {"mp4": "overlay.mp4", "webm": "overlay.webm"}
+
+
+def _overlay_name(args) -> str | None:
+    """The overlay's file name in DIR (--overlay-format), None with --no-overlay."""
+    return None if args.no_overlay else OVERLAY_NAMES[args.overlay_format]
+
+
 def _names(args, extra=()) -> tuple:
     """The output set of `run` / `demo`: RUN_OUTPUTS, `extra`, the overlay and the report."""
-    return RUN_OUTPUTS + tuple(extra) + (() if args.no_overlay else ("overlay.mp4",)) + \
+    overlay = _overlay_name(args)
+    return RUN_OUTPUTS + tuple(extra) + (() if overlay is None else (overlay,)) + \
         (() if args.no_report else (REPORT_NAME,))
 
 
 def _drop(args) -> tuple:
-    """Members of an older set this run does not write (removed when it succeeds)."""
-    return (("overlay.mp4",) if args.no_overlay else ()) + \
+    """Members of an older set this run does not write (removed when it succeeds): an overlay
+    of the other format, or none, and the report with --no-report."""
+    return tuple(n for n in OVERLAY_NAMES.values() if n != _overlay_name(args)) + \
         ((REPORT_NAME,) if args.no_report else ())
 
 
 def cmd_run(args) -> int:
     """The main job: track and classify the objects of a video; writes DIR/tracks.parquet,
     DIR/verdicts.csv, DIR/spectra.pdf (every judged track's spectrum; DIR/spectra.png its first
-    page), DIR/overlay.mp4 (annotated video) and DIR/report.html (summary, verdicts, spectra,
-    overlay, config) as one set: they replace the previous set together, only when the run
-    succeeds (an old overlay.mp4 or report.html is removed with --no-overlay, --no-report)."""
+    page), DIR/overlay.mp4 (annotated video; overlay.webm with --overlay-format webm) and
+    DIR/report.html (summary, verdicts, spectra, overlay, config) as one set: they replace the
+    previous set together, only when the run succeeds (an old overlay or report.html is removed
+    with --no-overlay, --no-report)."""
     options = _options(args)
     names = _names(args)
     with output_set(args.output, names, inputs=[args.video, args.config],
                     drop=_drop(args)) as outs:
         src, cfg, notes = open_source(args, load_config_dict(args.config))
         _notes(args, notes)
-        path = None if args.no_overlay else outs.path(os.path.join(args.output, "overlay.mp4"))
+        overlay_name = _overlay_name(args)
+        path = None if overlay_name is None else outs.path(os.path.join(args.output,
+                                                                         overlay_name))
         sampler = FrameSampler(src.n_frames)
         with src, overlay_writer(path, src.fps, (src.width, src.height)) as overlay:
             tracks, verdicts, objs, tracker = track_frames(
@@ -203,7 +216,9 @@ def cmd_demo(args) -> int:
         truth_cols = scene_to_tracks_truth(scene)
         frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
         size = (scene.frames.shape[2], scene.frames.shape[1])
-        path = None if args.no_overlay else outs.path(os.path.join(args.output, "overlay.mp4"))
+        overlay_name = _overlay_name(args)
+        path = None if overlay_name is None else outs.path(os.path.join(args.output,
+                                                                         overlay_name))
         sampler = FrameSampler(len(scene.frames))
         with overlay_writer(path, scene.fps, size) as overlay:
             tracks, verdicts, objs, tracker = track_frames(
@@ -268,7 +283,7 @@ def register(sub, formatter=None) -> None:
                    "walker tracked too briefly to judge, a walker or a dog misjudged)")
     p.add_argument("--walkers", type=count_arg, default=4, help="walkers in the scene")
     p.add_argument("--frames", type=count_arg, default=180, help="frames at 15 Hz")
-    p.add_argument("--no-overlay", action="store_true", help="skip the annotated video")
+    add_overlay_flags(p)
     add_no_report(p)
     add_common(p, config=False)
     p.set_defaults(func=cmd_demo)
@@ -288,7 +303,7 @@ def register(sub, formatter=None) -> None:
     p.add_argument("video", metavar="VIDEO", help="video file, or a folder of numbered frames")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     _video_flags(p)
-    p.add_argument("--no-overlay", action="store_true", help="skip the annotated video")
+    add_overlay_flags(p)
     add_no_report(p)
     add_common(p)
     p.set_defaults(func=cmd_run)
@@ -297,6 +312,14 @@ def register(sub, formatter=None) -> None:
 FPS_HELP = ("frame rate (frames/s); the rule in every verb: --fps, else the config's camera.fps, "
             "else the file's (a note says when they disagree); needed for a frame folder "
             "without camera.fps")
+
+
+def add_overlay_flags(p) -> None:
+    """--no-overlay and --overlay-format, for `run` and `demo`."""
+    p.add_argument("--no-overlay", action="store_true", help="skip the annotated video")
+    p.add_argument("--overlay-format", choices=sorted(OVERLAY_NAMES), default="mp4",
+                   help="overlay.mp4 (MPEG-4 part 2, fast to write; browsers do not play it) or "
+                   "overlay.webm (VP8: report.html plays it; about 30 ms a 512x512 frame more)")
 
 
 def add_no_report(p) -> None:

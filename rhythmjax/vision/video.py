@@ -27,7 +27,8 @@ from ..io.errors import BadInput, PathLike
 
 FRAME_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
 MAX_FPS = 1000.0  # a container frame rate above this (or 0, NaN) is taken as absurd
-WRITER_FOURCC = {".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v", ".avi": "MJPG"}
+WRITER_FOURCC = {".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v", ".avi": "MJPG",
+                 ".webm": "VP80"}  # VP8 WebM: plays in browsers (the report), ~30x slower to write
 FFMPEG_LOG_LEVEL = "8"  # AV_LOG_FATAL: FFmpeg's own lines ("[mjpeg @ 0x..] overread 8") off
 
 
@@ -280,7 +281,7 @@ class VideoWriter:
         suffix = os.path.splitext(path)[1].lower()
         if suffix not in WRITER_FOURCC:
             raise BadInput(path, f"cannot write video: unknown extension '{suffix}' (use .mp4 "
-                           "with mp4v or .avi with MJPG)")
+                           "with mp4v, .avi with MJPG or .webm with VP8)")
         f = float(fps)
         if not math.isfinite(f) or f <= 0:
             raise BadInput(path, f"cannot write video at fps {fps!r}: need a positive frame rate")
@@ -296,7 +297,7 @@ class VideoWriter:
         if not self._vw.isOpened():
             self.abort()
             raise BadInput(path, f"cannot write video: codec '{self.fourcc}' did not open (use "
-                           "mp4v/.mp4 or MJPG/.avi)")
+                           "mp4v/.mp4, MJPG/.avi or VP8/.webm)")
 
     def write(self, frame: np.ndarray) -> None:
         """Append one frame: (H, W) grey or (H, W, 3) BGR uint8 of the writer's size (checked)."""
@@ -340,6 +341,6 @@ class VideoWriter:
 
 def open_writer(path: PathLike, fps: float | int, size: tuple[int, int]) -> VideoWriter:
     """Open an output video of `size` = (width, height) px at `fps` frames/s before any processing:
-    .mp4/.m4v/.mov with mp4v, .avi with MJPG. Raises `BadInput` naming `path` if the directory,
-    the extension or the codec cannot be written."""
+    .mp4/.m4v/.mov with mp4v, .avi with MJPG, .webm with VP8 (browsers play it). Raises
+    `BadInput` naming `path` if the directory, the extension or the codec cannot be written."""
     return VideoWriter(os.fspath(path), fps, size)
