@@ -253,3 +253,24 @@ def test_report_loads_in_headless_chromium_without_console_errors(demo_report, t
         bad.write_text('<!DOCTYPE html><img src="missing.png"><script>nope()</script>')
         b.load(bad.as_uri())
         assert len(b.console_errors()) >= 2
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no Chromium here (apt-get install chromium)")
+def test_webm_overlay_plays_in_headless_chromium(tmp_path):
+    """--overlay-format webm: the report's <video> decodes (the mp4v default does not in
+    Chromium): ready with its first frame, no media error, the frame size of the scene."""
+    import time
+
+    out = tmp_path / "out"
+    assert main(["demo", "-o", str(out), "--frames", "30", "--walkers", "1", "-q",
+                 "--overlay-format", "webm"]) == 0
+    with Browser(CHROMIUM) as b:
+        b.load((out / "report.html").as_uri())
+        state = "document.querySelector('video').readyState"
+        t0 = time.monotonic()
+        while b.evaluate(state) < 2 and time.monotonic() - t0 < 20:
+            time.sleep(0.2)
+        assert b.evaluate(state) >= 2  # HAVE_CURRENT_DATA: decoded
+        assert b.evaluate("document.querySelector('video').error") is None
+        assert b.evaluate("document.querySelector('video').videoWidth") == 512
+        assert b.console_errors() == []
