@@ -15,8 +15,10 @@ machine the figures move with it).
 Rows (us per track unless said): the whole kernel; its steps: the filter rounds (EKF + Fig. 3
 ends + the rows of the next round), the EKF alone (`segments.filter_chunks` once over all
 tracks), the segment table and window gathering (host), the window classification; per window
-(us per window, blocks of `windows.WINDOW_BLOCK` first windows): the whole block, the speed of
-(12) (`windows.theil_sen_speed`) and the reference's `rhythm.window_speed`, the rest of the window
+(us per window, blocks of `windows.WINDOW_BLOCK` first windows): the kernel's one program a block
+(`window_block.classify_block`) and its speeds (`window_block.block_speeds`), the whole block
+with the bisection median (`windows.classify_window_block`), the speed of (12)
+(`windows.theil_sen_speed`) and the reference's `rhythm.window_speed`, the rest of the window
 (spectrum, peaks, matching: `rhythm.classify_window` with a given speed), Burg alone (`mem.burg`,
 M = 15); and the floor (operation counts in the printout).
 """
@@ -41,6 +43,7 @@ from rhythmjax.model.fast_batch import Segments, classify_segments  # noqa: E402
 from rhythmjax.model.params import Config  # noqa: E402
 from rhythmjax.model.rhythm import classify_window, window_speed, window_times  # noqa: E402
 from rhythmjax.model.segments import filter_chunks, filter_rounds  # noqa: E402
+from rhythmjax.model.window_block import block_speeds, classify_block  # noqa: E402
 from rhythmjax.model.windows import WINDOW_BLOCK, classify_window_block, theil_sen_speed  # noqa
 from rhythmjax.sim.tracks import make_tracks  # noqa: E402
 
@@ -128,6 +131,9 @@ def main() -> None:
     inten, dt, xy, obs = (jnp.asarray(x) for x in segs.gather(seg, np.zeros(len(seg), int)))
 
     blk = best(lambda: classify_window_block(cfg, inten, dt, xy, obs), args.repeat)
+    kernel_blk = best(lambda: classify_block(cfg, inten, dt, xy, obs), args.repeat)
+    speeds = jax.jit(lambda d, p, o: block_speeds(cfg, d, p, o))
+    t_speeds = best(lambda: speeds(dt, xy, obs), args.repeat)
     sp = jax.jit(jax.vmap(lambda d, p, o: theil_sen_speed(cfg, window_times(d), p, o)))
     t_speed = best(lambda: sp(dt, xy, obs), args.repeat)
     sp_ref = jax.jit(jax.vmap(lambda d, p, o: window_speed(cfg, window_times(d), p, o)))
@@ -153,8 +159,13 @@ def main() -> None:
     print(f"| - windows: gather + classify, all phases | {us(t_windows, B)} |")
     print(f"\n| per window (blocks of {W} first windows) | us per window |\n|---|---:|")
     print(f"| gather (host) | {us(t_gather, W)} |")
-    print(f"| whole window (`classify_window_block`) | {us(blk, W)} |")
-    print(f"| speed of (12), exact selection median | {us(t_speed, W)} |")
+    print(f"| whole window, the kernel's program (`window_block.classify_block`) | "
+          f"{us(kernel_blk, W)} |")
+    print(f"| - its speeds of (12) (`window_block.block_speeds`: windows on the minor axis, "
+          f"select median + in-program fallback) | {us(t_speeds, W)} |")
+    print(f"| whole window, bisection median (`classify_window_block`) | {us(blk, W)} |")
+    print(f"| speed of (12), bisection median, one window at a time (`theil_sen_speed`) | "
+          f"{us(t_speed, W)} |")
     print(f"| speed of (12), reference (`window_speed`, two float sorts) | "
           f"{us(t_speed_ref, W)} |")
     print(f"| the rest: Burg, PSD, peaks, (13)-(15) | {us(t_rest, W)} |")

@@ -21,9 +21,10 @@ import numpy as np
 import pytest
 
 from rhythmjax.io import read_tracks, to_batch, write_table
-from rhythmjax.model import windows
+from rhythmjax.model import window_block, windows
 from rhythmjax.model.batch import classify_tracks, classify_tracks_reference
 from rhythmjax.model.fast_batch import phases
+from rhythmjax.model.fast_window import median_small
 from rhythmjax.model.params import Config
 from rhythmjax.model.rhythm import window_speed, window_times
 from rhythmjax.model.windows import (
@@ -172,10 +173,11 @@ def _window_rows(seed, W):
 
 
 def test_classify_window_rows_falls_back_exactly(monkeypatch):
-    """classify_window_rows (select speeds, the unresolved ones again by bisection from the
-    slopes, then the windows with their speeds) against classify_window_block (one program,
-    bisection) on the same windows, once as is and once with the select median forced to
-    leave most windows unresolved (steps=0, spread=0)."""
+    """classify_window_rows (one program a block: select speeds, the unresolved medians again
+    by bisection, FALLBACK windows a turn of a loop) against classify_window_block (one
+    program, bisection) on the same windows: as is, and with the select median forced to
+    leave most windows unresolved (steps=0, spread=0), in blocks of 8 (one turn) and of 24
+    (more than FALLBACK unresolved: several turns)."""
     rows = _window_rows(12, 40)
     want = windows.classify_window_block(CFG, *(jnp.asarray(a) for a in rows))
 
@@ -187,15 +189,66 @@ def test_classify_window_rows_falls_back_exactly(monkeypatch):
                                        equal_nan=True, err_msg=f)
 
     check(windows.classify_window_rows(CFG, *rows, block=32))
-    select = windows.nanmedian_select
-    monkeypatch.setattr(windows, "nanmedian_select",
-                        lambda x: select(x, steps=0, spread=0))
-    called = []
-    exact_speed = windows.speed_from_slopes
-    monkeypatch.setattr(windows, "speed_from_slopes",
-                        lambda v, s, e, k: called.append(len(k)) or exact_speed(v, s, e, k))
-    check(windows.classify_window_rows(CFG, *rows, block=24, fallback_block=4))  # new shapes
-    assert len(called) >= 6 and set(called) == {4}
+    cols = window_block.nanmedian_select_cols
+    monkeypatch.setattr(window_block, "nanmedian_select_cols",
+                        lambda x: cols(x, steps=0, spread=0))
+    unresolved = []
+    block = windows.classify_block
+    monkeypatch.setattr(windows, "classify_block",
+                        lambda *a: (r := block(*a)) and unresolved.append(int(r[1])) or r)
+    check(windows.classify_window_rows(CFG, *rows, block=8))  # new shapes: traced again
+    assert 0 < max(unresolved) <= window_block.FALLBACK
+    unresolved.clear()
+    check(windows.classify_window_rows(CFG, *rows, block=24))
+    assert max(unresolved) > window_block.FALLBACK
+
+
+def _theil_sen_f64(t, px, py, use):
+    """NumPy float64 Theil-Sen velocity norm of (12): per axis the median of (p_j - p_i) /
+    (t_j - t_i) over the pairs i < j with both samples in `use`."""
+    i, j = np.triu_indices(len(t), 1)
+    keep = use[i] & use[j]
+    d = (t[j] - t[i])[keep]
+    vx = np.median((px[j] - px[i])[keep] / d)
+    vy = np.median((py[j] - py[i])[keep] / d)
+    return np.hypot(vx, vy)
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_block_speeds_against_numpy_float64(seed):
+    """window_block: the slopes with the windows on the minor axis are `window_slopes`' floats,
+    pair for pair; `block_speeds` (select median, in-program fallback) gives
+    `theil_sen_speed` within 1e-6 (1 ulp: other programs) and a NumPy float64 Theil-Sen of
+    the same position set (the measured foot points on the ground, by camera_np's float64
+    inverse of (3), when half the window has one, else the filtered positions) within 2e-3
+    relative (the float32 slopes' rounding can move the median to a neighbouring order
+    statistic; a wrong pair, axis or position set is off by far more)."""
+    from rhythmjax.model.camera_np import ground_of_pixels
+
+    dt, xy, uv = _windows(seed, W=48)
+    t = jax.vmap(window_times)(dt)
+    cols, enough = jax.jit(lambda t, p, o: window_block.window_slopes_cols(
+        CFG, t.T, jnp.swapaxes(p, 0, 1), jnp.swapaxes(o, 0, 1)))(t, xy, uv)
+    rows = jax.jit(jax.vmap(lambda t, p, o: window_slopes(CFG, t, p, o)))(t, xy, uv)
+    np.testing.assert_array_equal(np.transpose(np.asarray(cols), (2, 1, 0)).view(np.int32),
+                                  np.asarray(rows[0]).view(np.int32))
+    np.testing.assert_array_equal(np.asarray(enough), np.asarray(rows[1]))
+    speed, unresolved = jax.jit(lambda d, p, o: window_block.block_speeds(CFG, d, p, o))(
+        dt, xy, uv)
+    assert int(unresolved) <= window_block.FALLBACK
+    exact = jax.jit(jax.vmap(lambda d, p, o: theil_sen_speed(CFG, window_times(d), p, o)))
+    np.testing.assert_allclose(np.asarray(speed), np.asarray(exact(dt, xy, uv)), rtol=1e-6)
+    t64, xy64, uv64 = (np.asarray(a, np.float64) for a in (t, xy, uv))
+    ref = []
+    for w in range(len(t64)):
+        seen = np.isfinite(uv64[w]).all(-1)
+        gx, gy, ok = ground_of_pixels(CFG.camera, *np.where(seen[:, None], uv64[w], 0.0).T)
+        if 2 * (seen & ok).sum() >= N:
+            ref.append(_theil_sen_f64(t64[w], gx, gy, seen & ok))
+        else:
+            ref.append(_theil_sen_f64(t64[w], *xy64[w].T, np.ones(N, bool)))
+    assert {True, False} <= set(np.asarray(enough).tolist())
+    np.testing.assert_allclose(np.asarray(speed), ref, rtol=2e-3)
 
 
 @pytest.mark.parametrize("seed", [3, 4])
@@ -333,3 +386,21 @@ def test_two_devices_give_the_same_verdicts(tmp_path):
                          capture_output=True, text=True, env=env, timeout=900)
     assert out.returncode == 0, out.stderr[-3000:]
     assert out.stdout.startswith("ok")
+
+
+@pytest.mark.parametrize("m", [1, 2, 5, 63, 64])
+def test_median_small_is_jnp_median(m):
+    """fast_window.median_small (ranks by counting, no sort) against jnp.median bit for bit and
+    against np.median in float64 (exact for these: the median of float32 values, or the
+    midpoint of two, rounded once): jittered steps, ties, a constant row, signed zeros, NaN."""
+    rng = np.random.default_rng(m)
+    x = (1 / 15 * (1 + 0.05 * rng.normal(size=(300, m)))).astype(np.float32)
+    x[::7] = np.round(x[::7] * 100) / 100
+    x[5] = 0.5
+    x[6, : m // 2] = -0.0
+    x[3, 0] = np.nan
+    got = np.asarray(jax.jit(median_small)(jnp.asarray(x)))
+    np.testing.assert_array_equal(got.view(np.int32),
+                                  np.asarray(jnp.median(jnp.asarray(x), axis=-1)).view(np.int32))
+    ref = np.median(x.astype(np.float64), axis=-1)
+    np.testing.assert_allclose(got, ref, rtol=6e-8, equal_nan=True)

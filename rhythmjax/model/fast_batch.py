@@ -16,7 +16,8 @@ Here, in three steps:
    so window j is needed only when windows 0 .. j - 1 were not Pedestrian: the windows go in
    phases j in [0, 1), [1, 2), [2, 4), [4, 8), ..., each phase for the segments still
    undecided, gathered from the filter's rows into blocks of `windows.WINDOW_BLOCK`.
-3. Each block through `windows.classify_window_block` ((12)-(15), the exact fast median).
+3. Each block through `windows.classify_window_rows`: one program a block
+   (`window_block.classify_block`: (12)-(15), the exact fast median).
 
 The result per segment is the first Pedestrian window's, else window 0's; a segment with no
 complete window is Unclassified, `too-short` (or `no-measurements` when no row has a finite
