@@ -139,22 +139,10 @@ class CameraFit:
         5 % of a f, b f, h; 1 deg of theta, roll; 20 px of Uc, Vc; 5 m, 2 deg of the world
         transform), "weak" (up to the limit) or "not determined" (beyond it, non-finite, or in
         the singular direction of a Jacobian with condition number above 1e8)."""
-        lim = se_limits(self.values)
-        singular = self.weak_direction.split()[1::2] if self.cond > 1e8 else []
-        return {k: "not determined" if not self.se[k] <= lim[k] or k in singular else
-                "determined" if self.se[k] <= 0.1 * lim[k] else "weak" for k in self.fitted}
+        return determination(self.fitted, self.values, self.se, self.cond, self.weak_direction)
 
     def summary(self) -> str:
-        lines = [f"{k:6s} = {self.values[k]:11.4f} +- {self.se[k]:.4f} {UNITS[k]}"
-                 for k in self.fitted]
-        det = self.determination()
-        for what, head in (("determined", "determined by the data"), ("weak", "weakly "
-                           "determined (SE over 1/10 of its limit)"), ("not determined",
-                                                                       "NOT determined")):
-            names = [f"{k}" + (f" (SE {self.se[k]:.3g} {UNITS[k]})" if what != "determined"
-                               else "") for k in self.fitted if det[k] == what]
-            if names or what == "determined":
-                lines.append(f"{head}: {', '.join(names) or '-'}")
+        lines = value_lines(self.fitted, self.values, self.se, self.determination())
         lines.append(f"reprojection RMS {self.rms_px:.3f} px over {self.n_points} points, "
                      f"loss {self.loss}")
         lines.append(f"condition number {self.cond:.3g}; least determined combination: "
@@ -345,6 +333,33 @@ def se_limits(values: dict[str, float]) -> dict[str, float]:
     return {"h": 0.5 * values["h"], "theta": 10.0, "af": 0.5 * values["af"],
             "bf": 0.5 * values["bf"], "uc": 200.0, "vc": 200.0, "roll": 10.0, "tx": 50.0,
             "ty": 50.0, "yaw": 20.0}
+
+
+def determination(fitted, values: dict[str, float], se: dict[str, float], cond: float,
+                  weak_direction: str) -> dict[str, str]:
+    """Per fitted parameter: "determined" (SE at most a tenth of `se_limits`), "weak" (up to the
+    limit) or "not determined" (beyond it, non-finite, or in the named singular direction
+    `weak_direction` of a Jacobian with condition number `cond` above 1e8). `values` may leave
+    out parameters that were not fitted."""
+    lim = se_limits({**{k: 0.0 for k in NAMES}, **values})
+    singular = weak_direction.split()[1::2] if cond > 1e8 else []
+    return {k: "not determined" if not se[k] <= lim[k] or k in singular else
+            "determined" if se[k] <= 0.1 * lim[k] else "weak" for k in fitted}
+
+
+def value_lines(fitted, values: dict[str, float], se: dict[str, float],
+                det: dict[str, str]) -> list[str]:
+    """The lines `rhythmjax-fit` prints first: each fitted value with its SE and unit, then
+    which are determined, weakly determined and not determined (`determination`'s `det`)."""
+    lines = [f"{k:6s} = {values[k]:11.4f} +- {se[k]:.4f} {UNITS[k]}" for k in fitted]
+    for what, head in (("determined", "determined by the data"),
+                       ("weak", "weakly determined (SE over 1/10 of its limit)"),
+                       ("not determined", "NOT determined")):
+        names = [k + (f" (SE {se[k]:.3g} {UNITS[k]})" if what != "determined" else "")
+                 for k in fitted if det[k] == what]
+        if names or what == "determined":
+            lines.append(f"{head}: {', '.join(names) or '-'}")
+    return lines
 
 
 GTOL = 1e-8  # the orthogonality test of MINPACK's gtol: a stationary point of the squared sum

@@ -12,7 +12,6 @@ terminated (SIGTERM), nothing written.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 
@@ -316,7 +315,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _fit_main(args) -> int:
-    from rhythmjax.io import BadInput, atomic_write, check_output, dumps_json, write_config
+    from fit.output import write_json, write_output
+    from rhythmjax.io import BadInput, check_output, dumps_json, write_config
     from rhythmjax.model.view import format_report
 
     try:
@@ -340,21 +340,10 @@ def _fit_main(args) -> int:
         print(f"rhythmjax-fit: {failure(r)}; the best point is shown above; {args.output} not "
               "written", file=sys.stderr)
         return 1
-    try:
-        if run is not None:  # the config as given, with the fitted camera
-            with atomic_write(args.output, "w") as f:
-                f.write(json.dumps(run.config_dict, indent=2, allow_nan=False) + "\n")
-        else:
-            write_config(args.output, new)
-    except BadInput as e:
-        print(f"rhythmjax-fit: {e}", file=sys.stderr)
-        return 2
-    except OSError as e:
-        print(f"rhythmjax-fit: {args.output}: cannot write: {e.strerror}", file=sys.stderr)
-        return 1
-    if not args.json:
-        print(f"wrote {args.output}")
-    return 0
+    if run is not None:  # the config as given, with the fitted camera
+        return write_output(args.output, lambda: write_json(args.output, run.config_dict),
+                            quiet=args.json)
+    return write_output(args.output, lambda: write_config(args.output, new), quiet=args.json)
 
 
 if __name__ == "__main__":  # pragma: no cover

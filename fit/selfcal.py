@@ -205,11 +205,16 @@ def make_data(batch, used: np.ndarray, pace: np.ndarray) -> Data:
     lo = np.min(np.where(obs, t, np.inf), 1)
     hi = np.max(np.where(obs, t, -np.inf), 1)
     t = np.where(obs, t - 0.5 * (lo + hi)[:, None], 0.0)
-    B = z.shape[0]
+    B, T = obs.shape
     pad = np.r_[np.arange(B), np.zeros(-B % PAD_TRACKS, np.int64)]  # one compiled shape per
-    return Data(*(jnp.asarray(a[pad]) for a in (  # PAD_TRACKS tracks
-        np.where(obs[..., None], z, 0.0), np.asarray(batch.width, np.float64)[used], t, obs,
-        pace[used])), jnp.asarray(np.arange(pad.size) < B))
+    # PAD_TRACKS tracks and per SPEED_SAMPLES frames (the speed's stride k is kept: no change)
+    cols = -T % SPEED_SAMPLES
+    wide = lambda a, fill: np.pad(a, [(0, 0), (0, cols)] + [(0, 0)] * (a.ndim - 2),
+                                  constant_values=fill)
+    return Data(*(jnp.asarray(a[pad]) for a in (
+        wide(np.where(obs[..., None], z, 0.0), 0.0),
+        wide(np.asarray(batch.width, np.float64)[used], np.nan), wide(t, 0.0),
+        wide(obs, False), pace[used])), jnp.asarray(np.arange(pad.size) < B))
 
 
 def param_spec(fitted) -> CameraParams:

@@ -11,7 +11,7 @@ import jax
 import jax.flatten_util
 import numpy as np
 
-from fit.camera import NAMES, UNITS, se_limits
+from fit.camera import NAMES, UNITS, determination, value_lines
 from rhythmjax.model.params import Camera
 
 
@@ -42,22 +42,10 @@ class SelfcalFit:
     def determination(self) -> dict[str, str]:
         """"determined" (SE at most a tenth of `fit.camera.se_limits`), "weak" (up to it) or
         "not determined" (beyond it, non-finite, or in a singular direction)."""
-        lim = se_limits({**{k: 0.0 for k in NAMES}, **self.values})
-        singular = self.weak_direction.split()[1::2] if self.cond > 1e8 else []
-        return {k: "not determined" if not self.se[k] <= lim[k] or k in singular else
-                "determined" if self.se[k] <= 0.1 * lim[k] else "weak" for k in self.fitted}
+        return determination(self.fitted, self.values, self.se, self.cond, self.weak_direction)
 
     def summary(self) -> str:
-        lines = [f"{k:6s} = {self.values[k]:11.4f} +- {self.se[k]:.4f} {UNITS[k]}"
-                 for k in self.fitted]
-        det = self.determination() if self.fitted else {}
-        for what, head in (("determined", "determined by the data"),
-                           ("weak", "weakly determined (SE over 1/10 of its limit)"),
-                           ("not determined", "NOT determined")):
-            names = [k + (f" (SE {self.se[k]:.3g} {UNITS[k]})" if what != "determined" else "")
-                     for k in self.fitted if det[k] == what]
-            if names or what == "determined":
-                lines.append(f"{head}: {', '.join(names) or '-'}")
+        lines = value_lines(self.fitted, self.values, self.se, self.determination())
         lines.append(f"cues: {', '.join(self.cues)}; walkers used: {self.n_walkers} of "
                      f"{self.n_tracks} tracks (a clear gait peak)")
         if self.cue_rms:

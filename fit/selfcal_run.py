@@ -12,7 +12,6 @@ are printed, nothing is written); 2 bad input (one line naming the file).
 from __future__ import annotations
 
 import copy
-import json
 import sys
 
 
@@ -88,10 +87,10 @@ def selfcal_main(args) -> int:
     """The verb: exit code as the module doc says."""
     import numpy as np
 
+    from fit.output import write_json, write_output
     from fit.selfcal import fit_selfcal
     from rhythmjax.io import (
         BadInput,
-        atomic_write,
         check_output,
         config_or_bad_input,
         dumps_json,
@@ -147,21 +146,14 @@ def selfcal_main(args) -> int:
         print(f"rhythmjax-fit: selfcal {what}: {'; '.join(r.reasons)}; {args.output} not "
               "written", file=sys.stderr)
         return 1
-    try:
+
+    def write():
         try:
             config_or_bad_input(written, args.output)
         except BadInput as e:  # a range the fitted camera cannot give is derived per video
             if not (e.key or "").startswith("thresholds"):
                 raise
-        with atomic_write(args.output, "w") as f:
-            f.write(json.dumps(written, indent=2, allow_nan=False) + "\n")
-    except BadInput as e:
-        print(f"rhythmjax-fit: {e}", file=sys.stderr)
-        return 2
-    except OSError as e:
-        print(f"rhythmjax-fit: {args.output}: cannot write: {e.strerror}", file=sys.stderr)
-        return 1
-    if not args.json:
-        print(f"wrote {args.output}")
-    return 0
+        write_json(args.output, written)
+
+    return write_output(args.output, write, quiet=args.json)
 
