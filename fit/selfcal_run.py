@@ -37,7 +37,8 @@ def add_parser(sub, size_type, at_least) -> None:
                    "config's, 0 by default)")
     s.add_argument("--fit-center", action="store_true", help="fit the principal point too "
                    "(else held at the config's, or the image centre)")
-    s.add_argument("--max-steps", type=at_least(1), default=200)
+    s.add_argument("--max-steps", type=at_least(1), default=200,
+                   help="Levenberg-Marquardt steps per start at most (default 200)")
     s.add_argument("--config", "-c", metavar="C", help="start config JSON (default: Table 1's "
                    "camera on the image size)")
     s.add_argument("-o", "--output", required=True, metavar="C2", help="config to write")
