@@ -25,9 +25,9 @@ from .tables import (
     check_table_path,
     convert_csv,
     convert_parquet,
-    csv_header,
     csv_options,
     csv_parse_error,
+    csv_setup,
     select_columns,
 )
 
@@ -148,14 +148,7 @@ def _csv_block_size(p: str, batch_rows: int) -> int:
 
 
 def _csv_batches(p, required, optional, types, not_empty, batch_rows, start, stop):
-    raw = csv_header(p)
-    names = [n.strip() for n in raw]
-    keep = select_columns(p, names, required, optional)
-    bad: list[tuple[int, int, int]] = []
-
-    def on_bad_row(row) -> str:
-        bad.append((row.number, row.expected_columns, row.actual_columns))
-        return "skip"
+    raw, names, keep, bad, on_bad_row = csv_setup(p, required, optional)
 
     opts = pacsv.ReadOptions(use_threads=False, block_size=_csv_block_size(p, batch_rows))
     try:

@@ -13,7 +13,7 @@ import csv
 import math
 import os
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pyarrow as pa
@@ -188,15 +188,33 @@ def csv_parse_error(p: str, e: pa.ArrowInvalid) -> BadInput | None:
     return BadInput(p, f"cannot parse as CSV: {msg.splitlines()[0]}")
 
 
-def _read_csv(p: str, required, optional, types, not_empty) -> Table:
+class CsvSetup(NamedTuple):
+    """What a CSV reader needs before its first row: the header as written (`raw`) and
+    stripped (`names`), the columns kept, the list the bad rows go to and pyarrow's
+    `invalid_row_handler` that fills it (row number, columns expected, columns found)."""
+    raw: list[str]
+    names: list[str]
+    keep: list[str]
+    bad: list[tuple[int, int, int]]
+    on_bad_row: Any
+
+
+def csv_setup(p: str, required, optional) -> CsvSetup:
+    """The header of CSV file `p` read and checked (`select_columns`), and a bad-row recorder:
+    shared by the whole-file and the streaming readers."""
     raw = csv_header(p)
     names = [n.strip() for n in raw]
-    keep = select_columns(p, names, required, optional)
     bad: list[tuple[int, int, int]] = []
 
     def on_bad_row(row) -> str:
         bad.append((row.number, row.expected_columns, row.actual_columns))
         return "skip"
+
+    return CsvSetup(raw, names, select_columns(p, names, required, optional), bad, on_bad_row)
+
+
+def _read_csv(p: str, required, optional, types, not_empty) -> Table:
+    raw, names, keep, bad, on_bad_row = csv_setup(p, required, optional)
 
     try:
         tbl = pacsv.read_csv(p, read_options=pacsv.ReadOptions(use_threads=False),
