@@ -46,15 +46,19 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from fit.determination import (
+    GTOL as GTOL,
+    NAMES as NAMES,
+    UNITS as UNITS,
+    WORLD as WORLD,
+    determination as determination,
+    se_limits as se_limits,
+    stationarity,
+    value_lines as value_lines,
+)
 from fit.homography import dlt_homography as dlt_homography, grid_starts, pose_from_homography
 from rhythmjax.model.camera import project
 from rhythmjax.model.params import Camera
-
-
-NAMES = ("af", "bf", "h", "theta", "uc", "vc", "roll", "tx", "ty", "yaw")
-UNITS = {"af": "px", "bf": "px", "h": "m", "theta": "deg", "uc": "px", "vc": "px",
-         "roll": "deg", "tx": "m", "ty": "m", "yaw": "deg"}
-WORLD = ("tx", "ty", "yaw")
 
 
 class CameraParams(eqx.Module):
@@ -328,52 +332,6 @@ def _camera(values: dict[str, float], f: float, like: Camera) -> Camera:
                   image_width=like.image_width, image_height=like.image_height)
 
 
-def se_limits(values: dict[str, float]) -> dict[str, float]:
-    """The standard error (`UNITS`) beyond which a fitted parameter is not determined."""
-    return {"h": 0.5 * values["h"], "theta": 10.0, "af": 0.5 * values["af"],
-            "bf": 0.5 * values["bf"], "uc": 200.0, "vc": 200.0, "roll": 10.0, "tx": 50.0,
-            "ty": 50.0, "yaw": 20.0}
-
-
-def determination(fitted, values: dict[str, float], se: dict[str, float], cond: float,
-                  weak_direction: str) -> dict[str, str]:
-    """Per fitted parameter: "determined" (SE at most a tenth of `se_limits`), "weak" (up to the
-    limit) or "not determined" (beyond it, non-finite, or in the named singular direction
-    `weak_direction` of a Jacobian with condition number `cond` above 1e8). `values` may leave
-    out parameters that were not fitted."""
-    lim = se_limits({**{k: 0.0 for k in NAMES}, **values})
-    singular = weak_direction.split()[1::2] if cond > 1e8 else []
-    return {k: "not determined" if not se[k] <= lim[k] or k in singular else
-            "determined" if se[k] <= 0.1 * lim[k] else "weak" for k in fitted}
-
-
-def value_lines(fitted, values: dict[str, float], se: dict[str, float],
-                det: dict[str, str]) -> list[str]:
-    """The lines `rhythmjax-fit` prints first: each fitted value with its SE and unit, then
-    which are determined, weakly determined and not determined (`determination`'s `det`)."""
-    lines = [f"{k:6s} = {values[k]:11.4f} +- {se[k]:.4f} {UNITS[k]}" for k in fitted]
-    for what, head in (("determined", "determined by the data"),
-                       ("weak", "weakly determined (SE over 1/10 of its limit)"),
-                       ("not determined", "NOT determined")):
-        names = [k + (f" (SE {se[k]:.3g} {UNITS[k]})" if what != "determined" else "")
-                 for k in fitted if det[k] == what]
-        if names or what == "determined":
-            lines.append(f"{head}: {', '.join(names) or '-'}")
-    return lines
-
-
-GTOL = 1e-8  # the orthogonality test of MINPACK's gtol: a stationary point of the squared sum
-
-
-def _stationarity(J: np.ndarray, r: np.ndarray) -> float:
-    """Largest |cosine| between the residual vector and a Jacobian column (0 at a least-squares
-    stationary point, whatever the parameters' scales)."""
-    norms = np.linalg.norm(J, axis=0) * np.linalg.norm(r)
-    with np.errstate(all="ignore"):
-        cos = np.abs(J.T @ r) / np.where(norms > 0, norms, 1.0)
-    return float(np.max(cos)) if np.all(np.isfinite(cos)) else math.inf
-
-
 def _report(best, fit, loss, n) -> CameraFit:
     cost, val, static, args, res, steps = best
     full = eqx.combine(val, static)
@@ -403,7 +361,7 @@ def _report(best, fit, loss, n) -> CameraFit:
     msg = optx.RESULTS[res]
     success = res == optx.RESULTS.successful
     if res == optx.RESULTS.nonlinear_max_steps_reached:
-        cos = _stationarity(J, np.asarray(residuals(val, args)))
+        cos = stationarity(J, np.asarray(residuals(val, args)))
         if cos <= GTOL:
             success, msg = True, (f"stationary at max_steps (largest |cos(J_i, r)| {cos:.1e} <= "
                                   f"{GTOL:g}); the 1e-10 step test was not met")
