@@ -7,7 +7,7 @@ a f 400-1500 px, real image sizes, principal point at the centre, roll 0), 20 wa
 and fps (h 4 m, tilt 15 deg, a f = the image width: the grid of starts does the rest). Each cue
 set is fitted (`fit.selfcal.fit_selfcal`, the CLI's function) and compared with the truth.
 
-    python benchmarks/eval_selfcal.py [n_scenes=20] [first_seed=0] [--mix]
+    python benchmarks/eval_selfcal.py [n_scenes=20] [first_seed=0] [--mix] [--sets A+B,C]
     python benchmarks/eval_selfcal.py --tracks T.parquet [T2.parquet ...] --image-size WxH
         --fps F --truth H_M,TILT_DEG[,AF_PX]
 
@@ -38,13 +38,13 @@ import time
 import numpy as np
 
 from fit.selfcal import fit_selfcal
-from fit.selfcal_data import camera_values, scene
-from fit.walking import batch_of
+from fit.selfcal_data import camera_values, scene, scene_batch as batch_of
 from rhythmjax.model.params import Camera, Config
 
 
 CUE_SETS = (("gait", "speed", "width"), ("gait", "speed"), ("gait",), ("speed",), ("width",),
-            ("speed", "width"))
+            ("speed", "width"), ("height",), ("gait", "height"),
+            ("gait", "speed", "width", "height"))
 
 
 def start_config(cam: Camera) -> Config:
@@ -145,9 +145,13 @@ if __name__ == "__main__":
         tracks = [q for q in a if q.endswith((".parquet", ".csv"))]
         real(tracks, (w, h), float(opt("--fps")), [float(q) for q in opt("--truth").split(",")])
         sys.exit(0)
-    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    sets_arg = sys.argv[sys.argv.index("--sets") + 1] if "--sets" in sys.argv else None
+    args = [a for a in sys.argv[1:] if not a.startswith("--") and a != sets_arg]
     n = int(args[0]) if args else 20
     s0 = int(args[1]) if len(args) > 1 else 0
     mix = "--mix" in sys.argv
-    table(run(n, s0, mix), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 walkers"
+    sets = CUE_SETS  # --sets height,gait+height: only these (cues joined by +)
+    if sets_arg:
+        sets = tuple(tuple(c.split("+")) for c in sets_arg.split(","))
+    table(run(n, s0, mix, sets), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 walkers"
           + (" + 4 bicycles + 4 dogs" if mix else ""))

@@ -3,12 +3,14 @@
 For each source the videos are tracked with the project's `rhythmjax run` (a rough camera: the
 tracker needs one), the tracks files of one camera are pooled (track ids prefixed by the clip)
 and `fit.selfcal.fit_selfcal` (the command's function) fits h, tilt and a f with the cue sets
-gait+speed+width (the default), gait+speed and gait. Rows:
+gait+speed+width (the default), gait+speed, gait, height (foot-head from the tracker's top rows,
+the classical approach), gait+height and gait+speed+width+height. Rows:
 
 - `pets`: PETS09-S2L1 (`real/pets2009_s2l1`, 480x360 at 7 fps) tracked with a rough camera
   (f 500 px, h 5 m, tilt 20 deg), then tracked again with the camera the default cues gave
-  (`pets-retracked`). Truth: its Tsai calibration, h 7.07 m, tilt 16.5 deg, a f 742 px
-  (`rhythmjax-fit camera` on its footprints).
+  and with the one gait+speed+width+height gave (the tracker's top rows need a camera that
+  sizes its detection window near the people's size). Truth: its Tsai calibration, h 7.07 m,
+  tilt 16.5 deg, a f 742 px (`rhythmjax-fit camera` on its footprints).
 - `dev`: the 18 clips of `dev/` (512x512 at 15 fps, one camera), pooled, tracked with a rough
   camera (f 700 px, h 1.5 m, tilt 10 deg) and with their true camera (the truth of each clip's
   JSON: f 500 px, h 1 m, tilt 15 deg), an upper bound for the tracker.
@@ -43,7 +45,8 @@ import numpy as np
 
 
 ROOT = Path(__file__).resolve().parents[1]
-CUE_SETS = (("gait", "speed", "width"), ("gait", "speed"), ("gait",))
+CUE_SETS = (("gait", "speed", "width"), ("gait", "speed"), ("gait",), ("height",),
+            ("gait", "height"), ("gait", "speed", "width", "height"))
 FIELDS = ("source", "tracking camera", "cues", "tracks", "walkers", "h_m", "h_se_m", "h_truth_m",
           "tilt_deg", "tilt_se_deg", "tilt_truth_deg", "af_px", "af_se_px", "af_truth_px",
           "refused")
@@ -114,16 +117,16 @@ def pooled_batch(paths: list[Path], size: tuple[int, int], fps: float, window_s=
 
 def fit_rows(source: str, how: str, paths: list[Path], size, fps, truth,
              window_s=None) -> tuple[list, object]:
-    """One row per cue set; also the default cues' fit (for re-tracking)."""
+    """One row per cue set; also the fits by cue set (for re-tracking)."""
     from fit.selfcal import fit_selfcal
 
-    rows, first = [], None
+    rows, fits = [], {}
     if not paths:
-        return [{"source": source, "tracking camera": how, "refused": "no tracks"}], None
+        return [{"source": source, "tracking camera": how, "refused": "no tracks"}], {}
     cfg, batch = pooled_batch(paths, size, fps, window_s)
     for cues in CUE_SETS:
         r = fit_selfcal(cfg, batch, cues=cues)
-        first = first or r
+        fits[cues] = r
         v, se = (r.values, r.se) if r.camera is not None else ({}, {})
         get = lambda d, k: f"{d[k]:.5g}" if k in d and math.isfinite(d[k]) else ""
         rows.append({"source": source, "tracking camera": how, "cues": "+".join(cues),
@@ -137,7 +140,7 @@ def fit_rows(source: str, how: str, paths: list[Path], size, fps, truth,
             f"h {v['h']:.2f} +- {se['h']:.2f}, tilt {v['theta']:.1f} +- {se['theta']:.1f}, "
             f"af {v['af']:.0f} +- {se['af']:.0f}" if v else "no camera")
             + f"; {r.n_walkers} of {r.n_tracks}; {'; '.join(r.reasons)}")
-    return rows, first
+    return rows, fits
 
 
 def pets(data: Path, work: Path) -> list[dict]:
@@ -149,18 +152,23 @@ def pets(data: Path, work: Path) -> list[dict]:
     run = ("--fps", "7", "--max-objects", "24")
     rough = camera_json(work / "pets_rough.json", size, fps, 500, 5, 20)
     t = tracked(video, rough, work / "pets" / "rough", *run)
-    rows, r = fit_rows("PETS09-S2L1", "rough (f 500 px, h 5 m, tilt 20 deg)",
-                       [t] if t else [], size, fps, PETS_TRUTH)
-    if r is not None and r.camera is not None:
+    rows, fits = fit_rows("PETS09-S2L1", "rough (f 500 px, h 5 m, tilt 20 deg)",
+                          [t] if t else [], size, fps, PETS_TRUTH)
+    # tracked again with the camera of the default cues, and with that of all four
+    for cues, tag, name in ((CUE_SETS[0], "retracked", "pets_selfcal.json"),
+                            (CUE_SETS[-1], "retracked_height", "pets_selfcal_height.json")):
+        r = fits.get(cues)
+        if r is None or r.camera is None:
+            continue
         from rhythmjax.model.params import Config, config_to_dict
 
-        again = work / "pets_selfcal.json"
+        again = work / name
         if not again.exists():
             c = config_to_dict(Config(camera=r.camera))
             again.write_text(json.dumps({"camera": c["camera"]}, indent=2) + "\n")
-        t2 = tracked(video, again, work / "pets" / "retracked", *run)
-        rows += fit_rows("PETS09-S2L1", "self-calibrated from the rough tracks",
-                         [t2] if t2 else [], size, fps, PETS_TRUTH)[0]
+        t2 = tracked(video, again, work / "pets" / tag, *run)
+        rows += fit_rows("PETS09-S2L1", f"self-calibrated ({'+'.join(cues)}) from the rough "
+                         "tracks", [t2] if t2 else [], size, fps, PETS_TRUTH)[0]
     return rows
 
 

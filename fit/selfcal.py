@@ -20,10 +20,13 @@ cues, each a residual per track in units of its spread (`CUES`):
 - ``width``: people's ground widths follow the config's width model N(mean, std^2) whatever
   their distance: (mean width of the track - mean) / std, and the change of log width over the
   track (a linear fit against time, dimensionless) / its spread.
-- ``height``: foot-head heights from the blob tops; tracks files carry no top row, so this cue
-  is reported as not available.
+- ``height``: foot-head heights (`fit.selfcal_height`): per row, the height H (m) of the
+  vertical segment on the foot point's ground point whose top projects to the track's top row
+  v_top (the tracks format's optional column); per track the median H against people's heights
+  N(width.height, `HEIGHT_STD_M`^2), and the change of log H over the track / its spread.
+  Alone, the classical foot-head calibration: it fixes h, theta and a f.
 
-The spreads of the two shape residuals (speed change, width change) are measurement noise, not
+The spreads of the three shape residuals (speed, width, height change) are measurement noise, not
 a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
 `SHAPE_FLOOR`. Every residual goes through Cauchy's loss (c = 2.385 spreads): bicycles and dogs
 that slip through the gait selection (a bicycle's stride is 1.4-1.9 m: 8-13 spreads) do not pull
@@ -47,7 +50,8 @@ import numpy as np
 import optimistix as optx
 
 from fit.camera import NAMES, UNITS, CameraParams, se_limits
-from fit.selfcal_data import camera_values, gait_peaks
+from fit.selfcal_data import camera_of, camera_values, gait_peaks, make_params, radial, row_spread
+from fit.selfcal_height import HEIGHT_STD_M, MIN_TOP_ROWS, height_cues, top_walkers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
 from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
 from rhythmjax.model.params import Camera, Config
@@ -55,13 +59,17 @@ from rhythmjax.model.rhythm import ground_speed
 
 
 CUES = ("gait", "speed", "width", "height")
+DEFAULT_CUES = CUES  # the height cue is dropped (a note) where the tracks have no top rows
 CAUCHY_C = 2.385  # Cauchy's constant at 95 % efficiency, in spreads
 SHAPE_START = 0.1  # start spread of the shape residuals (relative change over a track)
 SHAPE_FLOOR = 0.02  # their spread is never below this (set a priori; seeds 0-5 checked)
 SPEED_SAMPLES = 48  # the Theil-Sen speed of a track over at most this many of its frames
 PAD_TRACKS = 8  # the used tracks are padded to a multiple of this
+N_BLOCKS = 6  # residual blocks per track (`standardised`)
 MIN_WALKERS = 5  # fewer tracks with a clear gait peak: refused
 MIN_ROWS = 20  # a track needs this many measured rows
+MIN_ROW_SPREAD = 0.02  # walkers' median foot rows (10-90 %) span less of the image: refused
+# (a quarter of the smallest on the development seeds 0-5, 0.083; added after CASIA-B's walks)
 HORIZON_MARGIN_PX = 2.0
 THETA_GRID = (3.0, 6.0, 10.0, 15.0, 20.0, 26.0, 33.0, 40.0, 50.0, 60.0)
 AF_GRID = (0.3, 0.42, 0.6, 0.8, 1.05, 1.35, 1.8, 2.4)  # x the image width
@@ -69,7 +77,8 @@ AF_GRID = (0.3, 0.42, 0.6, 0.8, 1.05, 1.35, 1.8, 2.4)  # x the image width
 
 class Data(eqx.Module):
     """The used tracks, padded (B, T), float64: foot points z (px, 0 where `obs` is False),
-    widths (px, NaN missing), times (s from the track's middle), pace F (Hz)."""
+    widths (px, NaN missing), times (s from the track's middle), pace F (Hz), top rows v_top
+    (px, NaN missing)."""
 
     z: jax.Array
     width: jax.Array
@@ -77,6 +86,7 @@ class Data(eqx.Module):
     obs: jax.Array
     pace: jax.Array
     valid: jax.Array  # False on the padding (copies of the first track, weight 0)
+    v_top: jax.Array
 
 
 class Weights(eqx.Module):
@@ -88,6 +98,8 @@ class Weights(eqx.Module):
     width_scale: jax.Array
     sd_speed: jax.Array
     sd_wshape: jax.Array
+    height: jax.Array
+    sd_hshape: jax.Array
 
 
 def _cauchy(r):
@@ -108,7 +120,8 @@ def _linear_fit(t, y, w, degree):
 
 def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
     """The cues' raw values per track (B): stride T (m), relative speed change, mean ground
-    width (m), change of log width over the track, and the horizon hinge (px)."""
+    width (m), change of log width over the track, median height (m), change of log height,
+    whether the track has heights, and the horizon hinge (px)."""
     u, v = data.z[..., 0], data.z[..., 1]
     gx, gy, ok = ground_from_image(camera, u, v)
     use = data.obs & ok
@@ -134,8 +147,10 @@ def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
     cw = jax.vmap(lambda t, y, w: _linear_fit(t, y[:, None], w, 1))(tn, logw, ww)
     vh = horizon_v(camera) + jnp.tan(camera.roll) * (u - camera.uc)
     hinge = jnp.max(jnp.where(data.obs, vh + HORIZON_MARGIN_PX - v, -jnp.inf), 1)
+    height, dlogh, hok = height_cues(camera, u, v, data.v_top, use, tn)
     return {"stride": speed / data.pace, "dspeed": dspeed, "width": wmean,
-            "dlogw": cw[:, 1, 0], "hinge": jnp.maximum(hinge, 0.0) / HORIZON_MARGIN_PX}
+            "dlogw": cw[:, 1, 0], "height": height, "dlogh": dlogh, "hok": hok,
+            "hinge": jnp.maximum(hinge, 0.0) / HORIZON_MARGIN_PX}
 
 
 def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Array:
@@ -143,11 +158,15 @@ def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Ar
     (weight 0 = the cue is off), then the horizon hinges."""
     r = raw_cues(camera, data, cfg)
     wk, wm = cfg.walking, cfg.width
-    return data.valid.astype(wt.gait.dtype)[None, :].repeat(4, 0).ravel() * jnp.concatenate([
+    wh = wt.height * r["hok"].astype(wt.height.dtype)
+    valid = data.valid.astype(wt.gait.dtype)[None, :].repeat(N_BLOCKS, 0).ravel()
+    return valid * jnp.concatenate([
         wt.gait * (r["stride"] - wk.stride_mean) / wk.stride_std,
         wt.speed * r["dspeed"] / wt.sd_speed,
         wt.width_scale * (r["width"] - wm.mean) / wm.std,
-        wt.width * r["dlogw"] / wt.sd_wshape])
+        wt.width * r["dlogw"] / wt.sd_wshape,
+        wh * (r["height"] - wm.height) / HEIGHT_STD_M,
+        wh * r["dlogh"] / wt.sd_hshape])
 
 
 def residuals(dynamic: CameraParams, args) -> jax.Array:
@@ -178,14 +197,6 @@ def _grid_cost(stack, static, args):
     return jax.vmap(one)(stack)
 
 
-def make_params(v: dict[str, float]) -> CameraParams:
-    """`CameraParams` (fit.camera's unconstrained form) of natural values (`fit.camera.UNITS`)."""
-    p = min(max(v["theta"], 0.5), 89.5) / 90.0
-    return CameraParams(*(jnp.asarray(x, jnp.float64) for x in (
-        math.log(v["af"]), math.log(v["bf"] / v["af"]), math.log(v["h"]),
-        math.log(p / (1 - p)), v["uc"], v["vc"], math.radians(v["roll"]), 0.0, 0.0, 0.0)))
-
-
 # ----------------------------------------------------------------------------------------------
 
 def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
@@ -211,10 +222,13 @@ def make_data(batch, used: np.ndarray, pace: np.ndarray) -> Data:
     cols = -T % SPEED_SAMPLES
     wide = lambda a, fill: np.pad(a, [(0, 0), (0, cols)] + [(0, 0)] * (a.ndim - 2),
                                   constant_values=fill)
+    top = (np.full(obs.shape, np.nan) if getattr(batch, "v_top", None) is None
+           else np.where(obs, np.asarray(batch.v_top, np.float64)[used], np.nan))
     return Data(*(jnp.asarray(a[pad]) for a in (
         wide(np.where(obs[..., None], z, 0.0), 0.0),
         wide(np.asarray(batch.width, np.float64)[used], np.nan), wide(t, 0.0),
-        wide(obs, False), pace[used])), jnp.asarray(np.arange(pad.size) < B))
+        wide(obs, False), pace[used])), jnp.asarray(np.arange(pad.size) < B),
+        jnp.asarray(wide(top, np.nan)[pad]))
 
 
 def param_spec(fitted) -> CameraParams:
@@ -222,18 +236,20 @@ def param_spec(fitted) -> CameraParams:
     return CameraParams(*(k in fitted for k in NAMES))
 
 
-def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=None) -> Weights:
+def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=None,
+                sd_hshape=SHAPE_START) -> Weights:
     """`Weights` of a cue set; the width's scale term is on with the width cue when
     `width_scale` is True, or (None) only without gait (module doc)."""
     on = lambda c: jnp.float64(1.0 if c in cues else 0.0)
     ws = "gait" not in cues if width_scale is None else width_scale
     scale = jnp.float64(1.0 if "width" in cues and ws else 0.0)
     return Weights(on("gait"), on("speed"), on("width"), scale, jnp.float64(sd_speed),
-                   jnp.float64(sd_wshape))
+                   jnp.float64(sd_wshape), on("height"), jnp.float64(sd_hshape))
 
 
 def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_scale=None):
-    """The best `n_best` grid points (tilt x a f) with h from the median stride (or width)."""
+    """The best `n_best` grid points (tilt x a f) with h from the median stride (or height,
+    or width)."""
     f = float(cam0.f)
     grid = []
     for th in THETA_GRID:
@@ -251,6 +267,9 @@ def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_sca
         if "gait" in cues:
             s = nanmedian(np.asarray(r["stride"]))
             g["h"] = float(cfg.walking.stride_mean) / s if s > 0 else values0["h"]
+        elif "height" in cues:
+            s = nanmedian(np.where(r["hok"], r["height"], np.nan))
+            g["h"] = float(cfg.width.height) / s if s > 0 else values0["h"]
         elif "width" in cues:
             s = nanmedian(np.asarray(r["width"]))
             g["h"] = float(cfg.width.mean) / s if s > 0 else values0["h"]
@@ -276,20 +295,21 @@ def _refused(cam0, cues, fitted, n_tracks, n_used, ids, reason) -> SelfcalFit:
                       "not run", True, 0, True, [reason], n_tracks, n_used, ids)
 
 
-def fit_selfcal(cfg: Config, batch, *, cues=("gait", "speed", "width"),
+def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                 fit=("af", "h", "theta"), max_steps: int = 200, n_starts: int = 3,
                 width_scale: bool | None = None) -> SelfcalFit:
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
-    track's first frame), with the `cues` (a subset of `CUES` but "height"). `fit` is a subset
+    track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
     of ("af", "h", "theta", "roll", "uc", "vc"); b f follows a f at the start's b/a. Refuses
     (ill_determined with a reason, no camera) with fewer than `MIN_WALKERS` walkers; flags the
-    fit ill-determined when a fitted parameter is not determined (module doc)."""
+    fit ill-determined when a fitted parameter is not determined (module doc). The height cue
+    needs top rows (`batch.v_top`) on `MIN_TOP_ROWS` rows of `MIN_WALKERS` walkers: alone it is
+    refused without them, with other cues it is dropped (a note says so)."""
+    bad = [c for c in cues if c not in CUES]
     cues = tuple(c for c in CUES if c in cues)
-    bad = [c for c in cues if c not in ("gait", "speed", "width")]
     if bad or not cues:
-        raise ValueError(f"cues {list(bad) or 'none'}: choose from gait, speed, width (height "
-                         "needs the blobs' top rows, which tracks files do not carry)")
+        raise ValueError(f"cues {list(bad) or 'none'}: choose from {', '.join(CUES)}")
     fitted = tuple(k for k in NAMES if k in fit)
     if not {"af", "h", "theta"} <= set(fitted) or set(fit) - {"af", "h", "theta", "roll", "uc",
                                                               "vc"}:
@@ -303,6 +323,13 @@ def fit_selfcal(cfg: Config, batch, *, cues=("gait", "speed", "width"),
                         f"only {n_used} of {n_tracks} tracks have a clear gait peak and "
                         f"{MIN_ROWS} measured rows; self-calibration needs at least "
                         f"{MIN_WALKERS} walkers")
+    notes = []
+    if "height" in cues and (n_top := top_walkers(batch, used)) < MIN_WALKERS:
+        why = (f"only {n_top} of the {n_used} walkers have top rows (v_top) on {MIN_TOP_ROWS} "
+               f"rows; the height cue needs {MIN_WALKERS}")
+        if cues == ("height",):
+            return _refused(cam0, cues, fitted, n_tracks, n_used, ids, why)
+        cues, notes = tuple(c for c in cues if c != "height"), [f"cue height dropped: {why}"]
     values0 = camera_values(cam0)
     spec = param_spec(fitted)
     f = float(cam0.f)
@@ -325,18 +352,22 @@ def fit_selfcal(cfg: Config, batch, *, cues=("gait", "speed", "width"),
         mad = lambda a: 1.4826 * float(np.median(np.abs(a - np.median(a))))
         sd_s = max(mad(np.asarray(raw["dspeed"])[:n_used]), SHAPE_FLOOR)
         sd_w = max(mad(np.asarray(raw["dlogw"])[:n_used]), SHAPE_FLOOR)
-        wt = cue_weights(cues, sd_s, sd_w, width_scale)
+        hok = np.asarray(raw["hok"])[:n_used]
+        sd_h = max(mad(np.asarray(raw["dlogh"])[:n_used][hok]) if hok.any() else 0.0,
+                   SHAPE_FLOOR)
+        wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h)
         best = run(_values(best[1], best[2]), wt)
         cost, val, static, args, res, steps = best
         J, G, r = jacobians(residuals, val, static, args, fitted)
         n_eff = n_used * (("gait" in cues) + ("speed" in cues) + ("width" in cues)
-                          + int(float(wt.width_scale) > 0))
+                          + int(float(wt.width_scale) > 0)) + 2 * int(hok.sum()) * (
+                              "height" in cues)
         cov, se, cond, weak = report(J, G, r, fitted, n_eff)
         values = _values(val, static)
         std = np.asarray(standardised(eqx.combine(val, static).camera(cam0, f), data, cfg, wt))
-    nb = std.size // 4
-    parts = {"gait": std[:n_used], "speed": std[nb:nb + n_used],
-             "width": np.r_[std[2 * nb:2 * nb + n_used], std[3 * nb:3 * nb + n_used]]}
+    blk = std.reshape(N_BLOCKS, -1)[:, :n_used]
+    parts = {"gait": blk[0], "speed": blk[1], "width": np.r_[blk[2], blk[3]],
+             "height": np.r_[blk[4][hok], blk[5][hok]]}
     cue_rms = {k: float(np.sqrt(np.mean(parts[k] ** 2))) for k in cues}
     msg = optx.RESULTS[res]
     success = res == optx.RESULTS.successful
@@ -348,7 +379,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=("gait", "speed", "width"),
     out = SelfcalFit(camera_of(values, cam0), cues, fitted, values, se, cov, cond, weak,
                      "" if res == optx.RESULTS.successful else msg, bool(success), steps,
                      False, [], n_tracks, n_used, ids,
-                     {"speed_change": sd_s, "log_width_change": sd_w}, cue_rms)
+                     {"speed_change": sd_s, "log_width_change": sd_w,
+                      "log_height_change": sd_h}, cue_rms, notes)
     det = out.determination()
     if not success:
         out.reasons.append(f"solver: {msg}")
@@ -365,29 +397,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=("gait", "speed", "width"),
     if out.reasons and radial(out.camera, batch, used):
         out.reasons.append("every walker moves along the optical axis (within 15 deg): "
                            "lateral and radial distances cannot be compared")
+    if (spread := row_spread(batch, used, cam0.image_height)) < MIN_ROW_SPREAD:
+        out.reasons.append(f"every walker stands at about the same depth (foot rows within "
+                           f"{100 * spread:.1f} % of the image height): nothing foreshortens")
     out.ill_determined = bool(out.reasons)
     return out
-
-
-def camera_of(values: dict[str, float], like: Camera) -> Camera:
-    """The `Camera` of natural values (`fit.camera.UNITS`), f and static fields of `like`."""
-    f = float(like.f)
-    return Camera(f=f, h=values["h"], theta=math.radians(values["theta"]), a=values["af"] / f,
-                  b=values["bf"] / f, uc=values["uc"], vc=values["vc"],
-                  roll=math.radians(values["roll"]), fps=like.fps,
-                  image_width=like.image_width, image_height=like.image_height)
-
-
-def radial(camera: Camera, batch, used: np.ndarray, within_deg: float = 15.0) -> bool:
-    """Whether every used track's ground heading (first to last measured foot point through
-    `camera`) lies within `within_deg` of the optical axis's ground direction (y)."""
-    z = np.asarray(batch.z, np.float64)[used]
-    ok = np.all(np.isfinite(z), -1)
-    first, last = np.argmax(ok, 1), z.shape[1] - 1 - np.argmax(ok[:, ::-1], 1)
-    i = np.arange(z.shape[0])
-    with jax.enable_x64(True):
-        ends = [ground_from_image(camera, jnp.asarray(z[i, k, 0]), jnp.asarray(z[i, k, 1]))
-                for k in (first, last)]
-    dx, dy = (np.asarray(ends[1][j]) - np.asarray(ends[0][j]) for j in (0, 1))
-    ang = np.degrees(np.arctan2(np.abs(dx), np.abs(dy)))
-    return bool(np.all(ang <= within_deg))

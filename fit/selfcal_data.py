@@ -22,7 +22,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from fit.camera import CameraParams
 from rhythmjax.model import mem
+from rhythmjax.model.camera import ground_from_image
 from rhythmjax.model.params import Camera, Config
 from rhythmjax.model.rhythm import (
     MAX_MISSING_FRACTION,
@@ -146,3 +148,66 @@ def scene(rng: np.random.Generator, *, walkers: int = 20, bicycles: int = 0, dog
             continue
         return cam, cols, truth
     raise RuntimeError(f"no camera of {tries} draws could hold the scene")
+
+
+# ----------------------------------------------------------------------------------------------
+# the camera's parameters (moved from fit.selfcal)
+
+def make_params(v: dict[str, float]) -> CameraParams:
+    """`CameraParams` (fit.camera's unconstrained form) of natural values (`fit.camera.UNITS`)."""
+    p = min(max(v["theta"], 0.5), 89.5) / 90.0
+    return CameraParams(*(jnp.asarray(x, jnp.float64) for x in (
+        math.log(v["af"]), math.log(v["bf"] / v["af"]), math.log(v["h"]),
+        math.log(p / (1 - p)), v["uc"], v["vc"], math.radians(v["roll"]), 0.0, 0.0, 0.0)))
+
+
+def camera_of(values: dict[str, float], like: Camera) -> Camera:
+    """The `Camera` of natural values (`fit.camera.UNITS`), f and static fields of `like`."""
+    f = float(like.f)
+    return Camera(f=f, h=values["h"], theta=math.radians(values["theta"]), a=values["af"] / f,
+                  b=values["bf"] / f, uc=values["uc"], vc=values["vc"],
+                  roll=math.radians(values["roll"]), fps=like.fps,
+                  image_width=like.image_width, image_height=like.image_height)
+
+
+def radial(camera: Camera, batch, used: np.ndarray, within_deg: float = 15.0) -> bool:
+    """Whether every used track's ground heading (first to last measured foot point through
+    `camera`) lies within `within_deg` of the optical axis's ground direction (y)."""
+    z = np.asarray(batch.z, np.float64)[used]
+    ok = np.all(np.isfinite(z), -1)
+    first, last = np.argmax(ok, 1), z.shape[1] - 1 - np.argmax(ok[:, ::-1], 1)
+    i = np.arange(z.shape[0])
+    with jax.enable_x64(True):
+        ends = [ground_from_image(camera, jnp.asarray(z[i, k, 0]), jnp.asarray(z[i, k, 1]))
+                for k in (first, last)]
+    dx, dy = (np.asarray(ends[1][j]) - np.asarray(ends[0][j]) for j in (0, 1))
+    ang = np.degrees(np.arctan2(np.abs(dx), np.abs(dy)))
+    return bool(np.all(ang <= within_deg))
+
+
+def scene_batch(cols: dict, cfg: Config, *, max_gap_frames: int = 5):
+    """A `TrackBatch` of a scene's tracks columns with their top rows (v_top), through a
+    temporary file so that `rhythmjax.io.read_tracks`' validation applies (as
+    `fit.walking.batch_of`, which keeps only the required columns and the label)."""
+    import tempfile
+    from pathlib import Path
+
+    from rhythmjax.io import read_tracks, to_batch, write_table
+
+    keep = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "label", "v_top")
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "tracks.parquet"
+        write_table(p, cols, [k for k in cols if k in keep])
+        tr = read_tracks(p, fps=cfg.camera.fps)
+    return to_batch(tr, max_gap_frames=max_gap_frames, min_len=cfg.thresholds.n,
+                    fps=cfg.camera.fps)
+
+
+def row_spread(batch, used: np.ndarray, height_px: float) -> float:
+    """The 10-90 % range of the used tracks' median foot rows, as a fraction of the image
+    height: near 0 when every walker is at about the same depth (nothing foreshortens)."""
+    v = np.asarray(batch.z, np.float64)[used][..., 1]
+    med = np.array([np.median(r[np.isfinite(r)]) for r in v if np.isfinite(r).any()])
+    if med.size < 2:
+        return 0.0
+    return float(np.subtract(*np.percentile(med, [90, 10]))) / float(height_px)

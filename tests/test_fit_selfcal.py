@@ -30,10 +30,11 @@ from fit.selfcal import (
     residuals,
     select,
 )
-from fit.selfcal_data import camera_values, gait_peaks
+from fit.selfcal_data import camera_values, gait_peaks, scene_batch
+from fit.selfcal_height import height_from_top
 from fit.walking import batch_of, make_labelled
 from rhythmjax.io import write_table
-from rhythmjax.model.camera import image_width, project
+from rhythmjax.model.camera import image_width, project, project_3d
 from rhythmjax.model.params import Camera, Config
 from rhythmjax.sim.tracks import rhythm_per_px
 
@@ -127,8 +128,9 @@ def test_data_is_padded_without_weight(mixed):
     assert int(np.sum(np.asarray(d.valid))) == int(used.sum())
 
 
-def _radial_tracks(cam: Camera, n: int, seed: int) -> dict:
-    """Walkers that all walk straight toward or away from the camera (x constant)."""
+def _radial_tracks(cam: Camera, n: int, seed: int, lateral: bool = False) -> dict:
+    """Walkers that all walk straight toward or away from the camera (x constant), or with
+    `lateral` all across the view at 10-10.3 m (y constant: every walker at one depth)."""
     rng = np.random.default_rng(seed)
     cols = {k: [] for k in COLUMNS}
     for i in range(n):
@@ -138,6 +140,8 @@ def _radial_tracks(cam: Camera, n: int, seed: int) -> dict:
         sign = rng.choice([-1, 1])
         y = (6.0 if sign > 0 else 16.0) + sign * pace * stride * t
         x = np.full(k, rng.uniform(-3, 3))
+        if lateral:
+            x, y = -sign * (3.5 - pace * stride * t), np.full(k, rng.uniform(10.0, 10.3))
         u, v = (np.asarray(a, float) for a in project(cam, jnp.asarray(x), jnp.asarray(y)))
         w = np.asarray(image_width(cam, jnp.asarray(0.5), jnp.asarray(y)), float)
         per = rhythm_per_px(t, pace, rng.uniform(), 0.9, 1.0, rng.standard_normal(k), 0.15,
@@ -150,9 +154,9 @@ def _radial_tracks(cam: Camera, n: int, seed: int) -> dict:
     return {k: np.asarray(v) for k, v in cols.items()}
 
 
-def _cli(tmp_path, cols, *extra):
+def _cli(tmp_path, cols, *extra, columns=COLUMNS):
     tracks = tmp_path / "tracks.csv"
-    write_table(tracks, cols, COLUMNS)
+    write_table(tracks, cols, columns)
     start = tmp_path / "start.json"
     start.write_text(json.dumps({"camera": {"image_width_px": 1280, "image_height_px": 720,
                                             "fps": 15}}))
@@ -199,7 +203,7 @@ def test_cli_refuses_walkers_all_along_the_optical_axis(tmp_path, capsys):
 
 @pytest.mark.parametrize("extra, message", [
     (("--cues", "gait,smell"), "unknown cue"),
-    (("--cues", "height"), "not available"),
+    (("--cues", "height"), "no top rows"),  # COLUMNS: no v_top
 ])
 def test_cli_bad_cues(tmp_path, mixed, capsys, extra, message):
     rc, out = _cli(tmp_path, mixed[0], *extra)
@@ -222,3 +226,111 @@ def test_gait_peaks_none_without_rhythm():
     x[1] = np.random.default_rng(0).normal(5, 1, 64)
     p = gait_peaks(START, x, np.array([64, 64]))
     assert not p.clear.any() and np.isnan(p.pace_hz).all()
+
+
+# ----------------------------------------------------------------------------------------------
+# the height cue (foot-head, `fit.selfcal_height`)
+
+def test_height_of_a_level_camera_by_hand():
+    # theta = 0, roll 0: v = Vc + b f (h - z) / (f + y), so z = (f + y) (v - v_top) / (b f).
+    # h 5 m, b f 1000 px, the ground point 10 m ahead: foot row 360 + 5000 / 10.008 =
+    # 859.6003 px; a 1.7 m head at 360 + 3300 / 10.008 = 689.7362 px.
+    with jax.enable_x64(True):
+        cam = Camera(f=F, h=5.0, theta=0.0, a=1000 / F, b=1000 / F, uc=640, vc=360, fps=15.0,
+                     image_width=1280, image_height=720)
+        H, ok = height_from_top(cam, jnp.float64(640.0), jnp.float64(859.6003197442047),
+                                jnp.float64(689.7362110311751))
+    assert bool(ok) and abs(float(H) - 1.7) < 1e-9
+
+
+def test_height_inverts_the_projection_of_a_tilted_rolled_camera():
+    x, y, z = np.array([-3.0, 0.5, 2.5, 4.0]), np.array([5.0, 9.0, 14.0, 19.0]), np.array(
+        [1.55, 1.7, 1.82, 0.5])
+    with jax.enable_x64(True):
+        cam = Camera(f=F, h=6.0, theta=math.radians(27.0), a=900 / F, b=880 / F, uc=610,
+                     vc=370, roll=math.radians(4.0), fps=15.0, image_width=1280,
+                     image_height=720)
+        u, v = project(cam, jnp.asarray(x), jnp.asarray(y))
+        _, vt = project_3d(cam, jnp.asarray(x), jnp.asarray(y), jnp.asarray(z))
+        H, ok = height_from_top(cam, u, v, vt)
+        _, bad = height_from_top(cam, u, v, jnp.full(4, jnp.nan))
+    assert np.all(np.asarray(ok)) and not np.any(np.asarray(bad))
+    np.testing.assert_allclose(np.asarray(H), z, rtol=0, atol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def with_tops(mixed):
+    """The `mixed` scene's batch with its top rows (v_top: 1.5 px noise, heights N(1.7, 0.07))."""
+    return scene_batch(mixed[0], START)
+
+
+@pytest.mark.parametrize("cues", [("height",), ("gait", "speed", "width", "height")])
+def test_height_gradient_matches_finite_differences(with_tops, cues):
+    used, pace = select(START, with_tops)
+    v = {**camera_values(TRUE), "h": 5.0, "theta": 19.0, "af": 1000.0, "bf": 1000.0}
+    with jax.enable_x64(True):
+        data = make_data(with_tops, used, pace)
+        assert np.isfinite(np.asarray(data.v_top)).sum() > 500
+        dyn, static = eqx.partition(make_params(v), param_spec(("af", "h", "theta")))
+        args = (static, START.camera, jnp.float64(F), data, START,
+                cue_weights(cues, 0.05, 0.03, sd_hshape=0.03))
+        flat, unravel = jax.flatten_util.ravel_pytree(dyn)
+        cost = jax.jit(lambda q: jnp.sum(residuals(unravel(q), args) ** 2))
+        g = np.asarray(jax.grad(cost)(flat))
+        eps = 1e-6
+        fd = np.array([(cost(flat + eps * e) - cost(flat - eps * e)) / (2 * eps)
+                       for e in np.eye(flat.size)])
+    assert np.max(np.abs(fd)) > 1.0  # the cue moves the cost
+    np.testing.assert_allclose(g, fd, rtol=2e-4, atol=1e-6 * np.max(np.abs(fd)))
+
+
+def test_height_alone_recovers_the_camera(mixed, with_tops):
+    r, tv = fit_selfcal(START, with_tops, cues=("height",)), camera_values(TRUE)
+    assert not r.ill_determined and r.success, r.reasons
+    assert 18 <= r.n_walkers <= 22
+    # tolerances: the fit's own precision with 20 walkers of N(1.7, 0.07^2) m (SE about 5 %,
+    # 2 deg, 12 %: heights fix the horizon and the scale, a f apart from theta only weakly),
+    # and 3 SE
+    for k, tol, se_max in (("h", 0.08 * tv["h"], 0.08 * tv["h"]), ("theta", 3.0, 3.0),
+                           ("af", 0.2 * tv["af"], 0.2 * tv["af"])):
+        err = abs(r.values[k] - tv[k])
+        assert err <= tol and err <= 3 * r.se[k] and r.se[k] <= se_max, (
+            k, r.values[k], tv[k], r.se[k])
+    # the height cue through the true camera: the walkers' median heights, N(1.7, 0.07^2)
+    used, pace = select(START, with_tops)
+    with jax.enable_x64(True):
+        raw = eqx.filter_jit(raw_cues)(camera_of(tv, TRUE), make_data(with_tops, used, pace),
+                                       START)
+    ids = [i for i, u in zip(with_tops.ids, used, strict=True) if u]
+    labels = dict(zip(with_tops.ids, with_tops.labels, strict=True))
+    hh = np.asarray(raw["height"])[:len(ids)][[labels[i] == "pedestrian" for i in ids]]
+    assert abs(np.mean(hh) - 1.7) < 3 * 0.07 / math.sqrt(hh.size) + 0.01
+    assert 0.03 < np.std(hh) < 0.12
+
+
+def test_height_alone_refused_without_top_rows(mixed):
+    r = fit_selfcal(START, mixed[2], cues=("height",))  # batch_of: no v_top column
+    assert r.ill_determined and r.camera is None and "top rows" in r.reasons[0]
+
+
+def test_cli_default_cues_use_the_top_rows(tmp_path, mixed, capsys):
+    rc, out = _cli(tmp_path, mixed[0], "--json", columns=(*COLUMNS, "v_top"))
+    doc = json.loads(capsys.readouterr().out)
+    assert rc == 0 and doc["cues"] == ["gait", "speed", "width", "height"]
+    tv = camera_values(TRUE)
+    assert abs(doc["values"]["h"] / tv["h"] - 1) < 0.05 and abs(doc["values"]["theta"]
+                                                                 - tv["theta"]) < 1.5
+
+
+def test_cli_default_cues_without_top_rows_drop_height(tmp_path, mixed, capsys):
+    rc, out = _cli(tmp_path, mixed[0], "--json")
+    doc = json.loads(capsys.readouterr().out)
+    assert rc == 0 and doc["cues"] == ["gait", "speed", "width"]
+    assert any("cue height dropped" in n for n in doc["notes"])
+
+
+def test_walkers_all_at_one_depth_are_refused():
+    cols = _radial_tracks(TRUE, 12, 5, lateral=True)
+    r = fit_selfcal(START, batch_of(cols, START), max_steps=20)
+    assert r.n_walkers >= 5 and r.ill_determined
+    assert any("same depth" in q for q in r.reasons), r.reasons

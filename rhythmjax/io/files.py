@@ -37,13 +37,13 @@ from .tables import (
 
 
 TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity")
-OPTIONAL_TRACK_COLUMNS = ("label", "x", "y")
+OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top")
 LABELS = ("pedestrian", "bicycle", "dog", "car", "other")
-MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y")
+MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top")
 MAX_ABS = 1e12
 TRACK_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
                "width_px": "float", "intensity": "float", "label": "str", "x": "float",
-               "y": "float"}
+               "y": "float", "v_top": "float"}
 TRACK_NOT_EMPTY = ("track_id", "frame", "t")
 
 
@@ -67,6 +67,7 @@ class Tracks:
     x: np.ndarray | None = None
     y: np.ndarray | None = None
     fps: float | int | None = None
+    v_top: np.ndarray | None = None  # top row px of the moving region (the head); NaN missing
     notes: list[str] = field(default_factory=list)
 
     def __len__(self) -> int:
@@ -101,7 +102,7 @@ class Tracks:
             self, track_id=take(self.track_id), frame=take(self.frame), t=take(self.t),
             u=take(self.u), v=take(self.v), width_px=take(self.width_px),
             intensity=take(self.intensity), line=take(self.line), label=take(self.label),
-            x=take(self.x), y=take(self.y), notes=[])
+            x=take(self.x), y=take(self.y), v_top=take(self.v_top), notes=[])
 
     def to_batch(self, *, max_gap_frames: int, min_len: int, bucket: bool = True,
                  fps: float | int | None = None) -> TrackBatch:
@@ -126,6 +127,7 @@ class TrackBatch:
     length: np.ndarray  # (B,) int32
     labels: list[str] | None = None
     xy: np.ndarray | None = None  # (B, T, 2) m
+    v_top: np.ndarray | None = None  # (B, T) px, the top row (head) where the file has it
 
 
 # ----------------------------------------------------------------------------------------------
@@ -187,7 +189,7 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
     return Tracks(path=p, track_id=tid, frame=col["frame"].astype(np.int64), t=col["t"],
                   u=col["u"], v=col["v"], width_px=col["width_px"], intensity=col["intensity"],
                   line=lines, unit=tab.unit, label=labels, x=col.get("x"), y=col.get("y"),
-                  fps=None if fps is None else float(fps), notes=notes)
+                  fps=None if fps is None else float(fps), v_top=col.get("v_top"), notes=notes)
 
 
 def _first(mask: np.ndarray) -> int | None:
@@ -347,7 +349,8 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
     labels = None if tracks.label is None else [str(s) for s in tracks.label[starts]]
     return TrackBatch(ids=[str(s) for s in tid[starts]], z=f32(z), width=f32(grid(tracks.width_px)),
                       intensity=f32(grid(tracks.intensity)), t=f32(tg), dt=f32(dt),
-                      present=present, length=length, labels=labels, xy=xy)
+                      present=present, length=length, labels=labels, xy=xy,
+                      v_top=f32(grid(tracks.v_top)))
 
 
 __all__: Sequence[str] = (

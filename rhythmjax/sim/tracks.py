@@ -28,6 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..model.camera import image_width, project
+from ..model.camera_np import project_3d
 from ..model.params import Camera, ConfigError
 
 
@@ -39,6 +40,15 @@ RANGE_Y_M = (3.3, 19.7)  # a path stays this far ahead (m), inside Table 1's 3-2
 START_Y_M = (5.0, 17.0)  # where a walker's, a dog's path starts (m ahead)
 EDGE_PX = 5.0  # a path stays this far inside the image (px)
 RADIAL_RANGE_M = 14.5  # bicycles and cars are tracked at most this far (m) along the road
+# height (m) of an object's top (the head; a bicycle's rider), N(mean, std^2) per object
+HEIGHT_M = {"pedestrian": (1.70, 0.07), "bicycle": (1.75, 0.05), "dog": (0.50, 0.08),
+            "car": (1.50, 0.10)}
+
+
+def top_rows(camera: Camera, x, y, height_m: float, noise) -> np.ndarray:
+    """Image row v_top (px) of the point `height_m` m above the ground point (x, y) m (the head
+    over the foot point; equation (3) with z), plus `noise` px."""
+    return np.asarray(project_3d(camera, x, y, np.full(np.shape(x), height_m))[1]) + noise
 
 
 @dataclass(frozen=True)
@@ -180,13 +190,17 @@ def make_tracks(
 
     `n_short` extra walkers are tracked for fewer than 64 frames (expected `too-short`). Columns:
     track_id, frame, t, u, v, width_px, intensity, label, x, y (true ground position, m).
-    Measurements are missing (empty u, v, width) at `gap_rate` of frames."""
+    Measurements are missing (empty u, v, width) at `gap_rate` of frames. v_top: the image row
+    of the object's top (`top_rows`: a height per object from `HEIGHT_M`, noise as the foot
+    point's), drawn from a generator of its own (seed (seed, 19)) so that the other columns
+    are those of earlier versions."""
     camera = camera or Camera()
     rng = np.random.default_rng(seed)
+    rng_top = np.random.default_rng([seed, 19])
     kinds = (["pedestrian"] * n_walkers + ["bicycle"] * n_bicycles + ["dog"] * n_dogs
              + ["car"] * n_cars + ["short"] * n_short)
     cols: dict[str, list] = {k: [] for k in ("track_id", "frame", "t", "u", "v", "width_px",
-                                             "intensity", "label", "x", "y")}
+                                             "intensity", "label", "x", "y", "v_top")}
     truth = []
     frame0 = 0
     for i, kind in enumerate(kinds):
@@ -220,6 +234,9 @@ def make_tracks(
         intensity = np.maximum(per_px, 0.0) * area
         gaps = rng.random(n) < gap_rate
         u[gaps], v[gaps], w_px[gaps] = np.nan, np.nan, np.nan
+        top = top_rows(camera, x, y, rng_top.normal(*HEIGHT_M[label]),
+                       rng_top.normal(0, r_std_px, n))
+        top[gaps | ~(top >= 0)] = np.nan  # a head above the image is not measured
         tid = f"{label[:3]}{i:03d}" if kind != "short" else f"sho{i:03d}"
         frames = frame0 + np.arange(n)
         frame0 += int(rng.integers(0, 5))
@@ -227,7 +244,7 @@ def make_tracks(
         cols["frame"] += list(frames)
         cols["t"] += list(frames / camera.fps)
         for k, a in (("u", u), ("v", v), ("width_px", w_px), ("intensity", intensity),
-                     ("x", x), ("y", y)):
+                     ("x", x), ("y", y), ("v_top", top)):
             cols[k] += list(a)
         cols["label"] += [label] * n
         truth.append(TrackTruth(tid, label, pace, stride if label != "car" else math.nan,

@@ -24,7 +24,7 @@ def tracks_columns(objs: list) -> dict[str, np.ndarray]:
     out["frame"] = out["frame"].astype(np.int64)
     out["state"] = np.asarray([TrackState(int(s)).name.lower() for s in out["state"]],
                               dtype=object)
-    for k in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est"):
+    for k in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est", "v_top"):
         out[k] = out[k].astype(np.float64)
     return out
 

@@ -20,7 +20,9 @@ class TrackRow(NamedTuple):
     frame: index; t: s; (u, v): the measured foot point px (NaN when predicted); width_px: the
     measured image width px of the object (NaN when predicted; the W_IMG of gate (10));
     intensity: the rhythm signal I(k) in window B (NaN: no sample); (x_est, y_est): the filter's
-    ground estimate m; state: `status.TrackState` as an int."""
+    ground estimate m; state: `status.TrackState` as an int; v_top: the top row px of the
+    measured moving region (the head; NaN when not measured or clipped by the detection
+    window), an optional column of the tracks format."""
 
     frame: int
     t: float
@@ -31,6 +33,7 @@ class TrackRow(NamedTuple):
     x_est: float
     y_est: float
     state: int
+    v_top: float = math.nan
 
 
 class Velocity(NamedTuple):

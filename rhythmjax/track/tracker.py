@@ -84,6 +84,7 @@ class _Object:
     win_start: int = 0  # first row of the next rhythm window
     high_run: int = 0  # frames in a row its measured foot point lay too high (_foot_too_high)
     vel: list[Velocity] = field(default_factory=list)  # EKF ground velocity m/s per row
+    top: float = math.nan  # top row px of the last detection (`detect.Detection.top`)
 
 
 class _Lost(NamedTuple):
@@ -209,6 +210,7 @@ class OnlineTracker:
                 held.add(s)
             elif s not in shared:
                 z[s], width[s] = (det.u, det.v), det.width
+                self._slots[s].top = det.top
             boxes.append(det.box)
         outside = 0 if glitch else detect.motion_outside(M, boxes, opt.new.outside_margin_px)
         if not glitch and outside >= opt.new.min_area:
@@ -221,7 +223,7 @@ class OnlineTracker:
                      if not any(math.hypot(d.u - nu, d.v - nv) < r for nu, nv, r in near)]
             for det in found[:len(free)]:
                 s = free.pop(0)
-                self._slots[s] = _Object(track_id=0, state=TrackState.DETECT)
+                self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top)
                 present[s], reset[s] = True, True
                 z[s], width[s] = (det.u, det.v), det.width
         fin.reset[:], fin.present[:], fin.dt[:] = reset, present, dt
@@ -325,8 +327,9 @@ class OnlineTracker:
         fu, fv = (z if measured and not self.opt.body.sample_estimate else est_uv)
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         intensity = math.nan if no_sample or D is None else detect.window_b_intensity(D, fu, fv, W)
+        top, obj.top = (obj.top if measured else math.nan), math.nan  # this frame's only
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
-                                 float(mean[0]), float(mean[2]), int(obj.state)))
+                                 float(mean[0]), float(mean[2]), int(obj.state), float(top)))
         obj.vel.append(Velocity(float(mean[1]), float(mean[3])))
         match_window(self.cfg, obj)
         out_of_range = not (self._range[0] <= mean[2] <= self._range[1])

@@ -25,6 +25,7 @@ Everything returns plain NumPy / Python values; only this module and `video` imp
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -46,13 +47,16 @@ SOBEL_HALO_PX = 1  # the 3x3 Sobel stencil spreads E this far beyond the thresho
 class Detection:
     """A detected object: foot point (u, v) px (u = centre of the horizontal extent, v = lowest
     row), image width wid_IMG px, bounding box (x0, y0, w, h) px of the sliced extent, and area (the
-    number of non-zero motion pixels in the box)."""
+    number of non-zero motion pixels in the box). `top`: the top row px of the sliced extent (the
+    head) where `detect_in_window` measured it; NaN where the extent reaches the window's top
+    (clipped: the head may lie above it) and for `find_objects`."""
 
     u: float
     v: float
     width: float
     box: WindowBox
     area: int
+    top: float = math.nan
 
 
 def frame_difference(prev: np.ndarray, cur: np.ndarray) -> np.ndarray:
@@ -160,6 +164,7 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
     way, gives v_p = its lowest row. None if the window is empty, outside the image, or holds
     fewer than `min_area` motion pixels in the sliced box (no measurement). wid_IMG is the
     extent less `halo` px on each side (see the module docstring; 0 to keep the raw extent).
+    `top` is the sliced extent's top row (the head), NaN where it is the window's top row.
 
     `core` (x0, y0, w, h) px, the box where the object is expected (its predicted body): when
     given, only the connected regions of the window's motion (dilated by `dilate_px`, as in
@@ -190,7 +195,10 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
                                body_px)
         if crop is None:
             return None
-    return _bottom_point(crop, x0, y0, fraction, min_area, halo)
+    det = _bottom_point(crop, x0, y0, fraction, min_area, halo)
+    if det is None or det.box[1] <= y0:  # the extent reaches the window's top: no top row
+        return det
+    return dataclasses.replace(det, top=float(det.box[1]))
 
 
 def _object_regions(crop: np.ndarray, core: WindowBox, dilate_px: int,

@@ -1,0 +1,99 @@
+"""The foot-head height cue of self-calibration (`fit.selfcal`, issue 19).
+
+A walker's height H (m) is the length of the vertical segment standing on the ground point of
+its foot point (u, v) px whose top projects to the measured top row v_top px of its moving
+region (the head; the tracks format's optional `v_top` column). With the camera of (3) and a
+point z m above the ground point (x, y) (`rhythmjax.model.camera.project_3d`), the depth is
+d(z) = d0 - z sin(theta), d0 = f + y cos(theta) + h sin(theta), and the image row satisfies
+
+    (Vc - v(z)) d(z) = N0 + N1 z,   N1 = b f cos(theta) cos(roll),
+    N0 = cos(roll) b f (y sin(theta) - h cos(theta)) - sin(roll) a f x,
+
+so with q = Vc - v_top and the foot point's own row (z = 0: (Vc - v) d0 = N0),
+
+    H = (q d0 - N0) / (N1 + q sin(theta)) = d0 (v - v_top) / (N1 + q sin(theta))      (H1)
+
+(a d0 / (b f) times the pixel height for a level camera). H scales with h for fixed angles and
+image; its change with the position in the image fixes the horizon and the vertical vanishing
+point, so heights alone determine a f, theta and (with people's mean height) h: the classical
+foot-head calibration. Per track the cue gives the median height (robust to the rows where the
+tracker's top row is off) and the change of log height over the track (a linear fit against
+time, rows more than `TRIM_LOG` from the track's median left out), both differentiable in the
+camera (the median through a sort).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from rhythmjax.model.camera import ground_from_image, terms
+from rhythmjax.model.params import Camera
+
+
+HEIGHT_STD_M = 0.07  # people's heights ~ N(1.7, 0.07^2) m (issue 19); the mean is the config's
+MIN_TOP_ROWS = 10  # a track needs this many rows with a top row for the height cue
+TRIM_LOG = 0.15  # rows whose log height is further than this from the track's median: out of
+# the slope (a top row 15 % off: the head clipped or another object's motion joined)
+
+
+def height_from_top(camera: Camera, u, v, v_top):
+    """(H m, ok) of (H1): the height above the ground point of the foot point (u, v) px whose
+    top projects to the image row v_top px. `ok` is False where the foot point is not on the
+    ground in front of the camera (`ground_from_image`), v_top is not finite, or the top lies
+    at or beyond the vertical vanishing point (denominator <= 0); H is 0 there (finite, so
+    gradients stay finite). Differentiable in the camera."""
+    k = terms(camera)
+    x, y, ok = ground_from_image(camera, u, v)
+    ok = ok & jnp.isfinite(v_top)
+    v_top = jnp.where(ok, v_top, v)  # data, not parameters: no NaN reaches a gradient
+    bf, af = k.b * k.f, k.a * k.f
+    d0 = k.f + y * k.cos_theta + k.h * k.sin_theta
+    q = k.vc - v_top
+    den = bf * k.cos_theta * k.cos_roll + q * k.sin_theta
+    n0 = k.cos_roll * bf * (y * k.sin_theta - k.h * k.cos_theta) - k.sin_roll * af * x
+    ok = ok & (den > 1e-6 * bf)
+    H = (q * d0 - n0) / jnp.where(ok, den, 1.0)
+    return jnp.where(ok, H, 0.0), ok
+
+
+def masked_median(x, mask):
+    """Median of x (T,) over `mask` (the mean of the two middle values for an even count);
+    differentiable in x (through a sort). Undefined (a large number) when mask is all False."""
+    xs = jnp.sort(jnp.where(mask, x, 1e30))
+    n = jnp.sum(mask)
+    lo = xs[jnp.maximum((n - 1) // 2, 0)]
+    hi = xs[jnp.maximum(n // 2, 0)]
+    return 0.5 * (lo + hi)
+
+
+def _slope(t, y, w):
+    """Weighted least-squares slope of y against t (T,)."""
+    sw = jnp.maximum(jnp.sum(w), 1e-12)
+    tb, yb = jnp.sum(w * t) / sw, jnp.sum(w * y) / sw
+    return jnp.sum(w * (t - tb) * (y - yb)) / jnp.maximum(jnp.sum(w * (t - tb) ** 2), 1e-12)
+
+
+def height_cues(camera: Camera, u, v, v_top, use, tn):
+    """Per track (B,): (median height m, change of log height over the track, usable) of foot
+    points (u, v), top rows v_top (px) and the rows `use` (B, T), times `tn` (B, T) in units of
+    the track's duration. Usable: at least `MIN_TOP_ROWS` rows with a height."""
+    H, ok = height_from_top(camera, u, v, v_top)
+    ok = ok & use & (H > 0)
+    med = jax.vmap(masked_median)(H, ok)
+    enough = jnp.sum(ok, 1) >= MIN_TOP_ROWS
+    med = jnp.where(enough, med, 1.0)
+    logh = jnp.log(jnp.where(ok, H, 1.0))
+    keep = ok & (jnp.abs(logh - jax.lax.stop_gradient(jnp.log(med))[:, None]) <= TRIM_LOG)
+    dlogh = jax.vmap(_slope)(tn, logh, keep.astype(H.dtype))
+    return med, jnp.where(enough, dlogh, 0.0), enough
+
+
+def top_walkers(batch, used: np.ndarray) -> int:
+    """How many of the used tracks have a top row (v_top) on at least `MIN_TOP_ROWS` rows."""
+    top = getattr(batch, "v_top", None)
+    if top is None:
+        return 0
+    ok = batch.present & np.all(np.isfinite(batch.z), -1) & np.isfinite(top)
+    return int(np.sum(np.sum(ok[used], 1) >= MIN_TOP_ROWS))
