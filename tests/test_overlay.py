@@ -1,9 +1,13 @@
 """The annotated video's frames (`cli.overlay`): colour by verdict, labels in words, every label
 inside the frame and none overlapping another or the legend (checked on the computed boxes),
-the trail of foot points, the same style for `count`."""
+the trail of foot points, the same style for `count`; drawn on the video's own colour frame
+(checked bit for bit against an independent OpenCV decode) where it has one, grey otherwise."""
 
 from __future__ import annotations
 
+import json
+
+import cv2
 import numpy as np
 import pytest
 
@@ -12,10 +16,12 @@ from rhythmjax.cli.overlay import (
     TRAIL,
     FrameSampler,
     TrackOverlay,
+    in_colour,
     label_text,
     place_labels,
     text_box_size,
 )
+from rhythmjax.vision.video import open_video
 
 
 def _disjoint(boxes) -> bool:
@@ -150,3 +156,114 @@ def test_frame_sampler_keeps_a_few_evenly_spaced_frames():
         s(i, np.zeros((50, 200, 3), np.uint8))
     assert [i for i, _ in s.frames] == [10 + 20 * k for k in range(8)]
     assert all(jpg[:2] == b"\xff\xd8" for _, jpg in s.frames)
+
+
+# -- the video's own colours --------------------------------------------------------------------
+SQUARE = (slice(12, 36), slice(12, 36))  # inside the blue square, away from labels and legend
+
+
+def _video(path, colour: bool, n: int = 24, w: int = 256, h: int = 192):
+    """A video written with OpenCV (MJPG .avi, 15 fps): a grey ramp, a saturated blue square at
+    the top left (`colour`; grey 128 otherwise) and a dark block in the middle."""
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (w, h), True)
+    for _ in range(n):
+        img = cv2.cvtColor(np.repeat(np.linspace(60, 180, w).astype(np.uint8)[None], h, 0),
+                           cv2.COLOR_GRAY2BGR)
+        img[8:40, 8:40] = (230, 40, 20) if colour else (128, 128, 128)
+        img[80:130, 120:140] = 40
+        vw.write(img)
+    vw.release()
+    return path
+
+
+def _decoded(path) -> list[np.ndarray]:
+    """Every frame as OpenCV decodes it (BGR): the reference for the colours kept."""
+    cap, out = cv2.VideoCapture(str(path)), []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            return out
+        out.append(f)
+
+
+OBJ = [{"track_id": 1, "u": 130.0, "v": 130.0, "width": 20.0, "state": "observe",
+        "verdict": "pedestrian"}]
+
+
+def test_overlay_draws_on_the_colour_frame_the_pipeline_sees_grey(tmp_path):
+    path = _video(tmp_path / "colour.avi", colour=True)
+    ref = _decoded(path)
+    src = open_video(path, fps=15)
+    assert src.is_colour
+    pick, draw = in_colour(src), TrackOverlay("run")
+    n = 0
+    for index, _, gray in src:
+        assert gray.ndim == 2 and gray.dtype == np.uint8  # the pipeline stays grey
+        img = draw(pick(gray, index), index, OBJ)
+        # the square's pixels are the decoded colour frame's, bit for bit
+        np.testing.assert_array_equal(img[SQUARE], ref[index][SQUARE])
+        b, g, r = (float(img[SQUARE][..., c].mean()) for c in range(3))
+        assert b > 180 and g < 90 and r < 90, (b, g, r)
+        n += 1
+    assert n == len(ref) == 24
+    assert src.colour(0) is None  # taken once; nothing left behind
+    # not kept: grey frames as before
+    src2 = open_video(path, fps=15)
+    index, _, gray = next(iter(src2))
+    assert src2.colour(index) is None
+    assert np.ptp(draw(gray, index, OBJ)[SQUARE], axis=-1).max() == 0
+
+
+def test_grey_source_stays_grey(tmp_path):
+    path = _video(tmp_path / "grey.avi", colour=False)
+    src = open_video(path, fps=15)
+    assert not src.is_colour
+    pick = in_colour(src)
+    index, _, gray = next(iter(src))
+    assert pick(gray, index) is gray
+    img = TrackOverlay("run")(pick(gray, index), index, OBJ)
+    assert np.ptp(img[SQUARE].astype(int), axis=-1).max() == 0  # B = G = R
+    folder = tmp_path / "frames"  # a folder of grey PNGs
+    folder.mkdir()
+    for k in range(3):
+        cv2.imwrite(str(folder / f"{k}.png"), gray)
+    src = open_video(folder, fps=15)
+    pick = in_colour(src)
+    assert not src.is_colour and all(pick(g, i) is g for i, _, g in src)
+
+
+def test_colour_frames_kept_only_until_taken(tmp_path):
+    """Frames read ahead (count's background peek) wait; a frame taken drops the older ones."""
+    path = _video(tmp_path / "colour.avi", colour=True, n=6)
+    src = open_video(path, fps=15)
+    src.keep_colour = True
+    items = list(src)
+    assert src.colour(3) is not None
+    assert src.colour(1) is None and src.colour(2) is None  # older than 3: dropped
+    assert src.colour(5) is not None and src.colour(4) is None
+    assert len(items) == 6
+
+
+def test_count_overlay_video_keeps_the_colours(tmp_path):
+    """`rhythmjax count --overlay` on a colour video writes colour frames; on a grey one, grey
+    frames (MJPG both ways: channels within 12 grey levels of the source's)."""
+    from rhythmjax.cli.main import main
+
+    from .test_pedestrians import SMALL
+
+    cfg = tmp_path / "small.json"
+    cfg.write_text(json.dumps(SMALL))
+    for colour in (True, False):
+        video = _video(tmp_path / f"v{colour}.avi", colour=colour, n=20)
+        out, ov = tmp_path / f"out{colour}", tmp_path / f"ov{colour}.avi"
+        assert main(["count", str(video), "-c", str(cfg), "-o", str(out), "--fps", "15", "-q",
+                     "--overlay", str(ov), "--no-camera-check"]) == 0
+        frames = _decoded(ov)
+        assert len(frames) == 20
+        b, g, r = (float(frames[10][SQUARE][..., c].mean()) for c in range(3))
+        if colour:
+            assert b > 180 and g < 90 and r < 90, (b, g, r)
+        else:
+            assert max(abs(b - 128), abs(g - 128), abs(r - 128)) < 12, (b, g, r)
+            top = frames[10][:60].astype(int)  # the ramp and square, no annotation
+            assert np.ptp(top, axis=-1).max() <= 12

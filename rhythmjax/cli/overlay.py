@@ -5,7 +5,9 @@ the legend (greedy placement of label boxes), a short trail of the last foot poi
 legend strip with the frame index.
 
 `TrackOverlay` is the stateful drawer (it remembers the trails) used by `run`, `demo`, `track`
-and `count`; `draw_frame` and `draw_count_frame` draw one frame without a trail."""
+and `count`; `draw_frame` and `draw_count_frame` draw one frame without a trail. The pipeline
+works on grey frames; `in_colour` gives the drawer the source's own colour frame where it has
+one (`vision.video.VideoSource.keep_colour`: kept from the one decode, not read twice)."""
 
 from __future__ import annotations
 
@@ -19,7 +21,7 @@ from ..model.params import WidthModel
 
 
 __all__ = ["PALETTE", "FrameSampler", "TrackOverlay", "draw_count_frame", "draw_frame",
-           "label_text", "place_labels", "verdict_key"]
+           "in_colour", "label_text", "place_labels", "verdict_key"]
 
 # BGR colours by verdict: green walkers, red non-walkers, amber undecided, grey tentative
 PALETTE = {"pedestrian": (60, 200, 40), "non-pedestrian": (60, 60, 235),
@@ -301,6 +303,20 @@ class FrameSampler:
             if ok:
                 self.frames.append((index, buf.tobytes()))
         return img
+
+
+def in_colour(src):
+    """(frame, index) -> the frame to draw on: `src`'s colour frame of `index` where it kept
+    one, else `frame` (grey). Sets `src.keep_colour` (a `VideoSource`; None: always `frame`);
+    call once per decoded frame, in order (each call takes the kept frame)."""
+    if src is None:
+        return lambda frame, index: frame
+    src.keep_colour = True
+
+    def pick(frame, index):
+        bgr = src.colour(index)
+        return frame if bgr is None or bgr.shape[:2] != frame.shape[:2] else bgr
+    return pick
 
 
 def draw_frame(gray: np.ndarray, objects: list[dict], index: int, *,

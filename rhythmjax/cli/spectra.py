@@ -3,7 +3,9 @@ spectrum of its deciding window relative to white noise, P_thr, the walking mode
 the spectral peak and the verdict (edge I/O, matplotlib; the numeric core never imports this).
 
 Written as `spectra.pdf` (every page) and `spectra.png` (the first page, which says how many
-pages there are); the report embeds every page (`page_images`)."""
+pages there are); the report embeds every page (`page_images`). The online tracker's objects
+are drawn as they are; `count`'s tracks from its tables (`table_windows`: the tracks and, per
+track, the first frame of the window the batch classifier decided on)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ import contextlib
 import functools
 import io
 import math
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -23,8 +26,8 @@ from ..model.rhythm import N_FREQS, fill_gaps, normalise_window
 from ..model.status import REASON_LABELS, VERDICT_LABELS
 
 
-__all__ = ["PER_PAGE", "gallery_figures", "judged", "page_images", "panel_text", "track_spectrum",
-           "window_spectrum", "write_spectra"]
+__all__ = ["PER_PAGE", "Sample", "WindowTrack", "gallery_figures", "judged", "page_images",
+           "panel_text", "table_windows", "track_spectrum", "window_spectrum", "write_spectra"]
 
 PER_PAGE = 12  # panels per page: 3 columns x 4 rows
 COLS = 3
@@ -36,6 +39,56 @@ def judged(objs) -> list:
     """The online tracker's objects that were judged (have a rhythm window's outcome), in
     track-id order."""
     return sorted((o for o in objs if o.result is not None), key=lambda o: o.track_id)
+
+
+class Sample(NamedTuple):
+    """One row of a rhythm window: frame, t (s), I(k) (NaN: not measured)."""
+
+    frame: int
+    t: float
+    intensity: float
+
+
+class WindowTrack(NamedTuple):
+    """A judged track as the gallery reads it (the online tracker's objects have the same
+    fields): its id, rows (`Sample`s) and result (verdict and reason codes, pace_hz, stride_m,
+    window: (first, end) indices into rows)."""
+
+    track_id: int
+    rows: list
+    result: dict
+
+
+def table_windows(tracks: dict, verdicts: dict, n: int, fps: float) -> list[WindowTrack]:
+    """The judged tracks of a tracks table (columns track_id, frame, t, intensity) and its
+    verdicts (track_id, verdict, reason labels, pace_hz, stride_m and window_frame: the first
+    frame of the window that decided the track, -1 for none; `count` keeps it from the batch
+    classifier). Each window holds the n frames from window_frame on (fps frames/s); a frame
+    without a row is a NaN sample, as `io.files.to_batch` fills a gap, and its t follows the
+    frame grid (t = frame / fps + the track's median offset)."""
+    verdict_code = {v: k for k, v in VERDICT_LABELS.items()}
+    reason_code = {v: k for k, v in REASON_LABELS.items()}
+    tid = np.asarray(tracks["track_id"])
+    frame = np.asarray(tracks["frame"], np.int64)
+    t = np.asarray(tracks["t"], np.float64)
+    inten = np.asarray(tracks["intensity"], np.float64)
+    out = []
+    for i, track in enumerate(verdicts["track_id"]):
+        f0 = int(verdicts["window_frame"][i])
+        if f0 < 0:
+            continue
+        mine = np.flatnonzero(tid == track)
+        offset = float(np.median(t[mine] - frame[mine] / fps))
+        grid = np.arange(f0, f0 + n)
+        at = {int(frame[k]): k for k in mine if f0 <= frame[k] < f0 + n}
+        rows = [Sample(int(f), float(t[at[f]]) if f in at else f / fps + offset,
+                       float(inten[at[f]]) if f in at else math.nan) for f in grid]
+        result = {"verdict": verdict_code[str(verdicts["verdict"][i])],
+                  "reason": reason_code[str(verdicts["reason"][i])],
+                  "pace_hz": float(verdicts["pace_hz"][i]),
+                  "stride_m": float(verdicts["stride_m"][i]), "window": (0, n)}
+        out.append(WindowTrack(int(track), rows, result))
+    return out
 
 
 @functools.partial(jax.jit, static_argnames=("order",))

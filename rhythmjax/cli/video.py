@@ -32,21 +32,23 @@ from .common import (
     say,
     seed_arg,
 )
-from .overlay import FrameSampler, TrackOverlay
+from .overlay import FrameSampler, TrackOverlay, in_colour
 from .report import REPORT_NAME, render_report
 from .spectra import write_spectra
 
 
-def _drawer(overlay, cfg, sampler=None):
+def _drawer(overlay, cfg, sampler=None, src=None):
     """The on_frame callback that writes the tracker's snapshot drawn on each frame (colour by
-    verdict, labels in words, trails, legend: `overlay.TrackOverlay`); `sampler` keeps a few
+    verdict, labels in words, trails, legend: `overlay.TrackOverlay`), on the video's own colour
+    frame where `src` (a `VideoSource`) has one (`overlay.in_colour`); `sampler` keeps a few
     drawn frames for the report."""
     if overlay is None:
         return None
     draw = TrackOverlay("run", height_per_width=cfg.width.height_per_width())
     keep = sampler or (lambda index, img: img)
-    return lambda frame, index, snapshot: overlay.write(keep(index, draw(frame, index,
-                                                                         snapshot)))
+    pick = in_colour(src)
+    return lambda frame, index, snapshot: overlay.write(keep(index, draw(pick(frame, index),
+                                                                         index, snapshot)))
 
 
 def _notes(args, notes) -> None:
@@ -66,7 +68,7 @@ def _write_outputs(outs, out_dir, cfg, tracks, verdicts, objs, *, truth_ids=None
     """tracks.parquet, verdicts.csv, spectra.png and spectra.pdf of `out_dir`, to the temp paths
     of `outs`; the spectra pages (PNG bytes) for the report."""
     at = lambda name: outs.path(os.path.join(out_dir, name))
-    write_table(at("tracks.parquet"), tracks, TRACK_ORDER)
+    write_table(at("tracks.parquet"), tracks, [*TRACK_ORDER, "v_top"])  # the head rows
     write_table(at("verdicts.csv"), verdicts, VERDICT_ORDER)
     return write_spectra(at("spectra.png"), at("spectra.pdf"), cfg, objs, truth_ids=truth_ids)
 
@@ -137,10 +139,10 @@ def cmd_track(args) -> int:
         overlay_path = outs.path(args.overlay) if args.overlay else None
         with src, overlay_writer(overlay_path, src.fps, (src.width, src.height)) as overlay:
             tracks, verdicts, objs, tracker = track_frames(
-                cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg),
+                cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg, src=src),
                 progress=not (args.quiet or args.json), options=options)
             reading_check(args, src, notes)
-            write_table(outs.path(args.output), tracks, TRACK_ORDER)
+            write_table(outs.path(args.output), tracks, [*TRACK_ORDER, "v_top"])
     _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
     return 0
 
@@ -189,7 +191,7 @@ def cmd_run(args) -> int:
         sampler = FrameSampler(src.n_frames)
         with src, overlay_writer(path, src.fps, (src.width, src.height)) as overlay:
             tracks, verdicts, objs, tracker = track_frames(
-                cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg, sampler),
+                cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg, sampler, src),
                 progress=not (args.quiet or args.json), options=options)
             reading_check(args, src, notes)
             spectra = _write_outputs(outs, args.output, cfg, tracks, verdicts, objs)

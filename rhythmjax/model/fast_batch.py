@@ -19,7 +19,8 @@ Here, in three steps:
 3. Each block through `windows.classify_window_rows`: one program a block
    (`window_block.classify_block`: (12)-(15), the exact fast median).
 
-The result per segment is the first Pedestrian window's, else window 0's; a segment with no
+The result per segment is the first Pedestrian window's, else window 0's (`window_row`: that
+window's first row in the batch, -1 for none, so the spectra can be drawn); a segment with no
 complete window is Unclassified, `too-short` (or `no-measurements` when no row has a finite
 measurement), with empty peaks (the reference fills the masked peak slots of such a segment
 with the spectrum of an incomplete window; here they are 0).
@@ -38,7 +39,7 @@ from .windows import WINDOW_BLOCK, classify_window_rows
 
 
 CODES = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
-         "peak_freq", "peak_power", "peak_mask")
+         "peak_freq", "peak_power", "peak_mask", "window_row")
 
 
 class Segments:
@@ -114,8 +115,9 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
            "speed_mps": np.full(S, nan), "n_samples": segs.n_tracked.astype(np.int32),
            "peak_freq": np.zeros((S, N_PEAKS), np.float32),
            "peak_power": np.zeros((S, N_PEAKS), np.float32),
-           "peak_mask": np.zeros((S, N_PEAKS), bool)}
-    fields = [k for k in CODES if k != "n_samples"]
+           "peak_mask": np.zeros((S, N_PEAKS), bool),
+           "window_row": np.full(S, -1, np.int64)}  # the deciding window's first batch row
+    fields = [k for k in CODES if k not in ("n_samples", "window_row")]
     decided = np.zeros(S, bool)
     block = place.rows(block)
     for lo, hi in phases(int(segs.windows.max(initial=0))):
@@ -137,6 +139,7 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
             take |= ~ped  # window 0 is the result unless a later window says Pedestrian
         for k in fields:
             out[k][seg[take]] = res[k][take].astype(out[k].dtype)
+        out["window_row"][seg[take]] = (segs.first[seg] + segs.k0[seg] + segs.hop * j)[take]
         decided[seg[ped]] = True
     return out
 

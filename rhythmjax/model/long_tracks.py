@@ -126,7 +126,8 @@ def _unclassified(reason: int, n_tracked: int) -> dict:
     k = np.zeros(N_PEAKS, np.float32)
     return {"verdict": int(Verdict.UNCLASSIFIED), "reason": int(reason), "pace_hz": nan,
             "stride_m": nan, "ratio": nan, "speed_mps": nan, "n_samples": n_tracked,
-            "peak_freq": k, "peak_power": k, "peak_mask": np.zeros(N_PEAKS, bool)}
+            "peak_freq": k, "peak_power": k, "peak_mask": np.zeros(N_PEAKS, bool),
+            "window_row": -1}
 
 
 def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
@@ -149,6 +150,7 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
         rows = (k0 + hop * j)[:, None] + np.arange(n)[None, :]
         res = classify_window_rows(cfg, intensity[rows], dt[rows], xy[rows], observed[rows],
                                    block=min(window_chunk, WINDOW_BLOCK))
+        res["window_row"] = k0 + hop * j  # the window's first row in the piece
         if first is None:
             first = {k: v[0] for k, v in res.items()}
         hit = np.flatnonzero(res["verdict"] == Verdict.PEDESTRIAN)
@@ -158,7 +160,8 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
     else:
         pick = first
     out = {k: pick[k] for k in ("verdict", "reason", "pace_hz", "stride_m", "ratio",
-                                "speed_mps", "peak_freq", "peak_power", "peak_mask")}
+                                "speed_mps", "peak_freq", "peak_power", "peak_mask",
+                                "window_row")}
     out["n_samples"] = n_tracked
     return out
 
@@ -177,7 +180,10 @@ def classify_long_track(cfg: Config, z: np.ndarray, width: np.ndarray, intensity
         m, started, valid, xy = _first_piece(cfg, z[first:], width[first:], dt[first:], dt0,
                                              segment_rows)
         ds = np.concatenate([[dt0], dt[first + 1:first + m]]).astype(dt.dtype)
-        pieces.append(classify_piece(cfg, z[first:first + m], intensity[first:first + m], ds,
-                                     np.ones(m, bool), started, valid, xy, window_chunk))
+        piece = classify_piece(cfg, z[first:first + m], intensity[first:first + m], ds,
+                               np.ones(m, bool), started, valid, xy, window_chunk)
+        if piece["window_row"] >= 0:  # the deciding window's first row in the track
+            piece["window_row"] = first + int(piece["window_row"])
+        pieces.append(piece)
         first += m
     return pieces

@@ -4,7 +4,9 @@ section 3, items 1-6, 10, 13, 15).
 `open_video` checks the input before any work and yields `(index, t, frame)`: the 0-based frame
 index, its time t = index / fps in s, and the frame as 8-bit grey (H, W) uint8, or None for a frame
 of a folder that fails to decode (a missing measurement; recorded in `bad_frames`). Conversion to
-grey is explicit (BGR, BGRA, 16-bit or grey in; see `to_gray_u8`). `open_writer` opens an output
+grey is explicit (BGR, BGRA, 16-bit or grey in; see `to_gray_u8`). The pipeline sees grey only;
+with `keep_colour` set, the source also keeps each frame's decoded BGR (no second decode) for the
+annotated video to draw on, until `colour(index)` takes it. `open_writer` opens an output
 video before any processing; it is written to a temp file that keeps the suffix and renamed over the
 target on `close()` (nothing half-written). This module and `detect` are the only ones that import
 OpenCV (STYLE R11).
@@ -65,6 +67,30 @@ def to_gray_u8(frame: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(frame)
 
 
+CHROMA_LEVELS = 8  # a pixel whose B, G, R spread over more than this many grey levels is coloured
+CHROMA_SHARE = 0.005  # ... and a frame with more than this share of such pixels is a colour one
+# (grey content coded as colour, e.g. MJPG, decodes with channels up to 2 levels apart)
+
+
+def colour_bgr(frame: np.ndarray) -> np.ndarray | None:
+    """The BGR (H, W, 3) uint8 of a decoded 8-bit BGR or BGRA frame (alpha dropped; BGR as it
+    is, no copy); None for grey or 16-bit."""
+    if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] not in (3, 4):
+        return None
+    return frame if frame.shape[2] == 3 else cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
+
+
+def has_colour(frame: np.ndarray) -> bool:
+    """Whether a decoded frame shows colour: 8-bit BGR(A) with more than CHROMA_SHARE of its
+    pixels' channels spread over more than CHROMA_LEVELS grey levels (grey content stored as
+    BGR is not colour)."""
+    bgr = colour_bgr(frame)
+    if bgr is None:
+        return False
+    spread = bgr.max(axis=2) - bgr.min(axis=2)
+    return bool(np.mean(spread > CHROMA_LEVELS) > CHROMA_SHARE)
+
+
 def _natural_key(name: str) -> list[Any]:
     return [(0, int(t), "") if t.isdigit() else (1, 0, t.lower()) for t in re.split(r"(\d+)", name)]
 
@@ -91,7 +117,11 @@ class VideoSource:
     `width`, `height` (px), `fourcc` ("" for a folder), `is_folder`, `n_frames` (announced by the
     container, or the number of files; may lie), `n_frames_read` (frames yielded so far, None
     frames included), `bad_frames` (indices yielded as None), `notes` (warnings for the run
-    summary, e.g. ``read 18 of 30 frames announced``). Iterating again restarts from frame 0.
+    summary, e.g. ``read 18 of 30 frames announced``), `is_colour` (the first frame shows colour:
+    `has_colour`). Iterating again restarts from frame 0.
+    Set `keep_colour` before iterating to keep each yielded frame's BGR (a colour source only)
+    until `colour(index)` takes it (the overlay, once per frame, bounds the memory to the
+    frames read ahead of it).
     A video file's stream ends at the first frame OpenCV fails to read (it cannot skip one, and
     truncation looks the same); a folder yields None for an undecodable or wrongly sized frame.
     """
@@ -102,8 +132,13 @@ class VideoSource:
         self.notes: list[str] = []
         self.n_frames_read = 0
         self.pass_ended = False
+        self.keep_colour = False
+        self.is_colour = False
+        self._colour: dict[int, np.ndarray] = {}
+        self._kept: np.ndarray | None = None
         self._cap: Any = None
         self._first: list[np.ndarray] = []
+        self._first_bgr: list[np.ndarray | None] = []
         override = _check_fps(path, fps)
         if not os.path.exists(path):
             raise BadInput(path, "no such file")
@@ -125,7 +160,8 @@ class VideoSource:
         self.n_frames = len(self._files)
         if self.n_frames < 2:
             raise BadInput(self.path, "video has 1 frame; need >= 2")
-        first = self._read_image(self._files[0])
+        first = self._read_image(self._files[0], colour=True)
+        self.is_colour = self._kept is not None and has_colour(self._kept)
         if first is None:
             raise BadInput(self._files[0], "first frame of the folder does not decode")
         self.height, self.width = first.shape
@@ -163,6 +199,9 @@ class VideoSource:
             if not ok or f is None:
                 break
             frames.append(self._convert(f, len(frames)))
+            self._first_bgr.append(colour_bgr(f))
+            if len(frames) == 1:
+                self.is_colour = has_colour(f)
         if not frames:
             raise BadInput(self.path, f"the container opens but no frame decodes (fourcc "
                            f"'{self.fourcc}'; codec missing from this OpenCV build?)")
@@ -185,11 +224,27 @@ class VideoSource:
         except ValueError as e:
             raise BadInput(self.path, f"frame {index}: {e}") from None
 
-    def _read_image(self, file: str) -> np.ndarray | None:
+    def _read_image(self, file: str, colour: bool = False) -> np.ndarray | None:
+        """The grey frame of an image file (None: it does not decode); with `colour`, its BGR
+        (`colour_bgr`) in `_kept`."""
         img = cv2.imread(file, cv2.IMREAD_UNCHANGED)  # no implicit conversion; see to_gray_u8
+        self._kept = None if img is None or not colour else colour_bgr(img)
         if img is None:
             return None
         return self._convert(img, 0)
+
+    def _keep(self, index: int, bgr: np.ndarray | None) -> None:
+        if self.keep_colour and bgr is not None:
+            self._colour[index] = bgr
+
+    def colour(self, index: int) -> np.ndarray | None:
+        """The BGR (H, W, 3) uint8 of frame `index` of this pass, taken (forgotten, with any
+        older frame not taken); None for a grey source, without `keep_colour`, or a frame not
+        decoded."""
+        bgr = self._colour.pop(index, None)
+        for k in [k for k in self._colour if k < index]:
+            del self._colour[k]
+        return bgr
 
     # -- reading ---------------------------------------------------------------------------------
     def __iter__(self) -> Iterator[tuple[int, float, np.ndarray | None]]:
@@ -197,6 +252,7 @@ class VideoSource:
         self.bad_frames = []
         self.notes = self.notes[:self._n_open_notes]  # a new pass reports its own reading
         self.pass_ended = False
+        self._colour = {}
         frames = self._folder_frames() if self.is_folder else self._file_frames()
         for i, frame in enumerate(frames):
             self.n_frames_read = i + 1
@@ -205,7 +261,7 @@ class VideoSource:
 
     def _folder_frames(self) -> Iterator[np.ndarray | None]:
         for i, file in enumerate(self._files):
-            img = self._read_image(file)
+            img = self._read_image(file, colour=self.keep_colour and self.is_colour)
             if img is not None and img.shape != (self.height, self.width):
                 self.notes.append(f"frame {i} ({os.path.basename(file)}): size {img.shape[1]}x"
                                   f"{img.shape[0]}, not {self.width}x{self.height}; skipped")
@@ -214,20 +270,29 @@ class VideoSource:
                 self.notes.append(f"frame {i} ({os.path.basename(file)}) does not decode; skipped")
             if img is None:
                 self.bad_frames.append(i)
+            else:
+                self._keep(i, self._kept)
             yield img
 
     def _file_frames(self) -> Iterator[np.ndarray]:
         first, self._first = self._first, []
+        first_bgr, self._first_bgr = self._first_bgr, []
         if not first:  # a second pass: reopen
             self.close()
             self._cap = cv2.VideoCapture(self.path)
-        yield from first
+        for i, (gray, bgr) in enumerate(zip(first, first_bgr)):
+            if self.is_colour:
+                self._keep(i, bgr)
+            yield gray
         i = len(first)
         while self._cap is not None:
             ok, f = self._cap.read()  # never loop on the header's frame count
             if not ok or f is None:
                 break
-            yield self._convert(f, i)
+            gray = self._convert(f, i)
+            if self.keep_colour and self.is_colour:
+                self._keep(i, colour_bgr(f))
+            yield gray
             i += 1
         n = self.n_frames_read
         if self.n_frames is not None and n < self.n_frames:
