@@ -157,8 +157,9 @@ def test_no_motion_gives_zero_tracks(videos, tmp_path, capsys):
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["counts"] == {"tracks": 0, "pedestrians": 0, "non_pedestrians": 0,
-                                 "unclassified": 0, "too_fast": 0, "unjudged_plausible": 0,
-                                 "walkers": 0, "walkers_low": 0, "walkers_high": 0}
+                                 "unclassified": 0, "too_fast": 0, "explained": 0,
+                                 "unjudged_plausible": 0, "walkers": 0, "walkers_low": 0,
+                                 "walkers_high": 0}
     assert "non_pedestrians" in summary["count_rule"]
     assert summary["n_frames"] == 30 and summary["crowd_frames"] == 0
     assert (tmp_path / "mot.txt").read_text() == ""
@@ -229,8 +230,8 @@ def test_count_rule_removes_non_pedestrians_and_too_fast_unclassified():
     # the paper counts every confirmed track (7); the classifier removes the 2 non-pedestrians;
     # the 3 too short to judge still count
     assert c == {"tracks": 7, "pedestrians": 2, "non_pedestrians": 2, "unclassified": 3,
-                 "too_fast": 0, "unjudged_plausible": 3, "walkers": 5, "walkers_low": 2,
-                 "walkers_high": 5}
+                 "too_fast": 0, "explained": 0, "unjudged_plausible": 3, "walkers": 5,
+                 "walkers_low": 2, "walkers_high": 5}
     # ... unless faster than the walking model accepts (only the unclassified one counts as
     # too fast: a judged track keeps its verdict)
     c = count_walkers(v, fast)
@@ -245,8 +246,9 @@ def test_count_rule_removes_non_pedestrians_and_too_fast_unclassified():
     del verdicts["too_fast"]
     assert walker_ids(verdicts) == [1, 2, 4, 5, 7]
     assert count_walkers([]) == {"tracks": 0, "pedestrians": 0, "non_pedestrians": 0,
-                                 "unclassified": 0, "too_fast": 0, "unjudged_plausible": 0,
-                                 "walkers": 0, "walkers_low": 0, "walkers_high": 0}
+                                 "unclassified": 0, "too_fast": 0, "explained": 0,
+                                 "unjudged_plausible": 0, "walkers": 0, "walkers_low": 0,
+                                 "walkers_high": 0}
     assert "non_pedestrians" in COUNT_RULE and "too_fast" in COUNT_RULE
 
 

@@ -274,3 +274,109 @@ def test_webm_overlay_plays_in_headless_chromium(tmp_path):
         assert b.evaluate("document.querySelector('video').error") is None
         assert b.evaluate("document.querySelector('video').videoWidth") == 512
         assert b.console_errors() == []
+
+
+# -- count: spectra of the windows the batch classifier decided on -------------------------------
+def _count_scene():
+    """Crossing walkers and a bicycle in the small camera of tests/test_pedestrians.py, 15 fps."""
+    from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.scene import SceneSpec, bicycle, render_scene, walker
+
+    from .test_pedestrians import SMALL
+
+    cfg = config_from_dict(SMALL)
+    actors = (walker(-4.0, 6.5, 0.0, start_frame=2, phase=0.1),
+              walker(4.0, 9.5, math.pi, start_frame=3, phase=0.6, grey_torso=150, grey_legs=70),
+              bicycle(-6.0, 12.0, 0.0, speed_mps=2.0, start_frame=0))
+    return SMALL, cfg, render_scene(3, SceneSpec(n_frames=100, actors=actors,
+                                                 camera=cfg.camera)).frames
+
+
+@pytest.fixture(scope="module")
+def count_report(tmp_path_factory):
+    import cv2
+
+    small, _, frames = _count_scene()
+    root = tmp_path_factory.mktemp("count_report")
+    (root / "frames").mkdir()
+    for k, f in enumerate(frames):
+        assert cv2.imwrite(str(root / "frames" / f"f{k:03d}.png"), f)
+    (root / "small.json").write_text(json.dumps(small))
+    out = root / "out"
+    assert main(["count", str(root / "frames"), "-c", str(root / "small.json"), "-o", str(out),
+                 "--fps", "15", "-q", "--overlay", str(out / "overlay.mp4")]) == 0
+    return root, out
+
+
+def _pdf_pages(path) -> int:
+    return len(re.findall(rb"/Type\s*/Page\b(?!s)", path.read_bytes()))
+
+
+def test_count_writes_spectra_of_every_judged_track(count_report, capsys):
+    root, out = count_report
+    verdicts = read_table(out / "verdicts.csv", required=["track_id", "verdict", "reason"])
+    judged = int(np.sum(~np.isin(verdicts["reason"], ["too-short", "no-measurements"])))
+    assert judged >= 3  # two walkers and the bicycle
+    pages = max(1, math.ceil(judged / 12))
+    assert _pdf_pages(out / "spectra.pdf") == pages
+    assert (out / "spectra.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    p = _parse((out / "report.html").read_text())
+    assert len([s for s in p.images if s.startswith("data:image/png")]) == pages
+    assert "spectra.pdf" in p.links and "spectra.png" in p.links
+    # --no-report: the spectra stay, the old report goes with the set
+    assert main(["count", str(root / "frames"), "-c", str(root / "small.json"), "-o",
+                 str(root / "again"), "--fps", "15", "-q"]) == 0
+    assert (root / "again" / "report.html").exists()
+    assert main(["count", str(root / "frames"), "-c", str(root / "small.json"), "-o",
+                 str(root / "again"), "--fps", "15", "-q", "--no-report"]) == 0
+    assert not (root / "again" / "report.html").exists()
+    assert _pdf_pages(root / "again" / "spectra.pdf") == pages
+
+
+def test_count_spectra_windows_are_the_deciding_windows():
+    """Each window `table_windows` rebuilds from count's tables, classified alone by
+    `rhythm.classify_window` (the reference, its speed given), gives the track's verdict,
+    reason and pace (1e-5 relative): the spectrum drawn is the one that decided."""
+    import jax.numpy as jnp
+
+    from rhythmjax.cli.spectra import table_windows
+    from rhythmjax.count import count_frames
+    from rhythmjax.model.rhythm import classify_window
+    from rhythmjax.model.status import REASON_LABELS, VERDICT_LABELS
+
+    _, cfg, frames = _count_scene()
+    res = count_frames(cfg, ((i, i / 15.0, f) for i, f in enumerate(frames)))
+    v = res.verdicts
+    wins = table_windows(res.tracks, v, cfg.thresholds.n, 15.0)
+    judged = ~np.isin(v["reason"], ["too-short", "no-measurements"])
+    assert [w.track_id for w in wins] == [int(t) for t in v["track_id"][judged]]
+    assert len(wins) >= 3 and {w.result["verdict"] for w in wins} == {1, 2}  # both verdicts
+    for w in wins:
+        i = list(v["track_id"]).index(w.track_id)
+        assert len(w.rows) == cfg.thresholds.n
+        inten = jnp.asarray([r.intensity for r in w.rows], jnp.float32)
+        t = jnp.asarray([r.t - w.rows[0].t for r in w.rows], jnp.float32)
+        r = classify_window(cfg, inten, t, jnp.zeros((len(w.rows), 2), jnp.float32),
+                            jnp.asarray(True), speed=jnp.float32(v["speed_mps"][i]))
+        assert VERDICT_LABELS[int(r.verdict)] == v["verdict"][i]
+        assert REASON_LABELS[int(r.reason)] == v["reason"][i]
+        np.testing.assert_allclose(float(r.pace_hz), float(v["pace_hz"][i]), rtol=1e-5,
+                                   equal_nan=True)
+        assert w.result["verdict"] == int(r.verdict) and w.result["window"] == (0, len(w.rows))
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no Chromium installed (apt-get install chromium)")
+def test_count_report_loads_in_headless_chromium(count_report, tmp_path):
+    _, out = count_report
+    with Browser(CHROMIUM) as b:
+        b.load((out / "report.html").as_uri())
+        assert b.console_errors() == []
+        rows = b.evaluate("document.querySelectorAll('#verdicts tbody tr').length")
+        verdicts = read_table(out / "verdicts.csv", required=["track_id"])
+        assert rows == len(verdicts["track_id"]) >= 2
+        widths = b.evaluate("Array.from(document.images).map(i => i.naturalWidth)")
+        alts = b.evaluate("Array.from(document.images).map(i => i.alt)")
+        assert any(a.startswith("spectra page") for a in alts)
+        assert widths and all(w > 0 for w in widths)  # every image decoded
+        shot = os.environ.get("RHYTHMJAX_SHOT_DIR")  # keep the screenshot to look at
+        b.screenshot(os.path.join(shot, "count_report.png") if shot else tmp_path / "s.png")

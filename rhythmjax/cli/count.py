@@ -26,11 +26,13 @@ from .common import (
     reading_check,
     say,
 )
-from .overlay import FrameSampler, TrackOverlay
+from .overlay import FrameSampler, TrackOverlay, in_colour
 from .report import REPORT_NAME, render_report, write_report
+from .spectra import table_windows, write_spectra
 
 
-COUNT_OUTPUTS = ("mot.txt", "mot_velocity.txt", "tracks.parquet", "verdicts.csv", "counts.json")
+COUNT_OUTPUTS = ("mot.txt", "mot_velocity.txt", "tracks.parquet", "verdicts.csv", "counts.json",
+                 "spectra.png", "spectra.pdf")
 GUESS_COLUMNS = ("track_speed_mps", "too_fast", "width_m", "width_ok", "counted")
 
 
@@ -65,9 +67,11 @@ def cmd_count(args) -> int:
     measured width at the foot point), width_ok (inside the width gate (10)), and counted) and
     DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
     unjudged_plausible, walkers, walkers_low, walkers_high; the rule in words; the run summary
-    with ghosts_dropped) and DIR/report.html (the counts, the verdict table, the overlay and the
-    config on one page; --no-report skips it). The files (and --overlay) replace the previous
-    set together, only when the run succeeds.
+    with ghosts_dropped), DIR/spectra.pdf (every judged track's spectrum: the window the
+    classifier decided on; DIR/spectra.png its first page) and DIR/report.html (the counts,
+    the verdict table, the spectra, the overlay and the config on one page; --no-report skips
+    it). The files (and --overlay) replace the previous set together, only when the run
+    succeeds. The overlay is drawn on the video's own colour frames where it has colour.
     Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
     (dense crowd, camera jump) is not used for detection (pedestrians predict) and the summary
     says how many there were."""
@@ -87,8 +91,9 @@ def cmd_count(args) -> int:
         overlay_path = outs.path(args.overlay) if args.overlay else None
         with src, overlay_writer(overlay_path, src.fps, (src.width, src.height)) as overlay:
             drawer, sampler = TrackOverlay("count"), FrameSampler(src.n_frames)
+            pick = None if overlay is None else in_colour(src)  # the video's colour frame
             draw = None if overlay is None else (lambda frame, index, snapshot: overlay.write(
-                sampler(index, drawer(frame, index, snapshot))))
+                sampler(index, drawer(pick(frame, index), index, snapshot))))
             res = count_frames(cfg, src, options=opt, n_frames=src.n_frames, on_frame=draw,
                                progress=not (args.quiet or args.json))
             reading_check(args, src)
@@ -105,11 +110,14 @@ def cmd_count(args) -> int:
                         VERDICT_ORDER + list(GUESS_COLUMNS))
             with atomic_write(outs.path(out("counts.json")), "w") as f:
                 f.write(dumps_json(summary, indent=2) + "\n")
+            spectra = write_spectra(outs.path(out("spectra.png")), outs.path(out("spectra.pdf")),
+                                    cfg, table_windows(res.tracks, res.verdicts,
+                                                       cfg.thresholds.n, cfg.camera.fps))
             if not args.no_report:
                 write_report(outs.path(out(REPORT_NAME)), render_report(
                     title=f"rhythmjax count {os.path.basename(args.video)}",
                     summary={k: v for k, v in summary.items() if k != "output"},
-                    verdicts=res.verdicts, config=config_to_dict(cfg),
+                    verdicts=res.verdicts, config=config_to_dict(cfg), spectra=spectra,
                     overlay=_relative(args.overlay, args.output), outputs=list(COUNT_OUTPUTS),
                     frames=sampler.frames))
     if args.json:
@@ -158,6 +166,6 @@ def register(sub, formatter=None) -> None:
     p.add_argument("--min-frames", type=int, default=10, help="tracks shorter than this many "
                    "frames are dropped from the outputs and counts")
     p.add_argument("--no-report", action="store_true", help="skip report.html (the counts, "
-                   "verdict table, overlay and config on one page)")
+                   "verdict table, spectra, overlay and config on one page)")
     add_common(p)
     p.set_defaults(func=cmd_count)

@@ -39,7 +39,11 @@ numbers of `count_walkers` (tracks, pedestrians, non_pedestrians, unclassified, 
 unjudged_plausible, walkers and its range walkers_low .. walkers_high: judged only .. judged +
 every unjudged track), the verdicts say per track `track_speed_mps`, `too_fast`, `width_m`,
 `width_ok` (the unjudged tracks' best guess by speed and size) and `counted`, and `COUNT_RULE`
-says the rule in words (written to counts.json).
+says the rule in words (written to counts.json). With `explain.enabled` (off: it removed
+distinct walkers on the sources it was not chosen on, docs/rules.md) a counted unclassified
+track that a stronger counted track explains (a duplicate on the ground or its continuation:
+`explain.explain_tracks`) is not counted either (verdicts `explained_by`, `explained_as`;
+counts `explained`).
 """
 
 from __future__ import annotations
@@ -55,6 +59,7 @@ from ..io.mot import VELOCITY_COLUMNS
 from ..model.params import Config
 from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
+from .explain import explain_tracks, measured_points
 from .options import SPEED_FITS, CountOptions
 from .pedestrian_level import Pedestrian, PedestrianLevel
 from .rows import BlobRow, BoxRow, GroundRow
@@ -208,30 +213,36 @@ def track_width(level: PedestrianLevel, p: Pedestrian) -> float:
     return float(np.median(r[m, 2] / W[m]) * level.shape.width_m) if m.any() else math.nan
 
 
-def count_walkers(verdicts, too_fast=None) -> dict[str, int]:
+def count_walkers(verdicts, too_fast=None, explained=None) -> dict[str, int]:
     """The counts of a verdict list (labels as `status.Verdict`; `too_fast`: per track, faster
-    than `walking_top_speed`, default none): tracks, pedestrians (judged), non_pedestrians
-    (judged), unclassified (too short to judge), too_fast (unclassified and too fast),
-    unjudged_plausible (unclassified, not too fast), walkers = tracks - non_pedestrians -
-    too_fast = pedestrians + unjudged_plausible (`COUNT_RULE`), and the range the unjudged
+    than `walking_top_speed`, default none; `explained`: per track, explained by another
+    counted track (`explain.explain_tracks`, `explain.enabled`), default none): tracks,
+    pedestrians (judged), non_pedestrians (judged), unclassified (too short to judge), too_fast
+    (unclassified and too fast), explained (unclassified, not too fast, explained),
+    unjudged_plausible (unclassified, neither), walkers = tracks - non_pedestrians - too_fast -
+    explained = pedestrians + unjudged_plausible (`COUNT_RULE`), and the range the unjudged
     tracks leave: walkers_low = pedestrians (judged only), walkers_high = pedestrians +
     unclassified (every unjudged track a walker)."""
     v = [str(x) for x in verdicts]
     fast = [False] * len(v) if too_fast is None else [bool(f) for f in too_fast]
+    expl = [False] * len(v) if explained is None else [bool(e) for e in explained]
     n, non, ped, unc = len(v), v.count("non-pedestrian"), v.count("pedestrian"), \
         v.count("unclassified")
     tf = sum(f and w == "unclassified" for w, f in zip(v, fast))
+    ex = sum(e and not f and w == "unclassified" for w, f, e in zip(v, fast, expl))
     return {"tracks": n, "pedestrians": ped, "non_pedestrians": non, "unclassified": unc,
-            "too_fast": tf, "unjudged_plausible": unc - tf, "walkers": n - non - tf,
-            "walkers_low": ped, "walkers_high": ped + unc}
+            "too_fast": tf, "explained": ex, "unjudged_plausible": unc - tf - ex,
+            "walkers": n - non - tf - ex, "walkers_low": ped, "walkers_high": ped + unc}
 
 
 def counted(verdicts: dict) -> np.ndarray:
     """Per track, whether `COUNT_RULE` counts it as a walker: not judged non-pedestrian, and
-    not unclassified and too fast (verdicts["too_fast"], when present)."""
+    not unclassified and too fast (verdicts["too_fast"], when present), and explained by no
+    other track (verdicts["explained_by"] 0, when present; `explain.enabled`)."""
     v = np.asarray([str(x) for x in verdicts["verdict"]], dtype=object)
     fast = np.asarray(verdicts.get("too_fast", np.zeros(len(v), bool)), bool)
-    return (v != "non-pedestrian") & ~((v == "unclassified") & fast)
+    expl = np.asarray(verdicts.get("explained_by", np.zeros(len(v), np.int64))) != 0
+    return (v != "non-pedestrian") & ~((v == "unclassified") & fast) & ~expl
 
 
 def walker_ids(verdicts: dict) -> list[int]:
@@ -255,18 +266,26 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
                     width_px=tracks["width_px"], intensity=tracks["intensity"],
                     line=np.arange(len(tracks["frame"])), fps=cfg.camera.fps)
         gap = max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
-        verdicts = classify_tracks(cfg, to_batch(tr, max_gap_frames=gap, min_len=n),
-                                   progress=False)
+        batch = to_batch(tr, max_gap_frames=gap, min_len=n)
+        verdicts = classify_tracks(cfg, batch, progress=False)
+        # the deciding window's first frame (-1: none; the spectra): its batch row's time
+        w = np.asarray(verdicts["window_row"], np.int64)
+        b = np.arange(len(w))
+        first = tracks["frame"][np.r_[0, np.flatnonzero(np.diff(tracks["track_id"])) + 1]]
+        dt_frames = (batch.t[b, np.maximum(w, 0)] - batch.t[:, 0]) * float(cfg.camera.fps)
+        window_frame = np.where(w >= 0, first + np.round(dt_frames).astype(np.int64), -1)
         verdicts = {k: verdicts[k] for k in ("track_id", "verdict", "reason", "pace_hz",
                                               "stride_m", "ratio", "speed_mps", "n_samples")}
         verdicts["track_id"] = verdicts["track_id"].astype(np.int64)
+        verdicts["window_frame"] = window_frame
     else:
         B, nan = len(peds), np.full(len(peds), np.nan)
         verdicts = {"track_id": np.arange(1, B + 1, dtype=np.int64),
                     "verdict": np.full(B, "unclassified", dtype=object),
                     "reason": np.full(B, "not-judged", dtype=object), "pace_hz": nan,
                     "stride_m": nan, "ratio": nan, "speed_mps": nan,
-                    "n_samples": np.asarray([len(p.rows) for p in peds], np.int64)}
+                    "n_samples": np.asarray([len(p.rows) for p in peds], np.int64),
+                    "window_frame": np.full(B, -1, np.int64)}
     mot, detections = mot_table(peds), detections_table(level.detections)
     top = walking_top_speed(cfg)
     fit = level.opt.verdicts.speed_fit
@@ -277,7 +296,9 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
     verdicts["width_ok"] = np.abs(verdicts["width_m"] - float(w.mean)) <= \
         float(cfg.thresholds.k_sigma1) * float(w.std)
     verdicts["counted"] = counted(verdicts)
-    counts = count_walkers(verdicts["verdict"], verdicts["too_fast"])
+    explain_counted(level, tracks, verdicts)
+    counts = count_walkers(verdicts["verdict"], verdicts["too_fast"],
+                           verdicts["explained_by"] != 0)
     summary = {"n_frames": level.n_frames, "dynamics": level.opt.dynamics,
                "count_rule": COUNT_RULE, "stitched": level.stitched,
                "ghosts_dropped": level.ghosts, "crowd_frames": len(level.crowd_frames),
@@ -291,6 +312,20 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
         summary["notes"].append(f"all {level.filter.slots} pedestrian slots were in use in "
                                 f"{len(set(level.full_frames))} frame(s); raise max_pedestrians")
     return CountResult(mot, tracks, verdicts, counts, detections, summary)
+
+
+def explain_counted(level: PedestrianLevel, tracks: dict, verdicts: dict) -> None:
+    """Adds verdicts["explained_by"] (the id of the counted track that explains each track, 0:
+    none) and ["explained_as"] (`explain.explain_tracks` with `explain.*`; all 0 and "" when
+    off) and takes the explained tracks out of verdicts["counted"]."""
+    ids = [int(i) for i in verdicts["track_id"]]
+    cfg = level.cfg
+    by, how = explain_tracks(measured_points(tracks, ids), verdicts["verdict"],
+                             verdicts["counted"], float(cfg.camera.fps), level.opt.explain,
+                             float(cfg.width.mean))
+    verdicts["explained_by"] = np.asarray([0] + ids, np.int64)[by]
+    verdicts["explained_as"] = how
+    verdicts["counted"] = counted(verdicts)
 
 
 def _columns(records: list, fields: tuple[str, ...]) -> dict[str, tuple]:

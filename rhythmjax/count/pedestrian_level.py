@@ -50,6 +50,7 @@ from ..track.rows import TrackRow
 from ..track.toolkit import PendingStep, dv_frames, match_window, velocity_jump
 from ..vision.blobs import box_table, meeting
 from ..vision.detect import window_b_intensity
+from .appearance import Appearance, look_of_frame
 from .foot_gate import gated
 from .patches import (
     FILTER_OUT,
@@ -61,7 +62,7 @@ from .patches import (
     place_patch,
 )
 from .rows import BlobRow, BoxRow, GroundRow
-from .still import is_still
+from .still import duplicates, is_still
 from .widths import measured_width
 
 
@@ -92,6 +93,7 @@ class Pedestrian:
     decided: bool = False
     z: tuple = (math.nan, math.nan)  # this frame's measurement
     z_width: float = math.nan  # its measured width px (`widths.measured_width`), gate (10)
+    look: Appearance | None = None  # `appearance.enabled`: its descriptor (unshared frames)
 
 
 def _finite(uv) -> bool:
@@ -115,7 +117,7 @@ class PedestrianLevel:
         self.coast_s = float(cfg.thresholds.predict_timeout)
         self.peds: list[Pedestrian] = []
         self.finished: list[Pedestrian] = []
-        self.bg = self.prev = None
+        self.bg = self.prev = self.gray = None
         self.prev_blobs: list = []
         self.last_t: float | None = None
         self.next_id, self.n_frames = 1, 0
@@ -154,6 +156,7 @@ class PedestrianLevel:
             while self.absorb:  # still pedestrians' patches (`_after`)
                 self.bg.absorb(gray, self.absorb.pop())
             mask = self.bg.apply(gray)
+            self.gray = gray  # for the descriptors (`appearance.look_of_frame`)
             D, self.prev = frame_difference(self.prev, gray), gray
             blobs, labels = find_blobs(mask, min_area=opt.blobs.min_area)
             if is_crowd(blobs, mask.shape, fraction=opt.blobs.crowd_fraction):
@@ -268,6 +271,10 @@ class PedestrianLevel:
                 continue
             p.z = z  # the object's width: its blob's run, a patch width around
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
+            if k == 1 and opt.appearance.enabled:  # its blobs not shared: its descriptor
+                a = opt.appearance
+                p.look = look_of_frame(p.look, self.gray, labels, lab, claimed, pl.u, pl.v,
+                                       pl.w, pl.h, a.bins, a.min_fill)
             if k > 1:
                 x0, y0, x1, y1 = (int(round(q)) for q in (pl.u - pl.w / 2, pl.v - pl.h,
                                                           pl.u + pl.w / 2, pl.v + 1))
@@ -405,17 +412,9 @@ class PedestrianLevel:
         match_window(self.cfg, p, skip_missing=False, measured_speed=False)
 
     def _duplicates(self) -> None:
-        for i, a in enumerate(self.peds):
-            for b in self.peds[i + 1:]:
-                near = math.hypot(a.est_uv[0] - b.est_uv[0], a.est_uv[1] - b.est_uv[1]) \
-                    < self.opt.life.duplicate_widths * max(1.0, a.size[0])
-                same = math.hypot(a.step_uv[0] - b.step_uv[0], a.step_uv[1] - b.step_uv[1]) \
-                    < 0.15 * max(1.0, a.size[0])
-                young = b if (b.hits, -b.born) < (a.hits, -a.born) else a
-                young.close = young.close + 1 if near and same else 0
-        for p in list(self.peds):
-            if p.close >= self.opt.life.duplicate_frames:
-                self._end(p)
+        life = self.opt.life
+        for p in duplicates(self.peds, life.duplicate_widths, life.duplicate_frames):
+            self._end(p)
 
     def _end(self, p: Pedestrian) -> None:
         if p in self.peds:

@@ -22,11 +22,14 @@ S2L1: a box where a man stood in frame 0, for all 794 frames). Two remedies:
    the frame into the background under its patch (`BackgroundModel.absorb`), so no new
    pedestrian starts there; a track still over its whole measured life (`never_moved`) is
    dropped from the count.
+3. `duplicates`: two pedestrians within `duplicate_widths` W with the same image step (within
+   0.15 W) for `duplicate_frames` frames in a row follow one object: the younger ends.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Iterable, Iterator
 
 import numpy as np
@@ -34,7 +37,7 @@ import numpy as np
 from ..vision.blobs import median_background
 
 
-__all__ = ["is_still", "never_moved", "peek_background"]
+__all__ = ["duplicates", "is_still", "never_moved", "peek_background"]
 
 
 def peek_background(frames: Iterable, seconds: float, max_frames: int
@@ -84,3 +87,18 @@ def never_moved(uv: np.ndarray | list, size: tuple[float, float], block: int, wi
     """`is_still` over a whole track's measured foot points (its predicted rows left out)."""
     uv = np.asarray(uv, np.float64).reshape(-1, 2)
     return is_still(uv[np.all(np.isfinite(uv), axis=1)], size, block, widths, heights)
+
+
+def duplicates(peds: list, duplicate_widths: float, duplicate_frames: int) -> list:
+    """Of `peds` (objects with est_uv, step_uv (px), size (w, h px), hits, born and a `close`
+    counter, updated here), those that have been the younger of a close pair (foot points within
+    `duplicate_widths` x w px, image steps within 0.15 w px) for `duplicate_frames` frames."""
+    for i, a in enumerate(peds):
+        for b in peds[i + 1:]:
+            near = math.hypot(a.est_uv[0] - b.est_uv[0], a.est_uv[1] - b.est_uv[1]) \
+                < duplicate_widths * max(1.0, a.size[0])
+            same = math.hypot(a.step_uv[0] - b.step_uv[0], a.step_uv[1] - b.step_uv[1]) \
+                < 0.15 * max(1.0, a.size[0])
+            young = b if (b.hits, -b.born) < (a.hits, -a.born) else a
+            young.close = young.close + 1 if near and same else 0
+    return [p for p in peds if p.close >= duplicate_frames]

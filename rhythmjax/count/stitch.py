@@ -5,16 +5,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..model.camera_np import project_3d
 from ..model.status import TrackState
 from ..track.relink import Anchor, gate_distance
+from .appearance import appearance_distance
+from .patches import ground_point
 from .pedestrian_level import Pedestrian, PedestrianLevel
 
 
-__all__ = ["Piece", "piece_of", "reid_distance", "stitch_level", "stitch_pieces"]
+if TYPE_CHECKING:
+    from .options import AppearanceOptions
+
+
+__all__ = ["Piece", "piece_of", "reach_misfit", "reid_distance", "stitch_level",
+           "stitch_pieces"]
 
 
 @dataclass(frozen=True)
@@ -22,7 +30,9 @@ class Piece:
     """A track for stitching: first and last measured frame (index) and time (s); its foot point
     (u, v px, du, dv px/s) at its first frame and at its last, and the patch (w, h) px at its
     first; for the "3d" dynamics also its ground state (x, y m, vx, vy m/s) at its last frame
-    (the EKF's: the prediction runs on the ground plane). NaN: unknown."""
+    (the EKF's: the prediction runs on the ground plane). NaN: unknown. `start_xy`: the ground
+    point (m) of its start foot point; `look`: its (2, bins) appearance descriptor
+    (`appearance.Appearance.mean`); None: unknown."""
 
     first: int
     last: int
@@ -32,6 +42,8 @@ class Piece:
     end: tuple[float, float, float, float]
     size: tuple[float, float]
     end_ground: tuple[float, float, float, float] | None = None
+    start_xy: tuple[float, float] | None = None
+    look: np.ndarray | None = None
 
 
 def _line_fit(t: np.ndarray, uv: np.ndarray, at: float) -> tuple[float, float, float, float]:
@@ -72,7 +84,13 @@ def piece_of(p: Pedestrian, shape, dynamics: str, fit_s: float) -> Piece:
     else:
         tail = use & (t >= t1 - fit_s)
         end = _line_fit(t[tail], uv[tail], t1)
-    return Piece(int(p.rows[0].frame), int(p.rows[-1].frame), t0, t1, start, end, size, ground)
+    start_xy = None
+    if np.isfinite(start[0]):
+        gx, gy, ok = ground_point(shape.camera, start[0], start[1])
+        start_xy = (float(gx), float(gy)) if bool(ok) else None
+    look = None if p.look is None else p.look.mean()
+    return Piece(int(p.rows[0].frame), int(p.rows[-1].frame), t0, t1, start, end, size, ground,
+                 start_xy, look)
 
 
 def _predict(A: Piece, dt: float, camera: tuple | None) -> np.ndarray:
@@ -110,9 +128,31 @@ def reid_distance(A: Piece, B: Piece, camera: tuple | None, *, gate_w: float, ga
         (1.0 + gate_per_s * gap)
 
 
+def reach_misfit(A: Piece, B: Piece, camera: tuple | None, reach_m: float,
+                 speed_mps: float) -> float:
+    """Ground distance (m) from A's last ground point (its EKF state, else its end foot point's
+    ground point) to B's start ground point (`Piece.start_xy`), over what a walker can cover in
+    the gap: reach_m + speed_mps x gap (<= 1: reachable). inf: unknown or B not after A."""
+    gap = B.t_first - A.t_last
+    if B.start_xy is None or not gap >= 0:
+        return math.inf
+    if A.end_ground is not None:
+        xa, ya = A.end_ground[:2]
+    elif camera is not None and np.all(np.isfinite(A.end[:2])):
+        xa, ya, ok = ground_point(camera, A.end[0], A.end[1])
+        if not bool(ok):
+            return math.inf
+    else:
+        return math.inf
+    d = math.hypot(float(xa) - B.start_xy[0], float(ya) - B.start_xy[1])
+    return d / max(1e-9, reach_m + speed_mps * gap)
+
+
 def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_h: float,
                   gate_per_s: float, max_dv_w: float, camera: tuple | None = None,
-                  reid: bool = False, reid_max_dv_w: float = math.inf) -> list[int]:
+                  reid: bool = False, reid_max_dv_w: float = math.inf,
+                  look: AppearanceOptions | None = None, body_width_m: float = 0.5
+                  ) -> list[int]:
     """Successor of each piece (index into `pieces`, -1: none); see the module docstring.
 
     B may follow A when B.first > A.last and B.t_first - A.t_last = gap <= max_gap_s, and they
@@ -130,7 +170,15 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
     only after every halfway pair. Taken together with them, cheapest of the two misfits first,
     re-identified pairs displaced right halfway ones in groups, where many walkers pass the
     predicted spot within seconds (own seeds 42024: missed/over/extra walkers 11/3/5 ->
-    11/2/7; 31337: 11/3/9 -> 12/4/10); as a fallback it changed no count there."""
+    11/2/7; 31337: 11/3/9 -> 12/4/10); as a fallback it changed no count there.
+
+    `look` (`AppearanceOptions`, when enabled; a second fallback, taken after both): B may also
+    follow A when B starts within look.max_gap_s s, within reach (`reach_misfit` <= 1 with
+    reach_widths x body_width_m m and reach_speed_mps) and their descriptors (`Piece.look`) are
+    at most look.max_distance apart (`appearance.appearance_distance`), cheapest first; a
+    halfway or re-identified pair whose descriptors are more than look.veto_distance apart is
+    refused."""
+    use_look = look is not None and look.enabled
     cand, gate = [], dict(gate_w=gate_w, gate_h=gate_h, gate_per_s=gate_per_s)
     for a, A in enumerate(pieces):
         ea = np.asarray(A.end, np.float64)
@@ -139,8 +187,14 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
         for b, B in enumerate(pieces):
             sb, (w, h) = np.asarray(B.start, np.float64), B.size
             gap = B.t_first - A.t_last
-            if (B.first <= A.last or gap > max_gap_s or not np.all(np.isfinite(sb))
-                    or not (w > 0 and h > 0)):
+            if (B.first <= A.last or not np.all(np.isfinite(sb)) or not (w > 0 and h > 0)):
+                continue
+            dist = appearance_distance(A.look, B.look) if use_look else math.nan
+            if gap > max_gap_s:
+                if (use_look and gap <= look.max_gap_s and dist <= look.max_distance
+                        and reach_misfit(A, B, camera, look.reach_widths * body_width_m,
+                                         look.reach_speed_mps) <= 1.0):
+                    cand.append((2, dist, a, b))
                 continue
             mid_a = _predict(A, 0.5 * gap, camera)
             mid_b = sb[:2] - sb[2:] * 0.5 * gap
@@ -151,10 +205,16 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
             r = reid_distance(A, B, camera, **gate) if reid else math.inf
             dv_r = dv * max_dv_w / reid_max_dv_w
             ok, ok_r = d <= 1.0 and dv <= 1.0, r <= 1.0 and dv_r <= 1.0
+            if (ok or ok_r) and use_look and dist > look.veto_distance:
+                continue
             if ok:
                 cand.append((0, d + dv, a, b))
             elif ok_r:
                 cand.append((1, r + dv_r, a, b))
+            elif (use_look and gap <= look.max_gap_s and dist <= look.max_distance
+                  and reach_misfit(A, B, camera, look.reach_widths * body_width_m,
+                                   look.reach_speed_mps) <= 1.0):
+                cand.append((2, dist, a, b))
     succ, pred = [-1] * len(pieces), [-1] * len(pieces)
     for _, _, a, b in sorted(cand):
         if succ[a] < 0 and pred[b] < 0:
@@ -172,7 +232,8 @@ def stitch_level(level: PedestrianLevel, peds: list[Pedestrian]) -> list[Pedestr
     succ = stitch_pieces(pieces, max_gap_s=opt.stitch.max_gap_s, gate_w=opt.stitch.gate_w,
                          gate_h=opt.stitch.gate_h, gate_per_s=opt.stitch.gate_per_s,
                          max_dv_w=opt.stitch.max_dv_w, camera=level.shape.camera,
-                         reid=opt.stitch.reid, reid_max_dv_w=opt.stitch.reid_max_dv_w)
+                         reid=opt.stitch.reid, reid_max_dv_w=opt.stitch.reid_max_dv_w,
+                         look=opt.appearance, body_width_m=float(level.cfg.width.mean))
     has_pred = {b for b in succ if b >= 0}
     out = []
     for a, p in enumerate(peds):
@@ -183,6 +244,10 @@ def stitch_level(level: PedestrianLevel, peds: list[Pedestrian]) -> list[Pedestr
             q = peds[b]
             p.rows, p.boxes, p.ground = p.rows + q.rows, p.boxes + q.boxes, p.ground + q.ground
             p.hits += q.hits
+            if p.look is not None:
+                p.look.merge(q.look)
+            else:
+                p.look = q.look
             level.stitched += 1
             b = succ[b]
         out.append(p)
