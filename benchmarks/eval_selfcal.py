@@ -25,7 +25,9 @@ Real data is read where it lies, never copied into the repository. For example:
 
 Prints per cue set: median |h error| (%), median |tilt error| (deg), median |a f error| (%),
 how many fits were flagged ill-determined (the CLI would refuse them), the median walkers used
-and how many non-walkers were among them. h is not determined by ``speed`` alone (scale-free):
+and how many non-walkers were among them; each fit's line also gives the clearance (px) of the
+used foot points below the fitted horizon (`fit.selfcal_checks`: under 4 px it is refused).
+h is not determined by ``speed`` alone (scale-free):
 its h column is left out.
 """
 
@@ -38,6 +40,7 @@ import time
 import numpy as np
 
 from fit.selfcal import fit_selfcal
+from fit.selfcal_checks import horizon_clearance
 from fit.selfcal_data import camera_values, scene, scene_batch as batch_of
 from rhythmjax.model.params import Camera, Config
 
@@ -72,6 +75,8 @@ def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS) -> dict:
                 rows[cues].append(None)
                 continue
             others = sum(labels[i] != "pedestrian" for i in r.walker_ids)
+            # px from the fitted horizon to the nearest used foot point (the pinned-horizon check)
+            clear = horizon_clearance(r.camera, b, np.isin(b.ids, r.walker_ids))[0]
             rows[cues].append({
                 "h": 100 * (r.values["h"] / tv["h"] - 1), "theta": r.values["theta"] - tv["theta"],
                 "af": 100 * (r.values["af"] / tv["af"] - 1), "ill": r.ill_determined,
@@ -80,6 +85,7 @@ def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS) -> dict:
             print(f"seed {seed} {'+'.join(cues):18s} h {tv['h']:5.2f} -> {r.values['h']:6.2f}  "
                   f"tilt {tv['theta']:5.2f} -> {r.values['theta']:6.2f}  af {tv['af']:6.0f} -> "
                   f"{r.values['af']:7.0f}  walkers {r.n_walkers} ({others} not)  "
+                  f"clearance {clear:.0f} px  "
                   f"{'ILL ' if r.ill_determined else ''}{dt:.1f} s", flush=True)
     return rows
 

@@ -50,7 +50,8 @@ import numpy as np
 import optimistix as optx
 
 from fit.camera import NAMES, UNITS, CameraParams, se_limits
-from fit.selfcal_data import camera_of, camera_values, gait_peaks, make_params, radial, row_spread
+from fit.selfcal_checks import HORIZON_MARGIN_PX, geometry_reasons
+from fit.selfcal_data import camera_of, camera_values, gait_peaks, make_params, radial
 from fit.selfcal_height import HEIGHT_STD_M, MIN_TOP_ROWS, height_cues, top_walkers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
 from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
@@ -70,7 +71,6 @@ MIN_WALKERS = 5  # fewer tracks with a clear gait peak: refused
 MIN_ROWS = 20  # a track needs this many measured rows
 MIN_ROW_SPREAD = 0.02  # walkers' median foot rows (10-90 %) span less of the image: refused
 # (a quarter of the smallest on the development seeds 0-5, 0.083; added after CASIA-B's walks)
-HORIZON_MARGIN_PX = 2.0
 THETA_GRID = (3.0, 6.0, 10.0, 15.0, 20.0, 26.0, 33.0, 40.0, 50.0, 60.0)
 AF_GRID = (0.3, 0.42, 0.6, 0.8, 1.05, 1.35, 1.8, 2.4)  # x the image width
 
@@ -397,8 +397,6 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     if out.reasons and radial(out.camera, batch, used):
         out.reasons.append("every walker moves along the optical axis (within 15 deg): "
                            "lateral and radial distances cannot be compared")
-    if (spread := row_spread(batch, used, cam0.image_height)) < MIN_ROW_SPREAD:
-        out.reasons.append(f"every walker stands at about the same depth (foot rows within "
-                           f"{100 * spread:.1f} % of the image height): nothing foreshortens")
+    out.reasons += geometry_reasons(out.camera, batch, used, MIN_ROW_SPREAD, ids)
     out.ill_determined = bool(out.reasons)
     return out

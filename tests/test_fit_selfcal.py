@@ -334,3 +334,45 @@ def test_walkers_all_at_one_depth_are_refused():
     r = fit_selfcal(START, batch_of(cols, START), max_steps=20)
     assert r.n_walkers >= 5 and r.ill_determined
     assert any("same depth" in q for q in r.reasons), r.reasons
+
+
+def test_horizon_clearance_against_the_projection_of_far_ground_points():
+    """Reference: `project` of ground points 1e7 m ahead lies on the horizon (within
+    b f h / y = 5e-4 px); 10 px below them the clearance is 10 px. Roll 3 deg: a sloped line."""
+    import types
+
+    from fit.selfcal_checks import horizon_clearance
+
+    cam = Camera(f=F, h=5.5, theta=math.radians(21.0), a=950 / F, b=950 / F, uc=640, vc=360,
+                 roll=math.radians(3.0), fps=15.0, image_width=1280, image_height=720)
+    with jax.enable_x64(True):
+        u, v = (np.asarray(q) for q in project(cam, jnp.array([-3e6, 0.0, 4e6]),
+                                               jnp.full(3, 1e7)))
+    for dv, want in ((0.0, 0.0), (10.0, 10.0)):
+        z = np.stack([u, v + dv], -1)[:, None, :]  # three tracks of one row
+        b = types.SimpleNamespace(z=z, present=np.ones((3, 1), bool))
+        clear, k = horizon_clearance(cam, b, np.ones(3, bool))
+        assert abs(clear - want) < 1e-2, (clear, want)
+
+
+def test_a_fit_pinned_on_the_horizon_is_refused():
+    """The dev clips' case: one foot point 2 px below the fitted horizon (the hinge's margin, a
+    fit held by that point) gives the pinned-horizon reason; 50 px below, none. Foot points
+    placed by `project` of a far ground point (on the horizon within 5e-4 px, test above)."""
+    import types
+
+    from fit.selfcal_checks import PINNED_CLEARANCE_PX, geometry_reasons
+
+    with jax.enable_x64(True):
+        u, v = (np.asarray(q) for q in project(TRUE, jnp.array([0.0]), jnp.array([1e7])))
+    rows = np.linspace(400.0, 700.0, 8)  # seven ordinary walkers' foot rows, spread in depth
+    for dv, pinned in ((2.0, True), (50.0, False)):
+        z = np.zeros((8, 2, 2))
+        z[:, :, 0] = 640.0
+        z[:, :, 1] = rows[:, None]
+        z[0, 1] = (u[0], v[0] + dv)  # one row of the first track near the horizon
+        b = types.SimpleNamespace(z=z, present=np.ones((8, 2), bool))
+        why = geometry_reasons(TRUE, b, np.ones(8, bool), 0.02, [f"w{k}" for k in range(8)])
+        assert (dv < PINNED_CLEARANCE_PX) == pinned
+        assert any("pinned" in q and "w0" in q for q in why) == pinned, why
+        assert not any("same depth" in q for q in why)
