@@ -79,17 +79,23 @@ def test_pace_and_stride_against_the_simulators_truth(mixed):
     assert np.median(np.abs(dspeed)) < 0.05  # constant speed through the true camera
 
 
+def assert_recovered(r, tv, *, h_rel, theta_deg, af_rel):
+    """Each of h, theta, a f within its tolerance of the truth `tv` (relative for h and a f,
+    deg for theta), within 3 of the fit's own SEs, and with an SE no larger than the
+    tolerance."""
+    for k, tol in (("h", h_rel * tv["h"]), ("theta", theta_deg), ("af", af_rel * tv["af"])):
+        err = abs(r.values[k] - tv[k])
+        assert err <= tol and err <= 3 * r.se[k] and r.se[k] <= tol, (
+            k, r.values[k], tv[k], r.se[k])
+
+
 def test_recovers_the_camera_with_non_walkers_mixed_in(fitted):
     r, tv = fitted, camera_values(TRUE)
     assert not r.ill_determined and r.success, r.reasons
     assert 18 <= r.n_walkers <= 22
     # tolerances: the issue's 5 % for h; tilt and a f as the fit's own precision says (20
     # walkers with Table 1's 12 % spread of stride: SE about 2 deg, 10 %), and 3 SE
-    for k, tol, se_max in (("h", 0.05 * tv["h"], 0.05 * tv["h"]), ("theta", 2.5, 2.5),
-                           ("af", 0.15 * tv["af"], 0.15 * tv["af"])):
-        err = abs(r.values[k] - tv[k])
-        assert err <= tol and err <= 3 * r.se[k] and r.se[k] <= se_max, (
-            k, r.values[k], tv[k], r.se[k])
+    assert_recovered(r, tv, h_rel=0.05, theta_deg=2.5, af_rel=0.15)
     assert r.determination()["h"] == "determined"
 
 
@@ -291,11 +297,7 @@ def test_height_alone_recovers_the_camera(mixed, with_tops):
     # tolerances: the fit's own precision with 20 walkers of N(1.7, 0.07^2) m (SE about 5 %,
     # 2 deg, 12 %: heights fix the horizon and the scale, a f apart from theta only weakly),
     # and 3 SE
-    for k, tol, se_max in (("h", 0.08 * tv["h"], 0.08 * tv["h"]), ("theta", 3.0, 3.0),
-                           ("af", 0.2 * tv["af"], 0.2 * tv["af"])):
-        err = abs(r.values[k] - tv[k])
-        assert err <= tol and err <= 3 * r.se[k] and r.se[k] <= se_max, (
-            k, r.values[k], tv[k], r.se[k])
+    assert_recovered(r, tv, h_rel=0.08, theta_deg=3.0, af_rel=0.2)
     # the height cue through the true camera: the walkers' median heights, N(1.7, 0.07^2)
     used, pace = select(START, with_tops)
     with jax.enable_x64(True):
