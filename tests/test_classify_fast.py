@@ -404,3 +404,21 @@ def test_median_small_is_jnp_median(m):
                                   np.asarray(jnp.median(jnp.asarray(x), axis=-1)).view(np.int32))
     ref = np.median(x.astype(np.float64), axis=-1)
     np.testing.assert_allclose(got, ref, rtol=6e-8, equal_nan=True)
+
+
+def test_packed_windows_equal_the_rows_path():
+    """classify_windows_packed (a block up as one array, back as one: window_block's
+    BLOCK_PROGRAM, the issue-18 host cut) gives classify_window_rows' results bit for bit,
+    with a partial last block and with no window at all."""
+    from rhythmjax.model.window_block import PACKED_FIELDS
+
+    rows = _window_rows(12, 40)
+    packed = np.stack([rows[0], rows[1], rows[2][..., 0], rows[2][..., 1], rows[3][..., 0],
+                       rows[3][..., 1]]).astype(np.float32)
+    for W in (40, 0):
+        want = windows.classify_window_rows(CFG, *(a[:W] for a in rows), block=16)
+        got = windows.classify_windows_packed(CFG, packed[:, :W], block=16)
+        assert set(got) == {f for f, _, _ in PACKED_FIELDS}
+        for f, v in want.items():
+            assert got[f].dtype == v.dtype and got[f].shape == v.shape, f
+            np.testing.assert_array_equal(got[f].view(np.uint8), v.view(np.uint8), err_msg=f)

@@ -16,8 +16,9 @@ Here, in three steps:
    so window j is needed only when windows 0 .. j - 1 were not Pedestrian: the windows go in
    phases j in [0, 1), [1, 2), [2, 4), [4, 8), ..., each phase for the segments still
    undecided, gathered from the filter's rows into blocks of `windows.WINDOW_BLOCK`.
-3. Each block through `windows.classify_window_rows`: one program a block
-   (`window_block.classify_block`: (12)-(15), the exact fast median).
+3. Each block through `windows.classify_windows_packed`: one program a block
+   (`window_block.classify_block`: (12)-(15), the exact fast median), its inputs uploaded as
+   one array and its results fetched as one.
 
 The result per segment is the first Pedestrian window's, else window 0's (`window_row`: that
 window's first row in the batch, -1 for none, so the spectra can be drawn); a segment with no
@@ -35,7 +36,7 @@ from .params import Config
 from .rhythm import N_PEAKS
 from .segments import filter_rounds
 from .status import Reason, Verdict
-from .windows import WINDOW_BLOCK, classify_window_rows
+from .windows import WINDOW_BLOCK, classify_windows_packed
 
 
 CODES = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
@@ -76,20 +77,29 @@ class Segments:
 
     def gather(self, seg: np.ndarray, j: np.ndarray):
         """The rows of window j of segments `seg`: intensity, dt (W, N), xy (m) and observed
-        (px, NaN where the gates used no measurement) (W, N, 2), float32."""
+        (px, NaN where the gates used no measurement) (W, N, 2), float32 (views of
+        `gather_packed`'s array)."""
+        p = self.gather_packed(seg, j)
+        return p[0], p[1], np.moveaxis(p[2:4], 0, -1), np.moveaxis(p[4:6], 0, -1)
+
+    def gather_packed(self, seg: np.ndarray, j: np.ndarray) -> np.ndarray:
+        """`gather`'s rows packed as one (6, W, N) float32 array: intensity, dt s, xy m (2),
+        observed px (2) (`windows.classify_windows_packed`'s input)."""
         W, N = len(seg), self.n
-        out = (np.zeros((W, N), np.float32), np.zeros((W, N), np.float32),
-               np.zeros((W, N, 2), np.float32), np.zeros((W, N, 2), np.float32))
+        out = np.zeros((6, W, N), np.float32)
         rnd = self.round[seg]
         for r in np.unique(rnd):
             w = np.flatnonzero(rnd == r)
             rd = self.rounds[r]
             row = self.row[seg[w]][:, None]
             col = (self.k0[seg[w]] + self.hop * j[w])[:, None] + np.arange(N)[None, :]
-            out[0][w] = rd.rest.intensity[row, col]
-            out[1][w] = rd.rest.dt[row, col]
-            out[2][w] = rd.xy[row, col]
-            out[3][w] = np.where(rd.valid[row, col][..., None], rd.rest.z[row, col], np.nan)
+            out[0, w] = rd.rest.intensity[row, col]
+            out[1, w] = rd.rest.dt[row, col]
+            xy, z = rd.xy[row, col], rd.rest.z[row, col]
+            seen = rd.valid[row, col]
+            out[2, w], out[3, w] = xy[..., 0], xy[..., 1]
+            out[4, w] = np.where(seen, z[..., 0], np.nan)
+            out[5, w] = np.where(seen, z[..., 1], np.nan)
         return out
 
 
@@ -127,7 +137,7 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
         count = np.minimum(segs.windows[todo], hi) - lo
         seg = np.repeat(todo, count)
         j = lo + np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
-        res = classify_window_rows(cfg, *segs.gather(seg, j), put=place.put, block=block)
+        res = classify_windows_packed(cfg, segs.gather_packed(seg, j), place, block)
         ped = res["verdict"] == Verdict.PEDESTRIAN
         # per segment, its first Pedestrian window of the phase, else (phase 0) window 0
         take = np.zeros(len(seg), bool)
@@ -137,9 +147,10 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
             take[hit[first]] = True
         if lo == 0:
             take |= ~ped  # window 0 is the result unless a later window says Pedestrian
+        at = seg[take]
         for k in fields:
-            out[k][seg[take]] = res[k][take].astype(out[k].dtype)
-        out["window_row"][seg[take]] = (segs.first[seg] + segs.k0[seg] + segs.hop * j)[take]
+            out[k][at] = res[k][take]
+        out["window_row"][at] = segs.first[at] + segs.k0[at] + segs.hop * j[take]
         decided[seg[ped]] = True
     return out
 

@@ -22,9 +22,12 @@ from __future__ import annotations
 import dataclasses
 from typing import NamedTuple
 
+import equinox as eqx
+import jax
+import jax.numpy as jnp
 import numpy as np
 
-from .devices import Placement
+from .devices import AXIS, Placement
 from .ekf_fused import filter_batch
 from .gates import PaperGates
 from .params import Config
@@ -58,7 +61,9 @@ def end_steps(cfg: Config, k_first: int, valid, y, dt, length, k0, has, end, pt)
     thr = cfg.thresholds
     timeout, lo, hi = (float(a) for a in (thr.predict_timeout, thr.range_min, thr.range_max))
     valid, y, dt = np.asarray(valid, bool), np.asarray(y, np.float64), np.asarray(dt, np.float64)
-    for i in range(valid.shape[1]):
+    # no track is live at or past its length: the walk stops at the longest open one's
+    stop = int(np.max(np.where(has & (end < 0), length, 0), initial=0)) - k_first
+    for i in range(min(valid.shape[1], max(stop, 0))):
         k = k_first + i
         live = has & (k > k0) & (k < length) & (end < 0)
         if not live.any():
@@ -72,6 +77,54 @@ def end_steps(cfg: Config, k_first: int, valid, y, dt, length, k0, has, end, pt)
     return end, pt
 
 
+class ParamProgram:
+    """`fn(params, *arrays)` jitted with the parameters' arrays as arguments and their other
+    leaves static (as `eqx.filter_jit` splits them), one compiled program per parameter
+    structure and array shapes: `eqx.filter_jit`'s program, called for a fraction of its
+    per-call host cost (the parameters are split and hashed once per structure, not per
+    call). `program(params)` gives a callable of the arrays."""
+
+    def __init__(self, fn):
+        self.fn = fn
+        self.cache: dict = {}
+
+    def __call__(self, params):
+        dyn, static = eqx.partition(params, eqx.is_array)
+        leaves, tree = jax.tree_util.tree_flatten(dyn)
+        key = (tree, static)
+        jitted = self.cache.get(key)
+        if jitted is None:
+            fn = self.fn
+            jitted = jax.jit(lambda lv, *a: fn(eqx.combine(
+                jax.tree_util.tree_unflatten(tree, lv), static), *a))
+            self.cache[key] = jitted
+        return lambda *arrays: jitted(leaves, *arrays)
+
+
+def put_packed(place: Placement, packed: np.ndarray):
+    """A packed array (quantities on axis 0, the batch rows on axis 1) for a program: as it
+    is with no mesh (the jitted call uploads it), else on the mesh split along axis 1."""
+    if place.mesh is None:
+        return packed
+    return jax.device_put(packed, jax.sharding.NamedSharding(
+        place.mesh, jax.sharding.PartitionSpec(None, AXIS)))
+
+
+def _filter_packed(params, packed):
+    """`filter_batch` of a chunk packed as (5, B, T) float32 (z's two coordinates px, width
+    px, dt s, present 0/1), its outputs packed as (4, B, T) float32: started, valid (0/1),
+    x, y (m). Only these outputs are kept, so the program does not write the covariances and
+    the other fields."""
+    camera, noise, gates = params
+    out = filter_batch(camera, noise, gates, jnp.moveaxis(packed[:2], 0, -1), packed[2],
+                       packed[3], packed[4] > 0.5).steps
+    return jnp.stack([out.started.astype(jnp.float32), out.valid.astype(jnp.float32),
+                      out.mean[..., 0], out.mean[..., 2]])
+
+
+FILTER_PROGRAM = ParamProgram(_filter_packed)
+
+
 def filter_chunks(cfg: Config, batch, rows: int, place: Placement | None = None):
     """`ekf_fused.filter_batch` with the paper's gates over a TrackBatch; returns started,
     valid (B, T) bool and xy (B, T, 2) m (the filtered ground position) as NumPy.
@@ -81,7 +134,9 @@ def filter_chunks(cfg: Config, batch, rows: int, place: Placement | None = None)
     of `thresholds.hop_samples` (the filter is causal: the rows of a track are filtered as in
     the whole batch); the columns past a chunk's cut repeat `started`'s last and hold no
     `valid` row. `place` puts a chunk's inputs on the devices (`devices.Placement`: the rows
-    a multiple of the device count)."""
+    a multiple of the device count). A chunk goes up as one packed array and comes back as
+    one (`FILTER_PROGRAM`: started, valid and the ground position only); every chunk is
+    dispatched before the first is fetched."""
     gates = PaperGates(cfg.width, cfg.thresholds)
     place = place or Placement()
     B, T = batch.z.shape[:2]
@@ -90,18 +145,25 @@ def filter_chunks(cfg: Config, batch, rows: int, place: Placement | None = None)
     order = np.argsort(np.asarray(batch.length), kind="stable")
     started, valid = np.zeros((B, T), bool), np.zeros((B, T), bool)
     xy = np.full((B, T, 2), np.nan, np.float32)
+    run = FILTER_PROGRAM((cfg.camera, cfg.noise, gates))
+    pending = []
     for s in range(0, B, rows):
         idx = order[s:s + rows]
         Tc = min(T, max(hop, -(-int(np.max(batch.length[idx])) // hop) * hop))
-        pad = lambda a, v, idx=idx, Tc=Tc: np.concatenate(
-            [a[idx, :Tc], np.full((rows - len(idx), Tc) + a.shape[2:], v, a.dtype)])
-        args = place.put(pad(batch.z, np.nan), pad(batch.width, np.nan), pad(batch.dt, 1.0),
-                   pad(batch.present, False))
-        out = filter_batch(cfg.camera, cfg.noise, gates, *args).steps
-        st = np.asarray(out.started)[: len(idx)]
+        packed = np.empty((5, rows, Tc), np.float32)
+        packed[:, len(idx):] = np.asarray([np.nan, np.nan, np.nan, 1.0, 0.0])[:, None, None]
+        z = batch.z[idx, :Tc]
+        packed[0, :len(idx)], packed[1, :len(idx)] = z[..., 0], z[..., 1]
+        packed[2, :len(idx)] = batch.width[idx, :Tc]
+        packed[3, :len(idx)] = batch.dt[idx, :Tc]
+        packed[4, :len(idx)] = batch.present[idx, :Tc]
+        pending.append((idx, Tc, run(put_packed(place, packed))))
+    for idx, Tc, out in pending:
+        out = np.asarray(out)[:, : len(idx)]
+        st = out[0] > 0.5
         started[idx, :Tc], started[idx, Tc:] = st, st[:, -1:]
-        valid[idx, :Tc] = np.asarray(out.valid)[: len(idx)]
-        xy[idx, :Tc] = np.asarray(out.mean)[: len(idx)][..., [0, 2]]
+        valid[idx, :Tc] = out[1] > 0.5
+        xy[idx, :Tc, 0], xy[idx, :Tc, 1] = out[2], out[3]
     return started, valid, xy
 
 

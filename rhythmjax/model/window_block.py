@@ -29,6 +29,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float, Int
 
 from .camera import ground_from_image
@@ -36,6 +37,7 @@ from .fast_window import classify_window_fast
 from .medians import nanmedian_exact, nanmedian_select_cols
 from .params import Config
 from .rhythm import RhythmResult, window_times
+from .segments import ParamProgram
 
 
 FALLBACK = 8  # unresolved windows whose medians a turn of the fallback loop takes again
@@ -101,3 +103,49 @@ def classify_block(cfg: Config, intensity: Float[Array, "W n"], dt: Float[Array,
 
     one = lambda i, d, v: classify_window_fast(cfg, i, window_times(d), v)
     return jax.vmap(one)(intensity, dt, speed), unresolved
+
+
+# the fields of a packed block result (`BLOCK_PROGRAM`), in column order: name, columns, dtype
+PACKED_FIELDS = (("verdict", 1, "int32"), ("reason", 1, "int32"), ("pace_hz", 1, "float32"),
+                 ("stride_m", 1, "float32"), ("ratio", 1, "float32"),
+                 ("speed_mps", 1, "float32"), ("n_samples", 1, "int32"),
+                 ("peak_freq", None, "float32"), ("peak_power", None, "float32"),
+                 ("peak_mask", None, "bool"))
+
+
+def _block_packed(cfg: Config, packed: Float[Array, "6 W n"]) -> Float[Array, "c W"]:
+    """`classify_block` of W windows packed as (6, W, n) float32 (intensity, dt s, xy m,
+    observed px), its `RhythmResult` packed as (c, W) float32 in `PACKED_FIELDS` order (the
+    integers' bits as they are, `lax.bitcast_convert_type`; the mask 0/1), so a block goes up
+    as one array and comes back as one."""
+    res = classify_block(cfg, packed[0], packed[1], jnp.moveaxis(packed[2:4], 0, -1),
+                         jnp.moveaxis(packed[4:6], 0, -1))[0]
+    cols = []
+    for name, _, kind in PACKED_FIELDS:
+        a = getattr(res, name)
+        a = a.reshape(a.shape[0], -1)
+        if kind == "bool":
+            a = a.astype(jnp.float32)
+        elif kind == "int32":
+            a = jax.lax.bitcast_convert_type(a.astype(jnp.int32), jnp.float32)
+        cols.append(a)
+    return jnp.concatenate(cols, axis=1).T
+
+
+BLOCK_PROGRAM = ParamProgram(_block_packed)
+
+
+def unpack_block(packed, k: int) -> dict:
+    """The `RhythmResult` fields (NumPy, one row per window) of `_block_packed`'s (c, W)
+    float32 output (blocks joined along axis 1); `k` the peaks a window."""
+    out, c = {}, 0
+    for name, width, kind in PACKED_FIELDS:
+        w = k if width is None else 1
+        a = packed[c:c + w].T
+        c += w
+        if kind == "bool":
+            a = a > 0.5
+        elif kind == "int32":
+            a = a.view(np.int32)
+        out[name] = np.ascontiguousarray(a if width is None else a[:, 0])
+    return out

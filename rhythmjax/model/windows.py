@@ -34,6 +34,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .camera import ground_from_image
+from .devices import Placement
 from .medians import (  # noqa: F401 (re-exported: the tests and benchmarks' names)
     float_keys,
     from_keys,
@@ -43,8 +44,9 @@ from .medians import (  # noqa: F401 (re-exported: the tests and benchmarks' nam
     rank_key,
 )
 from .params import Config
-from .rhythm import RhythmResult, classify_window, window_times
-from .window_block import classify_block
+from .rhythm import N_PEAKS, RhythmResult, classify_window, window_times
+from .segments import put_packed
+from .window_block import BLOCK_PROGRAM, classify_block, unpack_block
 
 
 WINDOW_BLOCK = 128  # windows per jitted call (fixed: one compiled shape per N)
@@ -147,3 +149,25 @@ def classify_window_rows(cfg: Config, intensity: np.ndarray, dt: np.ndarray, xy:
         return {f: np.asarray(getattr(empty, f))[:0] for f in fields}
     return {f: np.concatenate([np.asarray(getattr(r, f))[:m] for m, r in parts])
             for f in fields}
+
+
+def classify_windows_packed(cfg: Config, packed: np.ndarray, place: Placement | None = None,
+                            block: int = WINDOW_BLOCK) -> dict[str, np.ndarray]:
+    """`classify_window_rows` of windows packed as (6, W, n) float32 (intensity, dt s, xy m,
+    observed px: `fast_batch.Segments.gather_packed`), the same results with less host work a
+    block (`place`: where the blocks go, `devices.Placement`):
+    each block (the last padded with copies of the first window) goes up as one array and
+    comes back as one (`window_block.BLOCK_PROGRAM`, `classify_block` inside), every block
+    dispatched before the first is fetched. Returns the `RhythmResult` fields as NumPy
+    arrays, one row per window."""
+    place = place or Placement()
+    run = BLOCK_PROGRAM(cfg)
+    W = packed.shape[1]
+    pending = []
+    for s in range(0, max(W, 1), block):
+        e = min(s + block, W)
+        rows = np.r_[np.arange(s, e), np.zeros(block - (e - s), np.int64)]
+        src = packed[:, rows] if W else np.zeros((6, block, packed.shape[2]), np.float32)
+        pending.append((e - s, run(put_packed(place, src))))
+    out = np.concatenate([np.asarray(r)[:, :m] for m, r in pending], axis=1)
+    return unpack_block(out, N_PEAKS)
