@@ -3,6 +3,7 @@ they replace kept at its new place (the table below is the old classes' source, 
 removed knobs gone, `with_changes`, and the synthetic preset."""
 
 import dataclasses
+import math
 
 import pytest
 
@@ -96,6 +97,22 @@ COUNT_DEFAULTS = [
     (None, "placement.gate_heights", 0.0),
     (None, "placement.lift_heights", 0.0),
     (None, "placement.lift_keep_u", False),
+    # unjudged tracks explained by a counted one, and joins by appearance: both off (docs/rules.md)
+    ("(new: issue 16 counting)", "explain.enabled", False),
+    ("(new: issue 16 counting)", "explain.duplicate_widths", 1.0),
+    ("(new: issue 16 counting)", "explain.duplicate_fraction", 0.5),
+    ("(new: issue 16 counting)", "explain.continue_widths", 2.0),
+    ("(new: issue 16 counting)", "explain.speed_mps", 0.5),
+    ("(new: issue 16 counting)", "explain.max_gap_s", 5.0),
+    ("(new: issue 16 counting)", "explain.precedes", True),
+    ("(new: issue 16 counting)", "appearance.enabled", False),
+    ("(new: issue 16 counting)", "appearance.bins", 8),
+    ("(new: issue 16 counting)", "appearance.min_fill", 0.1),
+    ("(new: issue 16 counting)", "appearance.max_gap_s", 10.0),
+    ("(new: issue 16 counting)", "appearance.reach_widths", 2.0),
+    ("(new: issue 16 counting)", "appearance.reach_speed_mps", 2.0),
+    ("(new: issue 16 counting)", "appearance.max_distance", 0.387),
+    ("(new: issue 16 counting)", "appearance.veto_distance", math.inf),
 ]
 COUNT_REMOVED = ["height_m", "coast_s"]  # the config's width.height_m, thresholds.predict_timeout_s
 
