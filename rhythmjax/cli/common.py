@@ -126,7 +126,7 @@ def output_set(out_dir, names, *, extra=(), inputs=(), drop=(), overlay=None) ->
     (`io.OutputSet`): `out_dir` is created now (and removed again if the run fails before
     writing), every path checked against the `inputs` and for writability before any work."""
     if overlay is not None:
-        from ..vision.video import WRITER_FOURCC
+        from ..vision.video_out import WRITER_FOURCC
 
         suffix = os.path.splitext(overlay)[1].lower()
         if suffix not in WRITER_FOURCC:
@@ -196,7 +196,7 @@ def overlay_writer(path, fps, size):
     if path is None:
         yield None
         return
-    from ..vision.video import open_writer
+    from ..vision.video_out import open_writer
 
     writer = open_writer(path, fps, size)
     try:
