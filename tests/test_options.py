@@ -88,6 +88,11 @@ COUNT_DEFAULTS = [
     # still rule (`count.still`)
     (None, "blobs.bg_init_s", 0.0),
     (None, "blobs.bg_init_frames", 31),
+    # the noise-adaptive foreground threshold (`vision.fg_threshold`), off (docs/rules.md)
+    ("(new: issue 16 counting)", "blobs.noise_k", 0.0),
+    ("(new: issue 16 counting)", "blobs.noise_floor", 6.0),
+    ("(new: issue 16 counting)", "blobs.hysteresis", 0.0),
+    ("(new: issue 16 counting)", "blobs.hysteresis_px", 2),
     (None, "life.still_s", 5.0),
     (None, "life.still_widths", 0.15),
     (None, "life.still_heights", 0.04),

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..track.options import with_changes
+from ..vision.fg_threshold import check_noise_options
 from .patches import DYNAMICS
 
 
@@ -37,6 +38,23 @@ class BlobOptions:
     bg_init_s: float = 0.0  # > 0: background from the temporal median of the first seconds
     bg_init_frames: int = 31  # ... of at most this many frames, evenly spaced (0 s: frame 0;
     # `still.peek_background`)
+    # noise-adaptive threshold (`vision.fg_threshold`, docs/rules.md "Noise-adaptive foreground
+    # threshold"): noise_k > 0 replaces bg_threshold by max(noise_floor, noise_k x sigma), sigma
+    # the frame's robust (MAD) noise of frame - background, grey levels; 0: fixed bg_threshold
+    noise_k: float = 0.0
+    noise_floor: float = 6.0  # grey levels
+    hysteresis: float = 0.0  # in (0, 1): also pixels above this x the threshold ...
+    hysteresis_px: int = 2  # ... within this many px of one above it (0: off)
+
+    def __post_init__(self):
+        check_noise_options(self.noise_k, self.noise_floor, self.hysteresis, self.hysteresis_px)
+
+    def model_kwargs(self) -> dict:
+        """The keyword arguments of `vision.blobs.BackgroundModel` these settings give."""
+        return {"alpha": self.bg_alpha, "threshold": self.bg_threshold, "open_px": self.open_px,
+                "close_px": self.close_px, "noise_k": self.noise_k,
+                "noise_floor": self.noise_floor, "hysteresis": self.hysteresis,
+                "hysteresis_px": self.hysteresis_px}
 
 
 @dataclass(frozen=True)

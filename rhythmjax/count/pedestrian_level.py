@@ -142,8 +142,7 @@ class PedestrianLevel:
         if gray is not None and self.bg is None:
             b = opt.blobs
             first = gray if self.bg_init is None else self.bg_init
-            self.bg = BackgroundModel(first, alpha=b.bg_alpha, threshold=b.bg_threshold,
-                                      open_px=b.open_px, close_px=b.close_px)
+            self.bg = BackgroundModel(first, **b.model_kwargs())
             self.prev, self.last_t, self.image_shape = gray, t, gray.shape
             return
         if self.last_t is None:

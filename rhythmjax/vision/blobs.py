@@ -4,6 +4,9 @@ Images level (`BackgroundModel`): a running-average background B (float32, grey 
 difference image thresholded to 0/1, cleaned by a light morphology. Per frame I (uint8):
 
 1. D = I - B_prev (float32); raw mask R = [|D| > threshold] (strictly greater), values 0/1.
+   Optionally (`noise_k` > 0) the threshold adapts to the frame's noise, max(noise_floor,
+   noise_k x sigma of D), and (`hysteresis` > 0) R keeps weaker pixels near strong ones
+   (`fg_threshold`; both off by default).
 2. M = close(open(R)): OpenCV MORPH_OPEN with a (2 open_px + 1)^2 square, then MORPH_CLOSE with a
    (2 close_px + 1)^2 square (0 px skips the step). M is the returned foreground mask.
 3. Selective update where nothing moves (M = 0):  B <- (1 - alpha) B + alpha I,
@@ -32,6 +35,8 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
+from .fg_threshold import above, check_noise_options, hysteresis_mask, noise_sigma
 
 
 CornerBox = tuple[int, int, int, int]  # x0, y0, x1, y1 px, half-open
@@ -62,10 +67,18 @@ class BackgroundModel:
     alpha: learning rate where M = 0 (per frame, in [0, 1]); slow_alpha: rate under the foreground
     (beta, in [0, 1], normally far below alpha); threshold: grey levels, foreground where
     |I - B| > threshold; open_px / close_px: half-sizes of the square structuring elements (px,
-    >= 0)."""
+    >= 0).
+
+    Noise-adaptive threshold (`fg_threshold`): noise_k > 0 replaces `threshold` by
+    max(noise_floor, noise_k x sigma) grey levels (at most 254), sigma estimated per frame on the
+    pixels the previous mask called background; hysteresis h in (0, 1) keeps pixels above h x the
+    threshold within hysteresis_px px of one above it (0: off). `last_threshold` / `last_sigma`
+    hold the latest frame's values (grey levels; sigma NaN when not estimated)."""
 
     def __init__(self, first_gray: np.ndarray, *, alpha: Number = 0.05, threshold: Number = 20,
-                 open_px: int = 1, close_px: int = 2, slow_alpha: Number = 0.0025) -> None:
+                 open_px: int = 1, close_px: int = 2, slow_alpha: Number = 0.0025,
+                 noise_k: Number = 0.0, noise_floor: Number = 6.0, hysteresis: Number = 0.0,
+                 hysteresis_px: int = 2) -> None:
         _check_image(first_gray, "first_gray")
         if not 0.0 <= alpha <= 1.0:
             raise ValueError(f"alpha must lie in [0, 1], got {alpha}")
@@ -76,6 +89,11 @@ class BackgroundModel:
         if int(open_px) != open_px or int(close_px) != close_px or min(open_px, close_px) < 0:
             raise ValueError(f"open_px and close_px must be integers >= 0, got {open_px}, "
                              f"{close_px}")
+        check_noise_options(noise_k, noise_floor, hysteresis, hysteresis_px)
+        self.noise_k, self.noise_floor = float(noise_k), float(noise_floor)
+        self.hysteresis, self.hysteresis_px = float(hysteresis), int(hysteresis_px)
+        self.last_threshold, self.last_sigma = float(threshold), float("nan")
+        self._prev_mask: np.ndarray | None = None  # for the noise estimate's background pixels
         self.alpha = float(alpha)
         self.slow_alpha = float(slow_alpha)
         self.threshold = float(threshold)
@@ -106,8 +124,17 @@ class BackgroundModel:
             raise ValueError(f"frame shape {gray.shape} differs from the background's "
                              f"{self._bg.shape}")
         cv2.subtract(gray, self._bg, dst=self._scratch, dtype=cv2.CV_32F)  # I - B, float32
-        still = cv2.inRange(self._scratch, -self.threshold, self.threshold)  # 255: |D| <= t
-        _, mask = cv2.threshold(still, 0, 1, cv2.THRESH_BINARY_INV)  # 1 where |D| > t
+        t = self.threshold
+        if self.noise_k > 0.0:
+            bgmask = None if self._prev_mask is None else cv2.compare(self._prev_mask, 0,
+                                                                     cv2.CMP_EQ)
+            self.last_sigma = noise_sigma(self._scratch, bgmask)
+            t = min(254.0, max(self.noise_floor, self.noise_k * self.last_sigma))
+        self.last_threshold = t
+        if self.hysteresis > 0.0:
+            mask = hysteresis_mask(self._scratch, t, self.hysteresis * t, self.hysteresis_px)
+        else:
+            mask = above(self._scratch, t)  # 1 where |D| > t
         if self._erode1 is not None:
             mask = cv2.erode(mask, self._erode1)
         if self._dilate is not None:
@@ -122,6 +149,8 @@ class BackgroundModel:
         if mask.shape != self._bg.shape:
             raise ValueError(f"mask shape {mask.shape} differs from the background's "
                              f"{self._bg.shape}")
+        if self.noise_k > 0.0:
+            self._prev_mask = mask
         still = cv2.compare(mask, 0, cv2.CMP_EQ)
         cv2.accumulateWeighted(gray, self._bg, self.alpha, mask=still)
         if self.slow_alpha > 0.0:
