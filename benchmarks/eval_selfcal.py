@@ -8,6 +8,7 @@ and fps (h 4 m, tilt 15 deg, a f = the image width: the grid of starts does the 
 set is fitted (`fit.selfcal.fit_selfcal`, the CLI's function) and compared with the truth.
 
     python benchmarks/eval_selfcal.py [n_scenes=20] [first_seed=0] [--mix] [--sets A+B,C]
+        [--outliers]
     python benchmarks/eval_selfcal.py --tracks T.parquet [T2.parquet ...] --image-size WxH
         --fps F --truth H_M,TILT_DEG[,AF_PX]
 
@@ -27,7 +28,8 @@ Prints per cue set: median |h error| (%), median |tilt error| (deg), median |a f
 how many fits were flagged ill-determined (the CLI would refuse them), the median walkers used
 and how many non-walkers were among them; each fit's line also gives the clearance (px) of the
 used foot points below the fitted horizon (`fit.selfcal_checks`: under 4 px it is refused).
-h is not determined by ``speed`` alone (scale-free):
+`--outliers` turns on the foot-point outlier rule (`fit.selfcal_outliers`, off by default) to
+compare. h is not determined by ``speed`` alone (scale-free):
 its h column is left out.
 """
 
@@ -58,7 +60,7 @@ def start_config(cam: Camera) -> Config:
                                 image_width=cam.image_width, image_height=cam.image_height))
 
 
-def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS) -> dict:
+def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool = False) -> dict:
     rows = {c: [] for c in cue_sets}
     for seed in range(seed0, seed0 + n_scenes):
         rng = np.random.default_rng(seed)
@@ -69,7 +71,7 @@ def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS) -> dict:
         labels = dict(zip(b.ids, b.labels, strict=True))
         for cues in cue_sets:
             t0 = time.perf_counter()
-            r = fit_selfcal(cfg, b, cues=cues)
+            r = fit_selfcal(cfg, b, cues=cues, outliers=outliers)
             dt = time.perf_counter() - t0
             if r.camera is None:
                 rows[cues].append(None)
@@ -159,5 +161,6 @@ if __name__ == "__main__":
     sets = CUE_SETS  # --sets height,gait+height: only these (cues joined by +)
     if sets_arg:
         sets = tuple(tuple(c.split("+")) for c in sets_arg.split(","))
-    table(run(n, s0, mix, sets), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 walkers"
-          + (" + 4 bicycles + 4 dogs" if mix else ""))
+    on = "--outliers" in sys.argv
+    table(run(n, s0, mix, sets, on), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 walkers"
+          + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on else ""))

@@ -20,7 +20,10 @@ the classical approach), gait+height and gait+speed+width+height. Rows:
   No truth camera is published: estimate and SE only.
 
     python benchmarks/selfcal_real.py [--data ../shared/data] [--work /tmp/selfcal_real]
-        [-o docs/data/selfcal_real.csv] [--only pets,dev,casia]
+        [-o docs/data/selfcal_real.csv] [--only pets,dev,casia] [--outliers]
+
+`--outliers` turns on the fit's foot-point outlier rule (`fit.selfcal_outliers`, off by default)
+to compare; give it its own `--work` for the re-tracked PETS rows (tracked with the fitted camera).
 
 Tracks are made under `--work` (WORK/SOURCE/CLIP/tracks.parquet) unless already there, so a
 rerun only fits; the videos are read where they lie and nothing of them is copied into the
@@ -51,6 +54,7 @@ FIELDS = ("source", "tracking camera", "cues", "tracks", "walkers", "h_m", "h_se
           "tilt_deg", "tilt_se_deg", "tilt_truth_deg", "af_px", "af_se_px", "af_truth_px",
           "refused")
 PETS_TRUTH = (7.07, 16.5, 742.0)
+OUTLIERS = [False]  # the outlier rule of the fits (`--outliers` sets it on)
 
 
 def say(msg: str) -> None:
@@ -125,7 +129,7 @@ def fit_rows(source: str, how: str, paths: list[Path], size, fps, truth,
         return [{"source": source, "tracking camera": how, "refused": "no tracks"}], {}
     cfg, batch = pooled_batch(paths, size, fps, window_s)
     for cues in CUE_SETS:
-        r = fit_selfcal(cfg, batch, cues=cues)
+        r = fit_selfcal(cfg, batch, cues=cues, outliers=OUTLIERS[0])
         fits[cues] = r
         v, se = (r.values, r.se) if r.camera is not None else ({}, {})
         get = lambda d, k: f"{d[k]:.5g}" if k in d and math.isfinite(d[k]) else ""
@@ -215,7 +219,9 @@ def main(argv=None) -> int:
     a.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "selfcal_real"))
     a.add_argument("-o", "--output", default=str(ROOT / "docs" / "data" / "selfcal_real.csv"))
     a.add_argument("--only", default="pets,dev,casia")
+    a.add_argument("--outliers", action="store_true")
     args = a.parse_args(argv)
+    OUTLIERS[0] = args.outliers
     data, work = Path(args.data), Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     rows = []

@@ -30,11 +30,11 @@ The spreads of the three shape residuals (speed, width, height change) are measu
 a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
 `SHAPE_FLOOR`. Every residual goes through Cauchy's loss (c = 2.385 spreads): bicycles and dogs
 that slip through the gait selection (a bicycle's stride is 1.4-1.9 m: 8-13 spreads) do not pull
-the scale. A hinge keeps every used foot point below the horizon. The fit is Levenberg-Marquardt
-(optimistix) over log a f, log h and the tilt (and the roll, the principal point when asked),
-in float64, from the best points of a grid over tilt and a f with h set by the median stride.
-
-Identifiability: ``speed`` alone leaves h free; ``gait`` or ``width`` fix it. Standard errors
+the scale. A hinge keeps every used foot point below the horizon; foot points far from their
+track's image path can be left out first (`fit.selfcal_outliers`, off by default). The fit is
+Levenberg-Marquardt (optimistix) over log a f, log h and the tilt (and the roll, the principal
+point when asked), in float64, from the best points of a grid over tilt and a f with h set by
+the median stride. ``speed`` alone leaves h free; ``gait`` or ``width`` fix it. Standard errors
 come from the Gauss-Newton covariance scaled by the residual variance (as `fit.camera`).
 """
 
@@ -53,6 +53,7 @@ from fit.camera import NAMES, UNITS, CameraParams, se_limits
 from fit.selfcal_checks import HORIZON_MARGIN_PX, geometry_reasons
 from fit.selfcal_data import camera_of, camera_values, gait_peaks, make_params, radial
 from fit.selfcal_height import HEIGHT_STD_M, MIN_TOP_ROWS, height_cues, top_walkers
+from fit.selfcal_outliers import without_outliers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
 from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
 from rhythmjax.model.params import Camera, Config
@@ -71,6 +72,7 @@ MIN_WALKERS = 5  # fewer tracks with a clear gait peak: refused
 MIN_ROWS = 20  # a track needs this many measured rows
 MIN_ROW_SPREAD = 0.02  # walkers' median foot rows (10-90 %) span less of the image: refused
 # (a quarter of the smallest on the development seeds 0-5, 0.083; added after CASIA-B's walks)
+FITTABLE = ("af", "h", "theta", "roll", "uc", "vc")  # what `fit_selfcal` can fit
 THETA_GRID = (3.0, 6.0, 10.0, 15.0, 20.0, 26.0, 33.0, 40.0, 50.0, 60.0)
 AF_GRID = (0.3, 0.42, 0.6, 0.8, 1.05, 1.35, 1.8, 2.4)  # x the image width
 
@@ -201,11 +203,14 @@ def _grid_cost(stack, static, args):
 
 def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
     """(used mask (B,), pace Hz (B,)) of a `rhythmjax.io.TrackBatch`: tracks with a clear gait
-    peak (`gait_peaks`) and at least `MIN_ROWS` measured foot points."""
+    peak (`gait_peaks`), at least `MIN_ROWS` measured foot points and two on the frames the
+    speed takes (every k-th of the padded length, `raw_cues`; else the speed is undefined)."""
     peaks = gait_peaks(cfg, batch.intensity, batch.length)
     z = np.asarray(batch.z)
-    rows = np.sum(batch.present & np.all(np.isfinite(z), -1), 1)
-    return peaks.clear & (rows >= MIN_ROWS), peaks.pace_hz
+    seen = batch.present & np.all(np.isfinite(z), -1)
+    k = -(-(z.shape[1] - z.shape[1] % -SPEED_SAMPLES) // SPEED_SAMPLES)
+    ok = (np.sum(seen, 1) >= MIN_ROWS) & (np.sum(seen[:, ::k], 1) >= 2)
+    return peaks.clear & ok, peaks.pace_hz
 
 
 def make_data(batch, used: np.ndarray, pace: np.ndarray) -> Data:
@@ -297,7 +302,7 @@ def _refused(cam0, cues, fitted, n_tracks, n_used, ids, reason) -> SelfcalFit:
 
 def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                 fit=("af", "h", "theta"), max_steps: int = 200, n_starts: int = 3,
-                width_scale: bool | None = None) -> SelfcalFit:
+                width_scale: bool | None = None, outliers: bool = False) -> SelfcalFit:
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
     track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
@@ -305,16 +310,17 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     (ill_determined with a reason, no camera) with fewer than `MIN_WALKERS` walkers; flags the
     fit ill-determined when a fitted parameter is not determined (module doc). The height cue
     needs top rows (`batch.v_top`) on `MIN_TOP_ROWS` rows of `MIN_WALKERS` walkers: alone it is
-    refused without them, with other cues it is dropped (a note says so)."""
+    refused without them, with other cues it is dropped (a note says so). With `outliers` the
+    foot points of `fit.selfcal_outliers`' rule are left out first (a note gives how many)."""
     bad = [c for c in cues if c not in CUES]
     cues = tuple(c for c in CUES if c in cues)
     if bad or not cues:
         raise ValueError(f"cues {list(bad) or 'none'}: choose from {', '.join(CUES)}")
     fitted = tuple(k for k in NAMES if k in fit)
-    if not {"af", "h", "theta"} <= set(fitted) or set(fit) - {"af", "h", "theta", "roll", "uc",
-                                                              "vc"}:
+    if not {"af", "h", "theta"} <= set(fitted) or set(fit) - set(FITTABLE):
         raise ValueError(f"fit {fit}: af, h and theta, optionally roll, uc, vc")
     cam0 = cfg.camera
+    batch, dropped = without_outliers(batch) if outliers else (batch, None)
     used, pace = select(cfg, batch)
     ids = [i for i, u in zip(batch.ids, used, strict=True) if u]
     n_tracks, n_used = len(batch.ids), int(used.sum())
@@ -323,13 +329,16 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                         f"only {n_used} of {n_tracks} tracks have a clear gait peak and "
                         f"{MIN_ROWS} measured rows; self-calibration needs at least "
                         f"{MIN_WALKERS} walkers")
-    notes = []
+    notes = [] if dropped is None else [
+        f"{int(dropped[used].sum())} foot points of the walkers left out as outliers (each "
+        "track's image path, fit.selfcal_outliers)"]
     if "height" in cues and (n_top := top_walkers(batch, used)) < MIN_WALKERS:
         why = (f"only {n_top} of the {n_used} walkers have top rows (v_top) on {MIN_TOP_ROWS} "
                f"rows; the height cue needs {MIN_WALKERS}")
         if cues == ("height",):
             return _refused(cam0, cues, fitted, n_tracks, n_used, ids, why)
-        cues, notes = tuple(c for c in cues if c != "height"), [f"cue height dropped: {why}"]
+        cues = tuple(c for c in cues if c != "height")
+        notes.append(f"cue height dropped: {why}")
     values0 = camera_values(cam0)
     spec = param_spec(fitted)
     f = float(cam0.f)

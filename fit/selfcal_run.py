@@ -1,10 +1,12 @@
-"""`rhythmjax-fit selfcal TRACKS -o CONFIG`: the command around `fit.selfcal.fit_selfcal`.
+"""`rhythmjax-fit selfcal VIDEO|TRACKS -o CONFIG`: the command around `fit.selfcal.fit_selfcal`.
 
-It reads a tracks file (the format `rhythmjax track`, `run` and `simulate` write) and the start
-config (`-c`; its camera is the start and what it gives of the image size, fps, principal point
-and roll is held), fits the camera from the people walking in it, prints the values with their
-standard errors, what the data determine, the walkers used and the camera screen, and writes the
-config with its camera section replaced (atomically). Exit codes: 0 written; 1 refused (too few
+It reads a tracks file (the format `rhythmjax track`, `run` and `simulate` write), or tracks a
+video (by its extension, `fit.selfcal_video`: tracked, fitted and tracked again with the fitted
+camera, `--rounds` times), and the start config (`-c`; its camera is the start and what it
+gives of the image size, fps, principal point and roll is held), fits the camera from the people
+walking in it, prints the values with their standard errors, what the data determine, the
+walkers used and the camera screen, and writes the config with its camera section replaced
+(atomically). Exit codes: 0 written; 1 refused (too few
 walkers, a parameter the cues do not determine, a failed solve: the reason and the best point
 are printed, nothing is written); 2 bad input (one line naming the file).
 """
@@ -26,10 +28,25 @@ CUE_HELP = ("comma-separated cues (default gait,speed,width,height): gait (strid
 
 def add_parser(sub, size_type, at_least) -> None:
     """The `selfcal` subcommand's arguments (`size_type`, `at_least`: fit.cli's parsers)."""
+    from rhythmjax.track.options import TrackerOptions
+
     s = sub.add_parser("selfcal", help="fit h, tilt and focal length from people walking "
-                       "(gait, constant speed, widths, heights) in a tracks file")
-    s.add_argument("tracks", help="tracks .csv/.parquet (track_id, frame, t, u, v, width_px, "
-                   "intensity; optional v_top for the height cue)")
+                       "(gait, constant speed, widths, heights) in a video or a tracks file")
+    s.add_argument("tracks", metavar="VIDEO|TRACKS", help="a video (.avi .mp4 .mov .mkv .m4v "
+                   ".mpg .webm: tracked with the start camera, then again with the fitted one), "
+                   "or tracks .csv/.parquet (track_id, frame, t, u, v, width_px, intensity; "
+                   "optional v_top for the height cue)")
+    s.add_argument("--rounds", type=at_least(1), default=2, metavar="K",
+                   help="video: track and fit K times in all, each round tracking with the "
+                   "camera the previous one fitted (default 2)")
+    s.add_argument("--tracks-out", metavar="T", help="video: write the last round's tracks "
+                   "(.csv/.parquet)")
+    s.add_argument("--max-objects", type=at_least(1), default=TrackerOptions().max_objects,
+                   metavar="K", help="video: object slots tracked at once (default "
+                   f"{TrackerOptions().max_objects}; 24 for a crowd such as PETS09)")
+    s.add_argument("--outliers", action="store_true", help="leave out each track's foot points "
+                   "far from its image path (fit.selfcal_outliers: 5 robust spreads from a "
+                   "biweight quadratic of u(t), v(t)); off by default (docs/selfcal.md)")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
@@ -43,13 +60,14 @@ def add_parser(sub, size_type, at_least) -> None:
     s.add_argument("--max-steps", type=at_least(1), default=200,
                    help="Levenberg-Marquardt steps per start at most (default 200)")
     s.add_argument("--config", "-c", metavar="C", help="start config JSON (default: Table 1's "
-                   "camera on the image size)")
+                   "camera on the image size; for a video, the camera it is first tracked with)")
     s.add_argument("-o", "--output", required=True, metavar="C2", help="config to write")
     s.add_argument("--json", action="store_true", help="machine-readable summary on stdout")
 
 
 def parse_cues(text: str) -> tuple[tuple[str, ...], list[str]]:
-    """(cues, notes) of the --cues text; raises ValueError for an unknown name."""
+    """(cues, notes: an empty list to add to) of the --cues text; raises ValueError for an
+    unknown name."""
     from fit.selfcal import CUES
 
     names = [c.strip() for c in text.split(",") if c.strip()]
@@ -85,12 +103,51 @@ def start_config(args, d: dict, fps_tracks):
     return config_or_bad_input(start, cpath), d
 
 
-def selfcal_main(args) -> int:
-    """The verb: exit code as the module doc says."""
+def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
+    """(fit, start Config, the settled config dict) of `rhythmjax.io.Tracks` `tr` with the
+    start config dict `d` and the command's options; raises `BadInput` naming `source`.
+    Notes (the height cue dropped) go to the fit's notes and to `notes`."""
     import numpy as np
 
-    from fit.output import write_json, write_output
     from fit.selfcal import fit_selfcal
+    from rhythmjax.io import BadInput, to_batch
+
+    cues, more = parse_cues(args.cues)
+    if "height" in cues and (tr.v_top is None or not np.isfinite(tr.v_top).any()):
+        if cues == ("height",):
+            raise BadInput(source, "--cues height: the tracks have no top rows (column v_top; "
+                           "`rhythmjax track` and `run` write it); add gait, speed or width")
+        cues = tuple(c for c in cues if c != "height")
+        more.append("cue height dropped: the tracks have no top rows (column v_top)")
+    dt = np.diff(tr.t)[np.diff(tr.frame) == 1] if len(tr) > 1 else np.zeros(0)
+    fps_tracks = tr.fps or (1.0 / float(np.median(dt)) if dt.size and np.median(dt) > 0
+                            else None)
+    cfg, d = start_config(args, d, fps_tracks)
+    batch = to_batch(tr, max_gap_frames=5, min_len=cfg.thresholds.n, fps=cfg.camera.fps)
+    fit = ("af", "h", "theta") + (("roll",) if args.fit_roll else ()) + (
+        ("uc", "vc") if args.fit_center else ())
+    r = fit_selfcal(cfg, batch, cues=cues, fit=fit, max_steps=args.max_steps,
+                    outliers=args.outliers)
+    r.notes = more + r.notes
+    if notes is not None:
+        notes += more
+    return r, cfg, d
+
+
+def fitted_dict(r, d: dict) -> dict:
+    """The config dict `d` with its camera section replaced by the fit's camera (its fps and
+    image size kept)."""
+    from rhythmjax.model.params import Config, config_to_dict
+
+    fitted = config_to_dict(Config(camera=r.camera))["camera"]
+    return {**d, "camera": {**fitted, **{k: d["camera"][k] for k in (
+        "fps", "image_width_px", "image_height_px") if k in d["camera"]}}}
+
+
+def selfcal_main(args) -> int:
+    """The verb: exit code as the module doc says."""
+    from fit.output import write_json, write_output
+    from fit.selfcal_video import is_video, video_rounds
     from rhythmjax.io import (
         BadInput,
         check_output,
@@ -98,50 +155,43 @@ def selfcal_main(args) -> int:
         dumps_json,
         read_config_dict,
         read_tracks,
-        to_batch,
+        table_suffix,
     )
-    from rhythmjax.model.params import Config, config_to_dict
     from rhythmjax.model.view import camera_report, format_report
 
+    rounds = None
     try:
         check_output(args.output, [args.config, args.tracks])
+        if args.tracks_out:
+            table_suffix(args.tracks_out)
+            check_output(args.tracks_out, [args.config, args.tracks, args.output])
         try:
-            cues, notes = parse_cues(args.cues)
+            parse_cues(args.cues)
         except ValueError as e:
             raise BadInput(args.tracks, str(e)) from None
         d = read_config_dict(args.config) if args.config else {}
-        tr = read_tracks(args.tracks, fps=args.fps)
-        if "height" in cues and (tr.v_top is None or not np.isfinite(tr.v_top).any()):
-            if cues == ("height",):
-                raise BadInput(args.tracks, "--cues height: the tracks have no top rows (column "
-                               "v_top; `rhythmjax track` and `run` write it); add gait, speed "
-                               "or width")
-            cues = tuple(c for c in cues if c != "height")
-            notes.append("cue height dropped: the tracks have no top rows (column v_top)")
-        dt = np.diff(tr.t)[np.diff(tr.frame) == 1] if len(tr) > 1 else np.zeros(0)
-        fps_tracks = tr.fps or (1.0 / float(np.median(dt)) if dt.size and np.median(dt) > 0
-                                else None)
-        cfg, d = start_config(args, d, fps_tracks)
-        batch = to_batch(tr, max_gap_frames=5, min_len=cfg.thresholds.n, fps=cfg.camera.fps)
-        fit = ("af", "h", "theta") + (("roll",) if args.fit_roll else ()) + (
-            ("uc", "vc") if args.fit_center else ())
-        r = fit_selfcal(cfg, batch, cues=cues, fit=fit, max_steps=args.max_steps)
+        if is_video(args.tracks):
+            if args.image_size is not None:
+                raise BadInput(args.tracks, "--image-size is for a tracks file: a video gives "
+                               "its own")
+            r, cfg, d, rounds = video_rounds(args, d, fit_tracks, fitted_dict)
+        else:
+            if args.tracks_out:
+                raise BadInput(args.tracks, "--tracks-out is for a video input")
+            tr = read_tracks(args.tracks, fps=args.fps)
+            r, cfg, d = fit_tracks(args, tr, d, args.tracks)
     except BadInput as e:
         print(f"rhythmjax-fit: {e}", file=sys.stderr)
         return 2
-    r.notes = notes + r.notes
     bad = r.ill_determined or not r.success
-    written = None
-    if not bad:
-        fitted = config_to_dict(Config(camera=r.camera))["camera"]
-        d["camera"] = {**fitted, **{k: d["camera"][k] for k in ("fps", "image_width_px",
-                                                               "image_height_px")
-                                    if k in d["camera"]}}
-        written = d
+    written = None if bad else fitted_dict(r, d)
     report = camera_report(r.camera, float(cfg.width.height)) if r.camera is not None else None
     if args.json:
         print(dumps_json({"command": "selfcal", "written": None if bad else args.output,
-                          **r.to_dict(), "camera_report": report, "config": written}))
+                          **r.to_dict(), "camera_report": report, "config": written,
+                          **({} if rounds is None else {
+                              "rounds": [q.to_dict() for q in rounds],
+                              "tracks_out": args.tracks_out})}))
     else:
         print(r.summary())
         if report is not None:

@@ -375,3 +375,29 @@ def test_a_fit_pinned_on_the_horizon_is_refused():
         assert (dv < PINNED_CLEARANCE_PX) == pinned
         assert any("pinned" in q and "w0" in q for q in why) == pinned, why
         assert not any("same depth" in q for q in why)
+
+
+def test_a_spurious_foot_point_above_the_horizon_is_left_out(mixed, fitted):
+    """One walker's foot point moved 30 px above the true horizon (the dev clips' head sliver on
+    a `predict` row): the outlier rule (`fit.selfcal_outliers`, `--outliers`) drops it and the
+    fit is the clean one of the default (h within 0.5 %, tilt within 0.1 deg); without the rule
+    (the default) the hinge holds the horizon above that point and the fit moves (h more than
+    3 % away)."""
+    import copy
+
+    from rhythmjax.model.camera import horizon_v
+
+    b = mixed[2]
+    used, _ = select(START, b)
+    k = int(np.flatnonzero(used)[0])
+    rows = np.flatnonzero(np.isfinite(b.z[k, :, 1]))
+    z = b.z.copy()
+    z[k, rows[len(rows) // 2], 1] = float(horizon_v(TRUE)) - 30.0
+    bad = copy.copy(b)
+    bad.z = z
+    on = fit_selfcal(START, bad, outliers=True)
+    assert abs(on.values["h"] / fitted.values["h"] - 1) < 0.005
+    assert abs(on.values["theta"] - fitted.values["theta"]) < 0.1
+    assert any("left out as outliers" in n for n in on.notes)
+    off = fit_selfcal(START, bad)
+    assert abs(off.values["h"] / fitted.values["h"] - 1) > 0.03
