@@ -174,7 +174,7 @@ def test_streaming_equals_the_whole_file_path(tracks_csv, tmp_path, capsys, fmt,
     assert summary["streamed"] and summary["parts"] == 6 and summary["n_tracks"] == 28
     assert set(summary["timing"]) == {"read_s", "prepare_s", "kernel_s", "write_s", "wait_s",
                                       "total_s"}
-    assert 0 < summary["peak_tracks_in_memory"] <= 15
+    assert 0 < summary["peak_tracks_in_memory"] <= 20  # 4 blocks of 5 (stream.classify)
     assert "sorted by (track_id, frame)" in summary["notes"][0]
     assert sorted(os.listdir(tmp_path)) == sorted([src.name, "whole.csv", "streamed.csv",
                                                    "whole.report.html", "streamed.report.html"])

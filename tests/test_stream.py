@@ -358,7 +358,13 @@ def test_memory_is_bounded_by_blocks_not_the_file(files, tmp_path, cfg):
     s = classify_source(cfg, files["plain.parquet"], None, chunk=8, log=None, prefetch=1,
                         block_tracks=3, batch_rows=50)
     assert s["n_tracks"] == 20 and s["parts"] == 7
-    assert 0 < s["peak_tracks_in_memory"] <= s["memory_bound_tracks"] == 3 * 3
+    # blocks: one in the reader's hands, one queued, KERNEL_THREADS (2) in the kernels
+    assert 0 < s["peak_tracks_in_memory"] <= s["memory_bound_tracks"] == 4 * 3
+    one = classify_source(cfg, files["plain.parquet"], None, chunk=8, log=None, prefetch=1,
+                          block_tracks=3, batch_rows=50, kernel_threads=1)
+    assert 0 < one["peak_tracks_in_memory"] <= one["memory_bound_tracks"] == 3 * 3
+    for k in s["verdicts_table"]:
+        np.testing.assert_array_equal(s["verdicts_table"][k], one["verdicts_table"][k])
     assert set(s["timing"]) >= {"read_s", "prepare_s", "kernel_s", "write_s", "total_s"}
     assert len(s["verdicts_table"]["track_id"]) == 20
 

@@ -97,7 +97,7 @@ def cmd_classify(args) -> int:
     Streaming (the default): the tracks are read by record batches and classified in blocks of
     whole tracks while the next block is read, each block's verdicts written as a part beside
     the output (`.VERDICTS.parts/`) and the parts joined into VERDICTS at the end, in the
-    input's track order. Memory does not grow with the file (about 3 blocks of --block-tracks
+    input's track order. Memory does not grow with the file (about 4 blocks of --block-tracks
     tracks at once). An interrupted run (Ctrl-C, SIGTERM, kill) rerun with the same command
     resumes after the parts done; a changed input or config starts over. A track's rows must
     be contiguous to stream (rows of a track in any frame order); a file where a track's id
@@ -269,7 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "length")
     p.add_argument("--block-tracks", type=count_arg, default=BLOCK_TRACKS, metavar="K",
                    help="tracks per block (one part of the output; the resume step): memory "
-                   "holds about 3 blocks")
+                   "holds about 4 blocks")
     p.add_argument("--no-resume", action="store_true", help="start over even when an "
                    "interrupted run with the same input and config left parts to resume from")
     p.add_argument("--whole-file", action="store_true", help="read the whole file into "

@@ -104,6 +104,10 @@ def _parquet_batches(p, required, optional, types, not_empty, batch_rows, start,
     try:
         pf = pq.ParquetFile(p, pre_buffer=False)  # pre-buffered row groups stay in memory
         keep = select_columns(p, list(pf.schema_arrow.names), required, optional)
+        # text columns as their dictionary's indices (each distinct value converted once)
+        text = [n for n in keep if pa.types.is_string(pf.schema_arrow.field(n).type)]
+        if text:
+            pf = pq.ParquetFile(p, pre_buffer=False, read_dictionary=text)
         md = pf.metadata
         bounds = np.r_[0, np.cumsum([md.row_group(i).num_rows
                                      for i in range(md.num_row_groups)])].astype(np.int64)
@@ -132,7 +136,7 @@ def _parquet_batches(p, required, optional, types, not_empty, batch_rows, start,
         if hi > lo:
             yield convert_parquet(p, rb.slice(lo, hi - lo),
                                   np.arange(row + lo + 1, row + hi + 1, dtype=np.int64), keep,
-                                  types, not_empty)
+                                  types, not_empty, keys=("track_id", "label"))
         row += n
 
 

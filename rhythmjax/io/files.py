@@ -23,6 +23,7 @@ from .configs import (
 )
 from .footprints import Footprints as Footprints, read_footprints as read_footprints
 from .tables import (
+    KEY_SUFFIX,
     BadInput as BadInput,
     PathLike,
     Table as Table,
@@ -45,6 +46,7 @@ TRACK_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v"
                "width_px": "float", "intensity": "float", "label": "str", "x": "float",
                "y": "float", "v_top": "float"}
 TRACK_NOT_EMPTY = ("track_id", "frame", "t")
+TRACK_KEY = "track_id" + KEY_SUFFIX  # a Table's codes of its track ids (`tables.convert_parquet`)
 
 
 @dataclass
@@ -69,6 +71,7 @@ class Tracks:
     fps: float | int | None = None
     v_top: np.ndarray | None = None  # top row px of the moving region (the head); NaN missing
     notes: list[str] = field(default_factory=list)
+    track_key: np.ndarray | None = None  # int64 codes equal where track_id is (`run_key`)
 
     def __len__(self) -> int:
         return int(self.frame.shape[0])
@@ -76,21 +79,22 @@ class Tracks:
     @property
     def ids(self) -> list[str]:
         """Track ids in file order."""
-        return [str(i) for i in self.track_id[_starts(self.track_id)]]
+        return [str(i) for i in self.track_id[_starts(run_key(self))]]
 
     def by_span(self, rows: int) -> list[Tracks]:
         """The tracks in groups to pad and classify apart: first those spanning at most `rows`
         frames (first to last; their padded length is at most that), then each longer track on
         its own, so that one long track does not pad every other to its length. Each group
         keeps the file order; a group is all the tracks when none is longer."""
-        starts = _starts(self.track_id)
+        key = run_key(self)
+        starts = _starts(key)
         if not len(starts):
             return [self]
         ends = np.r_[starts[1:], len(self.frame)] - 1
         long = np.flatnonzero(self.frame[ends] - self.frame[starts] + 1 > rows)
         if not long.size:
             return [self]
-        track = np.cumsum(np.r_[False, self.track_id[1:] != self.track_id[:-1]])
+        track = np.cumsum(np.r_[False, key[1:] != key[:-1]])
         short = np.setdiff1d(np.arange(len(starts)), long)
         groups = ([np.isin(track, short)] if short.size else []) + [track == i for i in long]
         return [self.take(m) for m in groups]
@@ -102,7 +106,8 @@ class Tracks:
             self, track_id=take(self.track_id), frame=take(self.frame), t=take(self.t),
             u=take(self.u), v=take(self.v), width_px=take(self.width_px),
             intensity=take(self.intensity), line=take(self.line), label=take(self.label),
-            x=take(self.x), y=take(self.y), v_top=take(self.v_top), notes=[])
+            x=take(self.x), y=take(self.y), v_top=take(self.v_top), notes=[],
+            track_key=take(self.track_key))
 
     def to_batch(self, *, max_gap_frames: int, min_len: int, bucket: bool = True,
                  fps: float | int | None = None) -> TrackBatch:
@@ -155,7 +160,7 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
         if c not in tab:
             continue
         a = tab[c]
-        i = _first(np.isinf(a) | (np.abs(np.nan_to_num(a)) > MAX_ABS))
+        i = _first(np.abs(a) > MAX_ABS)  # inf too; NaN (a missing value) never
         if i is not None:
             raise tab.where(p, i, c, f"{float(a[i])!r} is not a usable value (inf or |value| > "
                             "1e12); leave the cell empty for a missing measurement")
@@ -163,17 +168,18 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
             i = _first(a < 0)
             if i is not None:
                 raise tab.where(p, i, c, f"{float(a[i])!r} is negative")
-    labels = None
+    labels = label_key = None
     if "label" in tab:
-        labels = map_text(tab["label"], lambda s: s.strip().lower())
-        i = _first(~np.isin(labels, LABELS + ("",)))
+        labels, label_key, known = _labels(tab)
+        i = _first(~known)
         if i is not None:
             raise tab.where(p, i, "label", f"unknown label {tab['label'][i]!r} (expected one of "
                             f"{', '.join(LABELS)}, or empty)")
     tid = np.asarray(tab["track_id"], dtype=object)
+    key = run_key(tab)
     notes: list[str] = []
     if grouped:
-        run = np.cumsum(np.r_[False, tid[1:] != tid[:-1]]) if len(tid) else np.zeros(0, int)
+        run = np.cumsum(np.r_[False, key[1:] != key[:-1]]) if len(tid) else np.zeros(0, int)
         order = np.lexsort((tab["frame"], run))
     else:
         order = _track_order(tid, tab["frame"])
@@ -181,15 +187,29 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
         moved = int(np.flatnonzero(order != np.arange(len(order)))[0])
         notes.append(f"{p}: rows were not grouped by track and ordered by frame (first at "
                      f"{tab.unit} {int(tab.lines[order[moved]])}); sorted by (track_id, frame)")
-    col = {k: tab[k][order] for k in tab if k != "label"}
-    lines = tab.lines[order]
-    tid, labels = tid[order], (None if labels is None else labels[order])
-    _check_tracks(p, tab.unit, tid, col["frame"], col["t"], lines, labels)
-    _check_units(p, tab.unit, tid, col, lines, fps, notes)
+    else:  # the rows are in order: taken as they are
+        order = None
+    col = {k: tab[k] if order is None else tab[k][order] for k in tab if k != "label"}
+    lines = tab.lines if order is None else tab.lines[order]
+    if order is not None:
+        tid = tid[order]
+        labels, label_key = (None, None) if labels is None else (labels[order], label_key[order])
+    key = col.get(TRACK_KEY, tid)
+    _check_tracks(p, tab.unit, tid, key, col["frame"], col["t"], lines, labels, label_key)
+    _check_units(p, tab.unit, tid, key, col, lines, fps, notes)
     return Tracks(path=p, track_id=tid, frame=col["frame"].astype(np.int64), t=col["t"],
                   u=col["u"], v=col["v"], width_px=col["width_px"], intensity=col["intensity"],
                   line=lines, unit=tab.unit, label=labels, x=col.get("x"), y=col.get("y"),
-                  fps=None if fps is None else float(fps), v_top=col.get("v_top"), notes=notes)
+                  fps=None if fps is None else float(fps), v_top=col.get("v_top"), notes=notes,
+                  track_key=col.get(TRACK_KEY))
+
+
+def run_key(rows) -> np.ndarray:
+    """Per row of a `Table` or `Tracks`, what is equal where the track id is: the ids' int64
+    codes when the reader kept them (`TRACK_KEY`, `Tracks.track_key`), else the ids."""
+    if isinstance(rows, Tracks):
+        return rows.track_id if rows.track_key is None else rows.track_key
+    return rows.get(TRACK_KEY, rows["track_id"])
 
 
 def _first(mask: np.ndarray) -> int | None:
@@ -222,10 +242,23 @@ def _track_order(tid: np.ndarray, frame: np.ndarray) -> np.ndarray:
     return np.lexsort((frame, rank[inverse.reshape(-1)]))
 
 
-def _check_tracks(p, unit, tid, frame, t, lines, labels) -> None:
+def _labels(tab: Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per row of `tab`, its label normalised (stripped, lower case; an object array), int64
+    codes equal where those are, and whether it is known (`LABELS` or ""). Normalised once per
+    run of equal cells (found on the reader's codes of the column when it kept them)."""
+    raw = np.asarray(tab["label"], dtype=object)
+    key = tab.get("label" + KEY_SUFFIX, raw)
+    first = _starts(key)
+    norm, code = map_text(raw[first], lambda s: s.strip().lower(), codes=True)
+    size = np.diff(np.r_[first, len(raw)]).astype(np.int64)
+    known = np.isin(norm, LABELS + ("",))
+    return np.repeat(norm, size), np.repeat(code, size), np.repeat(known, size)
+
+
+def _check_tracks(p, unit, tid, key, frame, t, lines, labels, label_key) -> None:
     if len(tid) < 2:
         return
-    same = tid[1:] == tid[:-1]
+    same = key[1:] == key[:-1]
     dup = _first(same & (frame[1:] == frame[:-1]))
     if dup is not None:
         a, b = sorted((int(lines[dup]), int(lines[dup + 1])))
@@ -238,17 +271,17 @@ def _check_tracks(p, unit, tid, frame, t, lines, labels) -> None:
         raise BadInput(p, f"t {what} at frame {frame[k + 1]} ({unit} {lines[k + 1]})",
                        track_id=str(tid[k]), line=int(lines[k + 1]), column="t")
     if labels is not None:
-        k = _first(same & (labels[1:] != labels[:-1]))
+        k = _first(same & (label_key[1:] != label_key[:-1]))
         if k is not None:
             raise BadInput(p, f"label changes from {labels[k]!r} to {labels[k + 1]!r} at frame "
                            f"{frame[k + 1]} ({unit} {lines[k + 1]})", track_id=str(tid[k]),
                            line=int(lines[k + 1]), column="label")
 
 
-def _check_units(p, unit, tid, col, lines, fps, notes) -> None:
+def _check_units(p, unit, tid, key, col, lines, fps, notes) -> None:
     frame, t = col["frame"], col["t"]
     if len(t) >= 2:
-        step = _steps(tid, frame, t)
+        step = _steps(key, frame, t)
         if step.size:
             med = float(np.median(step))
             ms = 300.0 < med * fps < 3000.0 if fps else med > 1.0
@@ -259,7 +292,7 @@ def _check_units(p, unit, tid, col, lines, fps, notes) -> None:
             if fps and not 0.5 < med * fps < 2.0:
                 notes.append(f"{p}: median time step {med:.4g} s per frame disagrees with "
                              f"{fps:g} fps (expected {1 / fps:.4g} s)")
-    starts = _starts(tid)
+    starts = _starts(key)
     if len(starts):
         u, v = col["u"], col["v"]
         meas = np.isfinite(u) & np.isfinite(v)
@@ -298,18 +331,18 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
     tracks'), else the median time per frame, else 1 s."""
     if max_gap_frames < 1 or min_len < 1:
         raise ValueError("max_gap_frames and min_len must be >= 1")
-    tid, frame, t = tracks.track_id, tracks.frame, tracks.t
+    tid, key, frame, t = tracks.track_id, run_key(tracks), tracks.frame, tracks.t
     n = len(frame)
-    starts = _starts(tid)
+    starts = _starts(key)
     B = len(starts)
-    seg = np.cumsum(np.r_[False, tid[1:] != tid[:-1]]) if n else np.zeros(0, np.int64)
+    seg = np.cumsum(np.r_[False, key[1:] != key[:-1]]) if n else np.zeros(0, np.int64)
     df = np.diff(frame)
     same = seg[1:] == seg[:-1]
     fps = fps or tracks.fps
     if fps:
         dt0 = 1.0 / fps
     else:
-        steps = _steps(tid, frame, t)
+        steps = _steps(key, frame, t)
         dt0 = float(np.median(steps)) if steps.size else 1.0
     ins = np.zeros(n, np.int64)
     if n > 1:
@@ -321,14 +354,17 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
     T = max(int(min_len), int(length.max()) if B else 1)
     T = _bucket(T) if bucket else T
 
-    def grid(a: np.ndarray | None) -> np.ndarray | None:
-        if a is None:
+    def grid(*cols: np.ndarray | None, dtype=np.float32) -> np.ndarray | None:
+        """The columns on the (B, T) grid (stacked on a last axis when more than one), NaN
+        elsewhere, cast to `dtype` as they are put (as `astype` casts)."""
+        if any(a is None for a in cols):
             return None
-        out = np.full((B, T), np.nan)
-        out[seg, pos] = a
-        return out
+        out = np.full((B, T, len(cols)), np.nan, dtype)
+        for i, a in enumerate(cols):
+            out[seg, pos, i] = a
+        return out if len(cols) > 1 else out[..., 0]
 
-    tg = grid(t)
+    tg = grid(t, dtype=np.float64)
     # inserted rows: j = 1..m between row k-1 and row k, at pos[k] - m - 1 + j
     kk = np.repeat(np.arange(n), ins)
     if kk.size:
@@ -341,16 +377,12 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
         t_last = tg[np.arange(B), length - 1]
         tg = np.where(present, tg, t_last[:, None] + dt0 * (idx[None, :] - length[:, None] + 1))
     dt = np.concatenate([np.full((B, 1), dt0), np.diff(tg, axis=1)], axis=1)
-    f32 = lambda a: None if a is None else a.astype(np.float32)
-    z = np.stack([grid(tracks.u), grid(tracks.v)], axis=-1)
-    xy = None
-    if tracks.x is not None and tracks.y is not None:
-        xy = f32(np.stack([grid(tracks.x), grid(tracks.y)], axis=-1))
     labels = None if tracks.label is None else [str(s) for s in tracks.label[starts]]
-    return TrackBatch(ids=[str(s) for s in tid[starts]], z=f32(z), width=f32(grid(tracks.width_px)),
-                      intensity=f32(grid(tracks.intensity)), t=f32(tg), dt=f32(dt),
-                      present=present, length=length, labels=labels, xy=xy,
-                      v_top=f32(grid(tracks.v_top)))
+    return TrackBatch(ids=[str(s) for s in tid[starts]], z=grid(tracks.u, tracks.v),
+                      width=grid(tracks.width_px), intensity=grid(tracks.intensity),
+                      t=tg.astype(np.float32), dt=dt.astype(np.float32), present=present,
+                      length=length, labels=labels, xy=grid(tracks.x, tracks.y),
+                      v_top=grid(tracks.v_top))
 
 
 __all__: Sequence[str] = (

@@ -33,8 +33,8 @@ from .batches import (
     source_files as source_files,
 )
 from .errors import BadInput, PathLike
-from .files import Tracks, validated_tracks
-from .tables import Table
+from .files import TRACK_KEY, Tracks, run_key, validated_tracks
+from .tables import KEY_SUFFIX, Table
 
 
 BLOCK_TRACKS = 4096  # whole tracks per block, at most
@@ -58,32 +58,32 @@ class NotGrouped(BadInput):
 
 # ----------------------------------------------------------------------------------------------
 class _Seen:
-    """64-bit hashes of the track ids met so far (a sorted array plus recent additions)."""
+    """64-bit hashes of the track ids met so far, as sorted runs whose lengths at least double
+    from the newest to the oldest (a run is merged into the one before it once it is as long),
+    so a lookup costs a binary search per run (about log2 of the ids met) and each hash is
+    sorted again about log2 times in all: the work per id does not grow with the file."""
 
     def __init__(self) -> None:
-        self.sorted = np.zeros(0, np.int64)
-        self.recent: list[np.ndarray] = []
-        self.n_recent = 0
+        self.runs: list[np.ndarray] = []
 
     def add(self, ids: np.ndarray) -> int | None:
         """Add the ids of tracks that just began; the index of the first one met before (or twice
         among them), else None."""
         h = np.fromiter(map(hash, ids), np.int64, len(ids))
+        if not len(h):
+            return None
         _, first = np.unique(h, return_index=True)
         hit = np.ones(len(h), bool)
         hit[first] = False
-        if len(self.sorted):
-            pos = np.minimum(np.searchsorted(self.sorted, h), len(self.sorted) - 1)
-            hit |= self.sorted[pos] == h
-        if self.recent:
-            hit |= np.isin(h, np.concatenate(self.recent))
+        for run in self.runs:
+            pos = np.minimum(np.searchsorted(run, h), len(run) - 1)
+            hit |= run[pos] == h
         if hit.any():
             return int(np.flatnonzero(hit)[0])
-        self.recent.append(h)
-        self.n_recent += len(h)
-        if self.n_recent > max(1 << 16, len(self.sorted) // 4):
-            self.sorted = np.sort(np.concatenate([self.sorted, *self.recent]))
-            self.recent, self.n_recent = [], 0
+        self.runs.append(np.sort(h))
+        while len(self.runs) > 1 and 2 * len(self.runs[-1]) > len(self.runs[-2]):
+            last = self.runs.pop()
+            self.runs[-1] = np.sort(np.concatenate([self.runs[-1], last]))
         return None
 
 
@@ -112,7 +112,7 @@ def _concat(tabs: list[Table]) -> Table:
 
 
 def _runs(tid: np.ndarray) -> np.ndarray:
-    """The first row of each run of equal ids."""
+    """The first row of each run of equal ids (or of their codes, `run_key`)."""
     return np.flatnonzero(np.r_[True, tid[1:] != tid[:-1]]) if len(tid) else np.zeros(0, int)
 
 
@@ -143,7 +143,7 @@ class _Pending:
         rest = _concat(self.pieces)
         self.pieces, self.tracks, self.rows = [], 0, 0
         while len(rest.lines):
-            ends = np.r_[_runs(rest["track_id"])[1:], len(rest.lines)]
+            ends = np.r_[_runs(run_key(rest))[1:], len(rest.lines)]
             k = min(block_tracks, int(np.searchsorted(ends, block_rows)) + 1)
             if k > len(ends):
                 if not final:
@@ -160,13 +160,20 @@ def _file_blocks(p: str, tables: Iterator[Table], seen: _Seen, block_tracks: int
     """Blocks of whole tracks (rows in file order) of one file's record batches."""
     carry: list[Table] = []  # rows of the last track, which may go on in the next batch
     pending = _Pending()
+    base = 0  # the ids' codes (`TRACK_KEY`) of each batch moved past the earlier batches'
     for tab in tables:
         n = len(tab.lines)
         if not n:
             continue
         tid = tab["track_id"]
-        starts = _runs(tid)
         cont = bool(carry) and tid[0] == carry[0]["track_id"][0]
+        for k in [k for k in tab if k.endswith(KEY_SUFFIX)]:  # codes unique to this batch
+            tab[k] = tab[k] + base
+        base += n
+        if cont and TRACK_KEY in tab:  # the carried track's code goes on
+            key = tab[TRACK_KEY]
+            key[key == key[0]] = carry[0][TRACK_KEY][0]
+        starts = _runs(run_key(tab))
         new = starts[1:] if cont else starts
         _refuse_repeats(p, tab, seen, new)
         if cont and len(starts) == 1:
@@ -217,8 +224,8 @@ def by_length(tracks: Tracks, chunk: int, segment_rows: int, min_len: int = 1
     `chunk` tracks (few, large calls: the kernel orders a call's tracks by length itself); then
     each longer track on its own (as `Tracks.by_span`). Returns the groups and `order`: the
     tracks' indices (file order) in the order the groups hold them."""
-    tid, frame = tracks.track_id, tracks.frame
-    starts = _runs(tid)
+    frame = tracks.frame
+    starts = _runs(run_key(tracks))
     if not len(starts):
         return [], np.zeros(0, np.int64)
     ends = np.r_[starts[1:], len(frame)]
@@ -267,7 +274,7 @@ def plan_partitions(source: PathLike | Sequence[PathLike], rows_per_partition: i
             if not len(tab.lines):
                 continue
             tid = tab["track_id"]
-            starts = _runs(tid)
+            starts = _runs(run_key(tab))
             if prev is not None and tid[0] == prev:
                 starts = starts[1:]
             _refuse_repeats(p, tab, seen, starts)

@@ -27,11 +27,13 @@ from .atomic import (
     make_output_dir as make_output_dir,
 )
 from .errors import BadInput as BadInput, PathLike
+from .text import is_text, map_text as map_text
 
 
 TABLE_SUFFIXES = (".csv", ".parquet")
 NULL_TOKENS = ("", "nan", "NaN", "NAN", "NA", "N/A", "null", "NULL", "None")
 KINDS = ("float", "int", "id", "str")
+KEY_SUFFIX = "#key"  # `convert_parquet`'s code columns: name + KEY_SUFFIX
 
 
 # ----------------------------------------------------------------------------------------------
@@ -327,49 +329,51 @@ def _read_parquet(p: str, required, optional, types, not_empty) -> Table:
                            types, not_empty)
 
 
-def convert_parquet(p: str, tbl, rows: np.ndarray, keep, types, not_empty) -> Table:
+def convert_parquet(p: str, tbl, rows: np.ndarray, keep, types, not_empty,
+                    keys: Sequence[str] = ()) -> Table:
     """The `keep` columns of the Arrow table or record batch `tbl` converted by `types`; `rows`
-    each row's 1-based row in the file. Raises `BadInput` for the earliest bad cell."""
+    each row's 1-based row in the file. Raises `BadInput` for the earliest bad cell. For each
+    text column named in `keys`, also a column `name + KEY_SUFFIX`: int64 codes equal where the
+    converted values are (within this table), so runs of equal values are found without
+    comparing strings. A text column stored dictionary-encoded is read through its dictionary
+    (each distinct value converted once)."""
     table = Table({}, rows, "row")
-    results = {}
+    results, codes = {}, {}
     for n in keep:
         col = tbl.column(n)
         col = col.combine_chunks() if isinstance(col, pa.ChunkedArray) else col
-        if pa.types.is_dictionary(col.type):
+        if pa.types.is_dictionary(col.type) and not is_text(col.type.value_type):
             col = col.dictionary_decode()
-        results[n] = _parquet_column(p, col, n, types.get(n), n in not_empty)
+        results[n] = _parquet_column(p, col, n, types.get(n), n in not_empty, codes)
     _raise_first(p, table, results)
     table.update(results)
+    table.update({n + KEY_SUFFIX: codes[n] for n in keys if n in codes})
     return table
 
 
-def map_text(col: Any, f) -> np.ndarray:
-    """`f` (a str -> str function) of each cell of the text column `col` (an Arrow array or a
-    sequence of str, no nulls) as an object array, `f` called once per distinct value."""
-    enc = pa.array(col, pa.string()).dictionary_encode() if not isinstance(col, pa.Array) \
-        else col.dictionary_encode()
-    done = np.asarray([f(s) for s in enc.dictionary.to_pylist()] + [""], dtype=object)
-    return done[np.asarray(enc.indices.to_numpy(zero_copy_only=False), np.int64)]
-
-
-def _parquet_column(p: str, col: pa.Array, name: str, kind: str | None, required: bool):
-    t = col.type
-    is_text = pa.types.is_string(t) or pa.types.is_large_string(t) or str(t) == "string_view"
+def _parquet_column(p: str, col: pa.Array, name: str, kind: str | None, required: bool,
+                    codes: dict):
+    t = col.type.value_type if pa.types.is_dictionary(col.type) else col.type
+    text = is_text(t)
     is_int = pa.types.is_integer(t)
     is_num = is_int or pa.types.is_floating(t) or pa.types.is_decimal(t)
     if kind is None:
-        if not (is_num or is_text):  # e.g. bool or timestamp: no conversion asked for
+        if not (is_num or text):  # e.g. bool or timestamp: no conversion asked for
             return col.to_numpy(zero_copy_only=False)
         kind = "int" if is_int and not col.null_count else "float" if is_num else "str"
-    ok = {"float": is_num, "int": is_num, "id": is_num or is_text, "str": is_text}[kind]
+    ok = {"float": is_num, "int": is_num, "id": is_num or text, "str": text}[kind]
     if not ok:
         expected = {"float": "float", "int": "integer", "id": "integer or string",
                     "str": "string"}[kind]
         raise BadInput(p, f"column '{name}' has type {t}, expected {expected}")
     null = np.asarray(col.is_null().to_numpy(zero_copy_only=False), bool)
-    if is_text:
-        values = map_text(col.fill_null(""), str.strip)
-        null |= values == ""
+    if text:
+        values, key = map_text(col.fill_null(""), str.strip, codes=True)
+        # the codes follow the sorted distinct values: "" (an empty cell) is code 0 if present
+        zero = np.flatnonzero(key == 0)
+        if zero.size and values[zero[0]] == "":
+            null |= key == 0
+        codes[name] = key
     else:
         values = col.cast(pa.float64()).to_numpy(zero_copy_only=False)
         null |= np.isnan(values)
@@ -378,8 +382,8 @@ def _parquet_column(p: str, col: pa.Array, name: str, kind: str | None, required
     if kind == "str":
         return values
     if kind == "float":
-        return values.astype(np.float64)
-    if is_text:  # id given as text
+        return np.asarray(values, np.float64)
+    if text:  # id given as text
         return values
     if is_int:
         ints = col.cast(pa.int64()).to_numpy(zero_copy_only=False)

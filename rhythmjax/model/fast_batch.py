@@ -60,7 +60,8 @@ class Segments:
             k0 = np.argmax(started, axis=1)
             has = started[np.arange(b), k0]
             n_tracked = np.sum(started & rd.rest.present, axis=1)
-            available = rd.rest.present & np.all(np.isfinite(rd.rest.z), axis=-1) & inside
+            z = rd.rest.z
+            available = rd.rest.present & np.isfinite(z[..., 0]) & np.isfinite(z[..., 1]) & inside
             windows = np.where(has & (n_tracked >= n_win), (n_tracked - n_win) // hop + 1, 0)
             for k, v in (("owner", rd.owner), ("first", rd.first), ("round", np.full(b, r)),
                          ("row", np.arange(b)), ("k0", k0), ("n_tracked", n_tracked),
@@ -90,16 +91,19 @@ class Segments:
         rnd = self.round[seg]
         for r in np.unique(rnd):
             w = np.flatnonzero(rnd == r)
+            w = slice(None) if len(w) == W else w
             rd = self.rounds[r]
-            row = self.row[seg[w]][:, None]
-            col = (self.k0[seg[w]] + self.hop * j[w])[:, None] + np.arange(N)[None, :]
-            out[0, w] = rd.rest.intensity[row, col]
-            out[1, w] = rd.rest.dt[row, col]
-            xy, z = rd.xy[row, col], rd.rest.z[row, col]
-            seen = rd.valid[row, col]
-            out[2, w], out[3, w] = xy[..., 0], xy[..., 1]
-            out[4, w] = np.where(seen, z[..., 0], np.nan)
-            out[5, w] = np.where(seen, z[..., 1], np.nan)
+            T = rd.valid.shape[1]
+            # each window's rows as flat indices into the round's (B, T) arrays: 1-D takes
+            # (the same elements as indexing by (row, column), at a fraction of the cost)
+            at = (self.row[seg[w]] * T + self.k0[seg[w]] + self.hop * j[w])[:, None] \
+                + np.arange(N)[None, :]
+            out[0, w] = np.take(rd.rest.intensity, at)
+            out[1, w] = np.take(rd.rest.dt, at)
+            seen = np.take(rd.valid, at)
+            out[2, w], out[3, w] = np.take(rd.xy, 2 * at), np.take(rd.xy, 2 * at + 1)
+            out[4, w] = np.where(seen, np.take(rd.rest.z, 2 * at), np.nan)
+            out[5, w] = np.where(seen, np.take(rd.rest.z, 2 * at + 1), np.nan)
         return out
 
 

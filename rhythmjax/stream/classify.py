@@ -5,19 +5,22 @@ tracks (`BLOCK_TRACKS` tracks or `BLOCK_ROWS` rows), validates each as `io.files
 does and prepares it (`stream.blocks.prepare`): the tracks in groups by padded length class
 (`io.stream.by_length`: a short track is not padded to a long one; a track longer than
 `segment_rows` alone, through `classify_tracks`' long-track path), each padded
-(`io.files.to_batch`). The main thread classifies the prepared blocks in order
-(`model.batch.classify_tracks`, one call per group) and writes each block's verdicts as a part
-(`io.parts`); at the end the parts become the output, in the input's track order. The two
-overlap: while block k is in the kernels, block k+1 is read and prepared.
+(`io.files.to_batch`). Kernel threads classify the prepared blocks (`model.batch.
+classify_tracks`, one call per group), `kernel_threads` blocks at once, so that one block's host
+work between its programs overlaps another's programs; the main thread writes each block's
+verdicts as a part (`io.parts`), in order; at the end the parts become the output, in the
+input's track order. All overlap: while blocks k and k+1 are in the kernels, block k+2 is read
+and prepared.
 
 Memory bound: the blocks alive (prepared, queued, in the kernels or being written) are at most
-`prefetch + 2` (one in the reader's hands, `prefetch` in the queue, one in the kernels), each of
-at most `block_tracks` tracks and, unless one track is longer, `block_rows` rows: at most
-(prefetch + 2) x block_tracks tracks, (prefetch + 2) x block_rows rows (defaults 3 x 4096
-tracks, 3 x 2^19 rows). The reader also holds less than one block plus one record batch
-(`batch_rows` rows) of rows not yet handed out. Nothing grows with the file but the ids' hashes
-(8 bytes a track) and, with no output file, the verdicts. The driver counts the tracks alive and
-reports the peak (`peak_tracks_in_memory`, against `memory_bound_tracks`).
+`prefetch + 1 + kernel_threads` (one in the reader's hands, `prefetch` in the queue,
+`kernel_threads` in the kernels), each of at most `block_tracks` tracks and, unless one track is
+longer, `block_rows` rows: at most (prefetch + 1 + kernel_threads) x block_tracks tracks, as
+many times block_rows rows (defaults 4 x 4096 tracks, 4 x 2^19 rows). The reader also holds
+less than one block plus one record batch (`batch_rows` rows) of rows not yet handed out.
+Nothing grows with the file but the ids' hashes (8 bytes a track) and, with no output file, the
+verdicts. The driver counts the tracks alive and reports the peak (`peak_tracks_in_memory`,
+against `memory_bound_tracks`).
 
 The verdicts are those of the whole-file path (`classify_whole`, kept for files whose tracks'
 rows are not contiguous, which the stream cannot group: a note says so).
@@ -33,7 +36,9 @@ import queue
 import sys
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 from .. import __version__
@@ -66,6 +71,9 @@ from .blocks import (
 
 
 PREFETCH = 1  # prepared blocks waiting in the queue
+# blocks in the kernels at once, each on its own thread: one block's host work (NumPy between
+# the programs, under the GIL) overlaps the other's compiled programs (which release it)
+KERNEL_THREADS = 2
 
 
 def _log_stderr(msg: str) -> None:
@@ -159,6 +167,7 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
                     log: Callable[[str], None] | None = _log_stderr,
                     block_tracks: int = BLOCK_TRACKS, block_rows: int = BLOCK_ROWS,
                     batch_rows: int = BATCH_ROWS, prefetch: int = PREFETCH,
+                    kernel_threads: int = KERNEL_THREADS,
                     on_part: Callable[[dict], None] | None = None) -> dict:
     """Classify every track of `source` (a tracks file, a list of files or a folder of them)
     streaming: read by record batches, classify block by block while the next is prepared,
@@ -173,11 +182,14 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
     over (`log` says so). A file whose tracks' rows are not contiguous is classified whole
     (`classify_whole`, a note says so); for a list or folder of files that is a `BadInput`.
     `devices` is passed on to `classify_tracks` when not None; `on_part(entry)` is called after
-    each part is written (tests).
+    each part is written (tests). Up to `kernel_threads` blocks are classified at once, each
+    on its own thread (the first block alone: it compiles the programs); the parts are
+    written in order by this thread.
 
     Returns a summary: n_tracks, verdicts, reasons, labels (when labelled), notes, streamed,
     parts, resumed_parts, peak_tracks_in_memory, memory_bound_tracks and timing (read_s,
-    prepare_s: in the reader thread; kernel_s, write_s, wait_s: in the main thread; total_s)."""
+    prepare_s: in the reader thread; kernel_s: in the kernel threads, summed over them;
+    write_s, wait_s: in the main thread; total_s)."""
     t_start = time.perf_counter()
     log = log or (lambda msg: None)
     files = source_files(source)
@@ -209,7 +221,40 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
         camera = [a + b for a, b in zip(camera, e.get("camera", [0, 0, 0]), strict=True)]
         labelled = "label" in e.get("columns", [])
     bar = _bar(progress, counts.get("n_tracks", 0))
+    pool = ThreadPoolExecutor(max(1, kernel_threads), thread_name_prefix="rhythmjax-kernels")
+    inflight: deque = deque()  # (prepared block, future of its verdict columns), in order
+
+    def kernels(prep):
+        t1 = time.perf_counter()
+        cols = classify_prepared(cfg, prep, chunk=chunk, segment_rows=segment_rows,
+                                 devices=devices)
+        return cols, time.perf_counter() - t1
+
+    def finish() -> None:
+        nonlocal counts, camera
+        prep, fut = inflight.popleft()
+        cols, dt = fut.result()
+        st.kernel_s += dt
+        t2 = time.perf_counter()
+        summ = summarise(cols, cols.get("label"))
+        counts = _add_counts(counts, summ)
+        notes.add(prep.notes)
+        camera = [a + b for a, b in zip(camera, prep.camera, strict=True)]
+        if parts is not None:
+            entry = parts.write(cols, verdict_order(labelled), {
+                "tracks": prep.n_tracks, "notes": prep.notes, "camera": prep.camera,
+                "summary": summ})
+            if on_part:
+                on_part(entry)
+        else:
+            kept.append(cols)
+        st.write_s += time.perf_counter() - t2
+        st.hold(-prep.n_tracks)
+        if bar is not None:
+            bar.update(prep.n_tracks)
+
     thread.start()
+    done_blocks = 0
     try:
         while True:
             t0 = time.perf_counter()
@@ -225,28 +270,13 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
                 raise BadInput(files[0], "some of the files have a 'label' column and some "
                                          "not; give all or none")
             labelled = prep.labels is not None
-            t1 = time.perf_counter()
-            cols = classify_prepared(cfg, prep, chunk=chunk, segment_rows=segment_rows,
-                                     devices=devices)
-            t2 = time.perf_counter()
-            st.kernel_s += t2 - t1
-            summ = summarise(cols, cols.get("label"))
-            counts = _add_counts(counts, summ)
-            notes.add(prep.notes)
-            camera = [a + b for a, b in zip(camera, prep.camera, strict=True)]
-            if parts is not None:
-                entry = parts.write(cols, verdict_order(labelled), {
-                    "tracks": prep.n_tracks, "notes": prep.notes, "camera": prep.camera,
-                    "summary": summ})
-                if on_part:
-                    on_part(entry)
-            else:
-                kept.append(cols)
-            st.write_s += time.perf_counter() - t2
-            st.hold(-prep.n_tracks)
-            if bar is not None:
-                bar.update(prep.n_tracks)
-            del prep, cols
+            inflight.append((prep, pool.submit(kernels, prep)))
+            del prep
+            while inflight and len(inflight) >= (max(1, kernel_threads) if done_blocks else 1):
+                finish()
+                done_blocks += 1
+        while inflight:
+            finish()
     except NotGrouped as e:
         _stop(stop, q, thread)
         if parts is not None:
@@ -277,6 +307,9 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
                     "resumes from them")
         raise
     finally:
+        for _, fut in inflight:
+            fut.cancel()
+        pool.shutdown(wait=True)
         if bar is not None:
             bar.close()
     thread.join()
@@ -300,7 +333,8 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
                "parts": len(parts.done) if parts else n_blocks,
                "resumed_parts": parts.resumed if parts else 0,
                "peak_tracks_in_memory": st.peak,
-               "memory_bound_tracks": (max(1, prefetch) + 2) * block_tracks,
+               "memory_bound_tracks": (max(1, prefetch) + 1 + max(1, kernel_threads))
+               * block_tracks,
                "timing": {k: round(getattr(st, k), 3) for k in
                           ("read_s", "prepare_s", "kernel_s", "write_s", "wait_s")}}
     summary["timing"]["total_s"] = round(time.perf_counter() - t_start, 3)
