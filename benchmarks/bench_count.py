@@ -70,13 +70,17 @@ def floor_pass(frames: np.ndarray, threshold: int = 20) -> tuple[float, int]:
     return time.perf_counter() - t0, n_blobs
 
 
-def count_pass(cfg, frames: np.ndarray):
+def count_pass(cfg, frames: np.ndarray, candidates: bool = False):
+    """`count_frames` over `frames`, timed; `candidates`: with the candidate windows B
+    (`verdicts.window_candidates`)."""
     from rhythmjax.count import count_frames
+    from rhythmjax.count.options import CountOptions, VerdictOptions
 
     fps = float(cfg.camera.fps)
     items = [(k, k / fps, f) for k, f in enumerate(frames)]
+    opt = CountOptions(verdicts=VerdictOptions(window_candidates=candidates))
     t0 = time.perf_counter()
-    res = count_frames(cfg, iter(items), n_frames=len(items))
+    res = count_frames(cfg, iter(items), n_frames=len(items), options=opt)
     return time.perf_counter() - t0, res
 
 
@@ -86,6 +90,8 @@ def main(argv=None) -> int:
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--quick", action="store_true", help="90 frames, 1 timed pass")
     p.add_argument("--json", help="write the figures here (nothing is written otherwise)")
+    p.add_argument("--window-candidates", action="store_true",
+                   help="count with the candidate windows B (verdicts.window_candidates)")
     a = p.parse_args(argv)
     n, reps = (90, 1) if a.quick else (a.frames, a.repeats)
     import jax
@@ -95,18 +101,19 @@ def main(argv=None) -> int:
     print(f"rendered {len(frames)} frames {WIDTH}x{HEIGHT}, walkers in view {vis.min()}-"
           f"{vis.max()} ({time.perf_counter() - t0:.1f} s, not timed)", file=sys.stderr)
     t0 = time.perf_counter()
-    _, res = count_pass(cfg, frames)  # warm-up: JIT compilation
+    _, res = count_pass(cfg, frames, a.window_candidates)  # warm-up: JIT compilation
     print(f"warm-up pass {time.perf_counter() - t0:.1f} s; counts {res.counts}", file=sys.stderr)
     t_floor, t_count = [], []
     for _ in range(reps):
         t_floor.append(floor_pass(frames)[0] / (len(frames) - 1))
-        dt, res = count_pass(cfg, frames)
+        dt, res = count_pass(cfg, frames, a.window_candidates)
         t_count.append(dt / len(frames))
     out = {"frames": len(frames), "size": [WIDTH, HEIGHT], "walkers_in_view": int(vis.min()),
            "repeats": reps, "cpu_count": os.cpu_count(), "jax_backend": jax.default_backend(),
            "count_fps_best": 1 / min(t_count), "count_fps_median": 1 / statistics.median(t_count),
            "floor_fps_best": 1 / min(t_floor), "floor_fps_median": 1 / statistics.median(t_floor),
-           "counts": res.counts, "target_fps": 140.0}
+           "counts": res.counts, "target_fps": 140.0,
+           "window_candidates": a.window_candidates}
     out["ratio_to_floor"] = out["count_fps_best"] / out["floor_fps_best"]
     print("| pipeline | fps (best) | fps (median) |\n|---|---|---|")
     print(f"| count_frames (paper's method + rhythm) | {out['count_fps_best']:.1f} | "

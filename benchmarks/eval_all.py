@@ -209,6 +209,9 @@ def has_rhythm_verb() -> bool:
     return importlib.util.find_spec("rhythmjax.cli.rhythm") is not None
 
 
+RHYTHM_FLAGS: list[str] = []  # extra `rhythmjax rhythm` flags (eval_rules' tracker rules)
+
+
 def run_pets_boxes(sets, quick, log) -> dict:
     """`rhythmjax rhythm VIDEO --boxes GT.txt -c pets.json --fps 7` on PETS's annotated boxes
     (all 19 people; occluded boxes included), each person's verdict its box track's."""
@@ -234,7 +237,7 @@ def run_pets_boxes(sets, quick, log) -> dict:
             json.dump(apply_set(ev.pets_config_dict(), sets), fh)
         cmd = [sys.executable, "-m", "rhythmjax.cli.main", "rhythm", str(datasets.pets_video()),
                "--boxes", gt, "--frame-base", "1", "-c", cfg, "--fps", str(datasets.PETS_FPS),
-               "-o", out, "-q"]
+               "-o", out, "-q", *RHYTHM_FLAGS]
         p = subprocess.run(cmd, capture_output=True, text=True)
         if p.returncode:
             return {"skipped": f"failed: rhythmjax rhythm exit {p.returncode}: "

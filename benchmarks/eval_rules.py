@@ -22,6 +22,9 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - stabilise: the tracker's `motion.stabilise` (camera-shake alignment) True vs False (needs a
   tree that has it: after d9d8d45).
 - reid: counting's `stitch.reid` True vs False (default off; after d9d8d45).
+- candidates: the tracker's candidate windows B (`body.window_candidates`, issue 16 item 2)
+  True vs False (`rhythm --boxes`: `--window-candidates`); count_candidates: counting's
+  (`verdicts.window_candidates`).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each
@@ -87,6 +90,11 @@ RULES = {
               "none: set from geometry (1ad0850, issue 16 item 4)"),
     "stabilise": ("tracker", "motion.stabilise", True, False, TRACKER_SOURCES,
                   "own scenes, seeds 4100-7100 with 1 px shake (docs/window_b.md; 95875e0)"),
+    "candidates": ("tracker", "body.window_candidates", True, False,
+                   TRACKER_SOURCES + ("pets_boxes",),
+                   "none: offsets -0.2, -0.1, +0.1 W set a priori (docs/window_b.md)"),
+    "count_candidates": ("count", "verdicts.window_candidates", True, False, COUNT_SOURCES,
+                         "none: offsets -0.2, -0.1, +0.1 W set a priori (docs/window_b.md)"),
     "reid": ("count", "stitch.reid", True, False, COUNT_SOURCES,
              "own counting seeds (left off: neutral there; 95875e0)"),
     "still_end": ("patch", "PedestrianLevel._still", "on", "off (ghost drop kept)",
@@ -98,7 +106,7 @@ ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
-              "stabilise": ALL, "reid": ()}
+              "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",
@@ -212,6 +220,8 @@ def run(rule: str, state: str, only, quick: bool, outdir: Path, seeds=None) -> P
             sets = [(key[0], key[1], val)]
         elif kind == "tracker":
             _patch_tracker({key: val})
+            if key == "body.window_candidates":  # `rhythm --boxes` runs in a subprocess
+                ea.RHYTHM_FLAGS.append(f"--{'' if val else 'no-'}window-candidates")
         elif kind == "count":
             _patch_count({key: val})
         elif kind == "patch" and state == "off":

@@ -30,6 +30,7 @@ TRACKER_DEFAULTS = [
     ("sample_estimate", "body.sample_estimate", False),
     ("high_foot_widths", "body.high_foot_widths", 0.0),
     ("high_foot_frames", "body.high_foot_frames", 3),
+    ("(new: issue 16 item 2)", "body.window_candidates", False),
     ("min_area", "new.min_area", 40),
     ("outside_margin_px", "new.outside_margin_px", 8),
     ("near_widths", "new.near_widths", 1.0),
@@ -97,6 +98,7 @@ COUNT_DEFAULTS = [
     (None, "life.still_widths", 0.15),
     (None, "life.still_heights", 0.04),
     (None, "verdicts.speed_fit", "lsq"),  # issue 16: Theil-Sen too-fast speed, off
+    ("(new: issue 16 item 2)", "verdicts.window_candidates", False),  # candidate windows B
     # the foot-point gates of `count.foot_gate` (options a and b), off
     (None, "placement.in_range", False),
     (None, "placement.gate_heights", 0.0),

@@ -56,6 +56,18 @@ def add_strict(p: argparse.ArgumentParser) -> None:
                    "(exit 2, nothing written) instead of a warning")
 
 
+def add_window_candidates(p: argparse.ArgumentParser, default: bool) -> None:
+    """--window-candidates / --no-window-candidates (issue 16's candidate windows B), for the
+    verbs that sum I(k) from a video; `default` the verb's options' default."""
+    from ..io.files import WINDOW_CANDIDATES
+
+    p.add_argument("--window-candidates", action=argparse.BooleanOptionalAction,
+                   default=default, help="also sum I(k) in window B moved by "
+                   + ", ".join(f"{o:+g} W ({c})" for c, o in WINDOW_CANDIDATES)
+                   + " (negative: up), written as tracks columns, and judge each rhythm window "
+                   "by the candidate whose strongest spectral peak is highest")
+
+
 def reading_check(args, src, notes=None) -> None:
     """After the video's pass: what was lost (frames read of frames announced, frames skipped
     and why) as one warning line on stderr, always; an error (`BadInput`) with --strict. Its

@@ -12,12 +12,14 @@ from ..count.options import CountOptions, VerdictOptions
 from ..io import atomic_write, dumps_json, write_table
 from ..io.mot import VELOCITY_COLUMNS, write_mot
 from ..model.params import ConfigError, config_to_dict
+from ..track.columns import candidate_columns
 from .common import (
     TRACK_ORDER,
     VERDICT_ORDER,
     add_camera_check,
     add_common,
     add_strict,
+    add_window_candidates,
     fps_arg,
     load_config_dict,
     open_source,
@@ -80,7 +82,8 @@ def cmd_count(args) -> int:
     if args.max_pedestrians < 1:
         raise ConfigError("--max-pedestrians", f"must be >= 1, got {args.max_pedestrians}")
     opt = CountOptions(dynamics=args.dynamics, max_pedestrians=args.max_pedestrians,
-                       verdicts=VerdictOptions(min_track_frames=args.min_frames))
+                       verdicts=VerdictOptions(min_track_frames=args.min_frames,
+                                               window_candidates=args.window_candidates))
     out = lambda name: os.path.join(args.output, name)
     names = COUNT_OUTPUTS + (() if args.no_report else (REPORT_NAME,))
     with output_set(args.output, names, overlay=args.overlay, inputs=[args.video, args.config],
@@ -105,9 +108,10 @@ def cmd_count(args) -> int:
             write_mot(outs.path(out("mot.txt")), res.mot)
             write_mot(outs.path(out("mot_velocity.txt")), res.mot, VELOCITY_COLUMNS)
             write_table(outs.path(out("tracks.parquet")), res.tracks,
-                        TRACK_ORDER + list(VELOCITY_COLUMNS))
+                        TRACK_ORDER + list(VELOCITY_COLUMNS) + candidate_columns(res.tracks))
             write_table(outs.path(out("verdicts.csv")), res.verdicts,
-                        VERDICT_ORDER + list(GUESS_COLUMNS))
+                        VERDICT_ORDER + list(GUESS_COLUMNS)
+                        + [c for c in ("candidate",) if c in res.verdicts])
             with atomic_write(outs.path(out("counts.json")), "w") as f:
                 f.write(dumps_json(summary, indent=2) + "\n")
             spectra = write_spectra(outs.path(out("spectra.png")), outs.path(out("spectra.pdf")),
@@ -167,5 +171,6 @@ def register(sub, formatter=None) -> None:
                    "frames are dropped from the outputs and counts")
     p.add_argument("--no-report", action="store_true", help="skip report.html (the counts, "
                    "verdict table, spectra, overlay and config on one page)")
+    add_window_candidates(p, VerdictOptions().window_candidates)
     add_common(p)
     p.set_defaults(func=cmd_count)

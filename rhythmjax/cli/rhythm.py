@@ -15,14 +15,17 @@ from ..io import (
     to_batch,
     write_table,
 )
+from ..io.files import CANDIDATE_COLUMNS, WINDOW_CANDIDATES
 from ..io.mot import read_mot_numbered
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
 from ..model.params import ConfigError
 from ..track.boxes import box_intensities, check_in_image, tracks_from_mot, window_widths
+from ..track.options import BodyOptions
 from .common import (
     add_camera_check,
     add_common,
     add_strict,
+    add_window_candidates,
     fps_arg,
     load_config_dict,
     open_source,
@@ -73,6 +76,9 @@ def cmd_rhythm(args) -> int:
     the foot point through the camera (Sec. 4.1, as the online tracker measures it). Each box
     track is then judged as `rhythmjax classify` does (EKF with the paper's gates, MEM
     spectrum, (13)-(15)). The config is resolved for the video as `run` does.
+    --window-candidates: I(k) also in window B moved by -0.2, -0.1 and +0.1 W (the tracker's
+    body.window_candidates; columns intensity_up20, intensity_up10, intensity_down10), and each
+    rhythm window judged by the candidate with the strongest spectral peak.
 
     Writes DIR/tracks.parquet (the tracks format with intensity) and DIR/verdicts.csv; prints
     the verdicts (or a --json summary). The two replace the previous pair together, and nothing
@@ -93,7 +99,8 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
                                  scale=args.box_scale)
         check_in_image(tracks, src.width, src.height, mot, args.box_scale)
         W = window_widths(cfg, tracks.u, tracks.v)
-        sig = box_intensities(src, tracks.frame, tracks.u, tracks.v, W)
+        offsets = tuple(off for _, off in WINDOW_CANDIDATES) if args.window_candidates else ()
+        sig = box_intensities(src, tracks.frame, tracks.u, tracks.v, W, offsets=offsets)
         reading_check(args, src)
     late = np.flatnonzero(tracks.frame >= sig.n_frames)
     if late.size:
@@ -103,6 +110,7 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
         raise BadInput(args.boxes, f"frame {int(tracks.frame[k])} (0-based) is past the video's "
                        f"last ({sig.n_frames - 1}; {args.video})", **where)
     tracks.intensity = sig.intensity
+    tracks.candidates = sig.candidates  # None without --window-candidates (a file's are dropped)
     n = cfg.thresholds.n
     batch = to_batch(tracks, max_gap_frames=max(1, round(float(cfg.thresholds.predict_timeout)
                                                          * cfg.camera.fps)), min_len=n)
@@ -118,6 +126,9 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
     if tracks.label is not None:
         cols["label"] = tracks.label
         track_order.append("label")
+    if sig.candidates is not None:
+        cols.update({c: sig.candidates[:, j] for j, c in enumerate(CANDIDATE_COLUMNS)})
+        track_order += list(CANDIDATE_COLUMNS)
     write_table(outs.path(out_tracks), cols, track_order)
     write_table(outs.path(out_verdicts), verdicts, order)
     sampled = int(np.sum(np.isfinite(sig.intensity)))
@@ -159,6 +170,7 @@ def register(sub, formatter=None) -> None:
                    "times smaller resolution than the video: their px are multiplied by S")
     p.add_argument("--fps", type=fps_arg, help="frame rate (frames/s): --fps, else the config's "
                    "camera.fps, else the file's; needed for a frame folder without camera.fps")
+    add_window_candidates(p, BodyOptions().window_candidates)
     add_camera_check(p)
     add_strict(p)
     add_common(p)

@@ -19,11 +19,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..io.files import atomic_path
+from ..io.files import CANDIDATE_COLUMNS, atomic_path
 from ..model import mem
 from ..model.params import Config
 from ..model.rhythm import N_FREQS, fill_gaps, normalise_window
 from ..model.status import REASON_LABELS, VERDICT_LABELS
+from ..track.toolkit import window_signal
 
 
 __all__ = ["PER_PAGE", "Sample", "WindowTrack", "gallery_figures", "judged", "page_images",
@@ -60,23 +61,29 @@ class WindowTrack(NamedTuple):
 
 
 def table_windows(tracks: dict, verdicts: dict, n: int, fps: float) -> list[WindowTrack]:
-    """The judged tracks of a tracks table (columns track_id, frame, t, intensity) and its
-    verdicts (track_id, verdict, reason labels, pace_hz, stride_m and window_frame: the first
-    frame of the window that decided the track, -1 for none; `count` keeps it from the batch
-    classifier). Each window holds the n frames from window_frame on (fps frames/s); a frame
-    without a row is a NaN sample, as `io.files.to_batch` fills a gap, and its t follows the
-    frame grid (t = frame / fps + the track's median offset)."""
+    """The judged tracks of a tracks table (columns track_id, frame, t, intensity; the candidate
+    windows' `io.files.CANDIDATE_COLUMNS` where present) and its verdicts (track_id, verdict,
+    reason labels, pace_hz, stride_m, window_frame: the first frame of the window that decided
+    the track, -1 for none, and optionally candidate: the window B that decided; `count` keeps
+    both from the batch classifier). Each window holds the n frames from window_frame on (fps
+    frames/s); a frame without a row is a NaN sample, as `io.files.to_batch` fills a gap, and
+    its t follows the frame grid (t = frame / fps + the track's median offset)."""
     verdict_code = {v: k for k, v in VERDICT_LABELS.items()}
     reason_code = {v: k for k, v in REASON_LABELS.items()}
     tid = np.asarray(tracks["track_id"])
     frame = np.asarray(tracks["frame"], np.int64)
     t = np.asarray(tracks["t"], np.float64)
-    inten = np.asarray(tracks["intensity"], np.float64)
+    signals = [np.asarray(tracks["intensity"], np.float64)]
+    if all(c in tracks for c in CANDIDATE_COLUMNS):
+        signals += [np.asarray(tracks[c], np.float64) for c in CANDIDATE_COLUMNS]
     out = []
     for i, track in enumerate(verdicts["track_id"]):
         f0 = int(verdicts["window_frame"][i])
         if f0 < 0:
             continue
+        # the candidate window B that decided (`verdicts["candidate"]`; 0: window B's own)
+        c = int(verdicts["candidate"][i]) if "candidate" in verdicts else 0
+        inten = signals[c if c < len(signals) else 0]
         mine = np.flatnonzero(tid == track)
         offset = float(np.median(t[mine] - frame[mine] / fps))
         grid = np.arange(f0, f0 + n)
@@ -101,10 +108,12 @@ def window_spectrum(inten, dt, order: int):
 
 
 def track_spectrum(cfg: Config, o) -> tuple[np.ndarray, np.ndarray]:
-    """(frequencies Hz, P / white-noise level) of the MEM spectrum of `o`'s deciding window."""
+    """(frequencies Hz, P / white-noise level) of the MEM spectrum of `o`'s deciding window: its
+    rows `result["window"]`, the I(k) of the candidate window B that decided (`result
+    ["candidate"]`, `track.toolkit.window_signal`; window B's own without candidates)."""
     a, b = o.result["window"]
     t = np.asarray([r.t for r in o.rows[a:b]], np.float64)
-    inten = np.asarray([r.intensity for r in o.rows[a:b]], np.float32)
+    inten = window_signal(o, a, b, int(o.result.get("candidate", 0))).astype(np.float32)
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0 / float(cfg.camera.fps)
     freqs, psd = window_spectrum(jnp.asarray(inten), jnp.float32(dt), int(cfg.thresholds.m))
     return np.asarray(freqs), np.maximum(np.asarray(psd) / dt, 1e-3)

@@ -12,6 +12,7 @@ from ..model.params import ConfigError, config_from_dict, config_to_dict
 from ..sim.evaluate import deciding_windows, match_tracks, score, window_objects
 from ..sim.presets import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
 from ..sim.scene import random_spec, render_scene, scene_to_tracks_truth
+from ..track.columns import candidate_columns
 from ..track.driver import track_frames
 from ..track.options import TrackerOptions, with_changes
 from .common import (
@@ -20,6 +21,7 @@ from .common import (
     add_camera_check,
     add_common,
     add_strict,
+    add_window_candidates,
     count_arg,
     emit_json,
     fps_arg,
@@ -61,14 +63,18 @@ def _options(args) -> TrackerOptions:
     if args.max_objects < 1:
         raise ConfigError("--max-objects", f"must be >= 1, got {args.max_objects}")
     opt = TrackerOptions(max_objects=args.max_objects)
-    return with_changes(opt, {"motion.stabilise": False}) if args.no_stabilise else opt
+    changes = {"body.window_candidates": bool(args.window_candidates)}
+    if args.no_stabilise:
+        changes["motion.stabilise"] = False
+    return with_changes(opt, changes)
 
 
 def _write_outputs(outs, out_dir, cfg, tracks, verdicts, objs, *, truth_ids=None):
     """tracks.parquet, verdicts.csv, spectra.png and spectra.pdf of `out_dir`, to the temp paths
     of `outs`; the spectra pages (PNG bytes) for the report."""
     at = lambda name: outs.path(os.path.join(out_dir, name))
-    write_table(at("tracks.parquet"), tracks, [*TRACK_ORDER, "v_top"])  # the head rows
+    write_table(at("tracks.parquet"), tracks, [*TRACK_ORDER, "v_top",  # the head rows
+                                               *candidate_columns(tracks)])
     write_table(at("verdicts.csv"), verdicts, VERDICT_ORDER)
     return write_spectra(at("spectra.png"), at("spectra.pdf"), cfg, objs, truth_ids=truth_ids)
 
@@ -142,7 +148,8 @@ def cmd_track(args) -> int:
                 cfg, src, n_frames=src.n_frames, on_frame=_drawer(overlay, cfg, src=src),
                 progress=not (args.quiet or args.json), options=options)
             reading_check(args, src, notes)
-            write_table(outs.path(args.output), tracks, [*TRACK_ORDER, "v_top"])
+            write_table(outs.path(args.output), tracks,
+                        [*TRACK_ORDER, "v_top", *candidate_columns(tracks)])
     _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
     return 0
 
@@ -341,3 +348,4 @@ def _video_flags(p) -> None:
     p.add_argument("--no-stabilise", action="store_true",
                    help="do not compensate camera shake before the frame difference (a fixed "
                    "camera's results are the same either way; this only saves ~0.2 ms a frame)")
+    add_window_candidates(p, TrackerOptions().body.window_candidates)

@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from ..io.files import CANDIDATE_COLUMNS
 from ..io.mot import VELOCITY_COLUMNS
 from ..model.params import Config
 from ..track.rows import TrackRow
@@ -65,6 +66,7 @@ from .pedestrian_level import Pedestrian, PedestrianLevel
 from .rows import BlobRow, BoxRow, GroundRow
 from .still import never_moved, peek_background
 from .stitch import stitch_level
+from .window_candidates import align_candidates, candidate_table, candidates_by_row
 
 
 __all__ = ["COUNT_RULE", "CountResult", "build_result", "count_frames", "finish_count",
@@ -123,7 +125,8 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
     of gate (10) when the tracks are judged. counts (`count_walkers`): tracks,
     pedestrians, non_pedestrians, unclassified (shorter than N or unusable), too_fast and
     walkers = tracks - non_pedestrians - too_fast (`COUNT_RULE`: unclassified tracks count
-    unless too fast to walk)."""
+    unless too fast to walk). `verdicts.window_candidates`: the tracks also hold the candidate
+    columns (`window_candidates`), verdicts["candidate"] the deciding one (0: window B)."""
     opt = options or CountOptions()
     if on_frame is None and opt.verdicts.online:
         opt = dataclasses.replace(opt, verdicts=dataclasses.replace(opt.verdicts, online=False))
@@ -141,7 +144,9 @@ def count_frames(cfg: Config, frames, *, options: CountOptions | None = None,
 def finish_count(level: PedestrianLevel) -> CountResult:
     """End every pedestrian of `level`; the `CountResult` of its tracks, stitched, those shorter
     than `verdicts.min_track_frames` and those that never moved (`ghost`) dropped, judged."""
-    peds = stitch_level(level, level.end_all())
+    ended = level.end_all()
+    by_row = candidates_by_row(ended)  # stitching joins rows; their candidates follow them
+    peds = align_candidates(stitch_level(level, ended), by_row)
     shortest = level.opt.verdicts.min_track_frames
     kept = [p for p in peds if len(p.rows) >= shortest]
     level.ghosts = sum(ghost(level, p) for p in kept)
@@ -258,13 +263,16 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
     cfg = level.cfg
     for k, p in enumerate(peds, 1):
         p.track_id = k
-    tracks = tracks_table(peds)
+    on = level.opt.verdicts.window_candidates  # the candidate windows B (`window_candidates`)
+    tracks = tracks_table(peds, candidates=on)
     n = cfg.thresholds.n
     if peds and level.opt.verdicts.classify:
         tr = Tracks(path="<count>", track_id=tracks["track_id"].astype(str).astype(object),
                     frame=tracks["frame"], t=tracks["t"], u=tracks["u"], v=tracks["v"],
                     width_px=tracks["width_px"], intensity=tracks["intensity"],
-                    line=np.arange(len(tracks["frame"])), fps=cfg.camera.fps)
+                    line=np.arange(len(tracks["frame"])), fps=cfg.camera.fps,
+                    candidates=np.stack([tracks[c] for c in CANDIDATE_COLUMNS], axis=1)
+                    if on else None)
         gap = max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
         batch = to_batch(tr, max_gap_frames=gap, min_len=n)
         verdicts = classify_tracks(cfg, batch, progress=False)
@@ -274,8 +282,9 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
         first = tracks["frame"][np.r_[0, np.flatnonzero(np.diff(tracks["track_id"])) + 1]]
         dt_frames = (batch.t[b, np.maximum(w, 0)] - batch.t[:, 0]) * float(cfg.camera.fps)
         window_frame = np.where(w >= 0, first + np.round(dt_frames).astype(np.int64), -1)
-        verdicts = {k: verdicts[k] for k in ("track_id", "verdict", "reason", "pace_hz",
-                                              "stride_m", "ratio", "speed_mps", "n_samples")}
+        keep = ("track_id", "verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps",
+                "n_samples") + (("candidate",) if on else ())  # the deciding window's window B
+        verdicts = {k: verdicts[k] for k in keep}
         verdicts["track_id"] = verdicts["track_id"].astype(np.int64)
         verdicts["window_frame"] = window_frame
     else:
@@ -286,6 +295,8 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
                     "stride_m": nan, "ratio": nan, "speed_mps": nan,
                     "n_samples": np.asarray([len(p.rows) for p in peds], np.int64),
                     "window_frame": np.full(B, -1, np.int64)}
+        if on:
+            verdicts["candidate"] = np.zeros(B, np.int64)
     mot, detections = mot_table(peds), detections_table(level.detections)
     top = walking_top_speed(cfg)
     fit = level.opt.verdicts.speed_fit
@@ -333,9 +344,10 @@ def _columns(records: list, fields: tuple[str, ...]) -> dict[str, tuple]:
     return dict(zip(fields, zip(*records))) if records else {f: () for f in fields}
 
 
-def tracks_table(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
+def tracks_table(peds: list[Pedestrian], candidates: bool = False) -> dict[str, np.ndarray]:
     """The tracks format of the pedestrians' rows (`track.rows.TrackRow`), their track ids
-    first."""
+    first; with `candidates` also the candidate windows' I(k) (`io.files.CANDIDATE_COLUMNS`,
+    `window_candidates.candidate_table`)."""
     from ..model.status import TrackState
 
     rows = [r for p in peds for r in p.rows]
@@ -346,6 +358,8 @@ def tracks_table(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
         out[name] = np.asarray(cols[name], np.float64)
     out["state"] = np.asarray([TrackState(s).name.lower() for s in cols["state"]], dtype=object)
     out.update(velocity_columns(peds))
+    if candidates:
+        out.update(candidate_table(peds))
     return out
 
 

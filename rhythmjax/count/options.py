@@ -162,6 +162,12 @@ class VerdictOptions:
     # (least squares) | "theil-sen" (median pairwise slope); off: measured on own seed 42024 the
     # too-fast tracks of walkers come from foot points off the feet, not from the fit, and
     # Theil-Sen counted 1 more duplicate (per-clip errors 7 -> 8 of 58)
+    window_candidates: bool = False  # candidate windows B (issue 16, item 2): I(k) summed also
+    # in window B moved by -0.2, -0.1 and +0.1 W (io.files.WINDOW_CANDIDATES; count.
+    # window_candidates), written as the tracks' candidate columns; each rhythm window is judged
+    # once per candidate and the one whose strongest spectral peak is highest decides (model.
+    # candidates.strongest; verdicts["candidate"]). Default decided by measurement,
+    # docs/window_b.md. Costs one window-B sum a row and one (13)-(15) a window per candidate
 
 
 @dataclass(frozen=True)

@@ -15,31 +15,32 @@ Per frame (`PedestrianLevel.update`):
    Pedestrians sharing a blob too narrow for them side by side (< `placement.merge_widths` x
    their summed widths: walking past each other) keep their predictions (identities survive
    the merge). One jitted call advances every filter (`patches.SlotFilter`).
-4. Refinement: blob columns no pedestrian explains (`new.walker_widths` W around each foot
-   point: a walker's blob spans its stance foot to its leading arm), at least `new.min_widths` W
-   wide, full enough and reaching the blob's bottom (feet, not arms) or, lifted above it,
-   `new.lifted_height` of its patch tall (a farther walker merged with a nearer object), with
-   the foot point's ground point in the detection range (`new.in_range`), start pedestrians, one
-   per `new.walker_widths` W of the run; confirmed after `life.confirm_hits` measured frames
-   (dropped at `life.tentative_misses` misses). One ends: after predicting for
-   predict_timeout_s; ("3d") when its ground velocity changes by more than `life.max_dv_mps`
-   within `life.dv_window_s` s (no walker or cyclist turns or brakes that fast: it lost its
-   walker and ends without those frames, `track.toolkit.velocity_jump`); when its foot point
-   stayed put for `life.still_s` s (`still.is_still`: a ghost or a stopped object, copied into
-   the background under its patch); two within `life.duplicate_widths` W with the same image
-   velocity for `life.duplicate_frames` frames are one: the younger ends. Relations for the next
-   frame: the blobs the placed patch overlaps. The background starts from `background` (the
-   first seconds' median, `still.peek_background`), else from the first frame.
+4. Refinement: blob columns no pedestrian explains (`new.walker_widths` W around each foot point: a
+   walker's blob spans its stance foot to its leading arm), at least `new.min_widths` W wide, full
+   enough and reaching the blob's bottom (feet, not arms) or, lifted above it, `new.lifted_height`
+   of its patch tall (a farther walker merged with a nearer object), with the foot point's ground
+   point in the detection range (`new.in_range`), start pedestrians, one per `new.walker_widths` W
+   of the run (`refinement.new_pedestrians`); confirmed after `life.confirm_hits` measured frames
+   (dropped at `life.tentative_misses` misses). One ends: after predicting for predict_timeout_s;
+   ("3d") when its ground velocity changes by more than `life.max_dv_mps` within `life.dv_window_s`
+   s (no walker or cyclist turns or brakes that fast: it lost its walker and ends without those
+   frames, `track.toolkit.velocity_jump`); when its foot point stayed put for `life.still_s` s
+   (`still.is_still`: a ghost or a stopped object, copied into the background under its patch); two
+   within `life.duplicate_widths` W with the same image velocity for `life.duplicate_frames` frames
+   are one: the younger ends. Relations for the next frame: the blobs the placed patch overlaps.
+   The background starts from `background` (the first seconds' median, `still.peek_background`),
+   else from the first frame.
 Every frame each pedestrian samples I(k) in window B at its foot point
-(`detect.window_b_intensity` on the frame difference, W = its patch width) and keeps its ground
-state (`Pedestrian.ground`) for stitching; an ended one loses its trailing predicted frames, and
+(`detect.window_b_intensity` on the frame difference, W = its patch width; with
+`verdicts.window_candidates` also in window B moved by each offset of `io.files.
+WINDOW_CANDIDATES`: `window_candidates`) and keeps its ground state (`Pedestrian.ground`) for
+stitching; an ended one loses its trailing predicted frames, and
 `count` stitches, judges and counts the ended tracks.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -50,7 +51,7 @@ from ..track.rows import TrackRow
 from ..track.toolkit import PendingStep, dv_frames, match_window, velocity_jump
 from ..vision.blobs import box_table, meeting
 from ..vision.detect import window_b_intensity
-from .appearance import Appearance, look_of_frame
+from .appearance import look_of_frame
 from .foot_gate import gated
 from .patches import (
     FILTER_OUT,
@@ -61,43 +62,16 @@ from .patches import (
     patch_box,
     place_patch,
 )
+from .pedestrian import Pedestrian as Pedestrian, finite_uv
+from .refinement import in_range, new_pedestrians
 from .rows import BlobRow, BoxRow, GroundRow
 from .still import duplicates, is_still
 from .widths import measured_width
+from .window_candidates import sample_candidates
 
 
 if TYPE_CHECKING:
     from .options import CountOptions
-
-
-@dataclass
-class Pedestrian:
-    slot: int
-    born: int  # frame index
-    track_id: int = 0  # 0 while tentative
-    blobs: set = field(default_factory=set)  # related blobs (indices into the last frame's)
-    rows: list[TrackRow] = field(default_factory=list)  # the tracks format, per frame
-    ground: list[GroundRow] = field(default_factory=list)  # per row: the filter's state
-    boxes: list[BoxRow] = field(default_factory=list)  # per row: the patch, a MOT row
-    hits: int = 0
-    misses: int = 0
-    coast: float = 0.0  # s without a measurement
-    next_uv: tuple = (math.nan, math.nan)  # predicted foot point for the next frame, px
-    est_uv: tuple = (math.nan, math.nan)
-    size: tuple = (math.nan, math.nan)  # patch (w, h) px at est_uv
-    step_uv: tuple = (0.0, 0.0)  # predicted image motion per frame, px
-    close: int = 0
-    win_start: int = 0  # first row of the next rhythm window (`match_window`)
-    windows_done: int = 0
-    result: dict | None = None
-    decided: bool = False
-    z: tuple = (math.nan, math.nan)  # this frame's measurement
-    z_width: float = math.nan  # its measured width px (`widths.measured_width`), gate (10)
-    look: Appearance | None = None  # `appearance.enabled`: its descriptor (unshared frames)
-
-
-def _finite(uv) -> bool:
-    return math.isfinite(uv[0]) and math.isfinite(uv[1])
 
 
 class PedestrianLevel:
@@ -219,18 +193,20 @@ class PedestrianLevel:
                     for p in peds:
                         rel[id(p)].update(kids)
         for p in self.peds:
-            if rel[id(p)] or not _finite(p.next_uv):
+            if rel[id(p)] or not finite_uv(p.next_uv):
                 continue
-            rel[id(p)].update(meeting(self._box(p.next_uv), boxes, 0.2))
+            rel[id(p)].update(meeting(self.patch_at(p.next_uv), boxes, 0.2))
         return rel
 
     def _dist(self, p: Pedestrian, b) -> float:
-        if not _finite(p.next_uv):
+        if not finite_uv(p.next_uv):
             return 1e6
         bu, bv = b.bottom_center
         return math.hypot(p.next_uv[0] - bu, p.next_uv[1] - bv)
 
-    def _box(self, uv):
+    def patch_at(self, uv) -> tuple:
+        """The patch box (x0, y0, x1, y1) px of a pedestrian with foot point `uv`; all 0 where
+        the camera gives it no size."""
         w, h = (float(q) for q in self.shape.size(*uv))
         return patch_box(uv[0], uv[1], w, h) if math.isfinite(w) else (0, 0, 0, 0)
 
@@ -244,7 +220,7 @@ class PedestrianLevel:
         claimed = None  # pixels taken by shared placements, made on the first one
         for p in sorted(self.peds, key=lambda q: (-q.hits, q.born)):
             mine = rel[id(p)]
-            if not mine or not _finite(p.next_uv):
+            if not mine or not finite_uv(p.next_uv):
                 continue
             w0 = float(self.shape.size(*p.next_uv)[0])
             k = max(users[j] for j in mine)
@@ -282,74 +258,25 @@ class PedestrianLevel:
                 claimed[max(0, y0):max(0, y1), max(0, x0):max(0, x1)] = True
 
     def _new_pedestrians(self, blobs, labels) -> list[Pedestrian]:
-        """Runs of blob columns no patch covers, wide and full enough for a pedestrian: one new
-        pedestrian per patch width of the run, side by side (groups)."""
-        opt = self.opt
-        cover = []
-        for p in self.peds:
-            b = self._box(p.z if _finite(p.z) else p.next_uv)
-            half = 0.5 * opt.new.walker_widths * (b[2] - b[0])
-            cover.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3]))
-        free_slots = sorted(set(range(self.filter.slots)) - {p.slot for p in self.peds})
-        new: list[Pedestrian] = []
-        for b in blobs:
-            x0, y0, x1, y1 = b.box
-            free = np.ones(x1 - x0, bool)  # columns no patch covers
-            for c in cover:
-                if c[1] < y1 and c[3] > y0:
-                    free[max(0, int(math.floor(c[0])) - x0):max(0, int(math.ceil(c[2])) - x0)] \
-                        = False
-            if not free.any():  # every column covered: no run (the blob's pixels not needed)
-                continue
-            hb = float(self.shape.size(0.5 * (x0 + x1 - 1), y1 - 1)[1])
-            crop = labels[y0:y1, x0:x1] == b.label
-            ext = np.zeros(free.size + 2, np.int8)  # run edges of the free blob columns
-            np.logical_and(crop.any(axis=0), free, out=ext[1:-1].view(bool))
-            edges = np.flatnonzero(np.diff(ext))
-            for c0, c1 in zip(edges[::2], edges[1::2]):
-                sub = crop[:, c0:c1]
-                rows = np.flatnonzero(sub.any(axis=1))
-                vb = y0 + int(rows[-1])
-                w, h = (float(q) for q in self.shape.size(x0 + 0.5 * (c0 + c1 - 1), vb))
-                if not (math.isfinite(w) and w > 0):
-                    continue
-                n = max(1, int(round((c1 - c0) / (opt.new.walker_widths * w))))
-                span = rows[-1] - rows[0] + 1
-                lifted = vb < y1 - 1 - opt.new.max_lift * hb  # above the blob's bottom: an arm,
-                # or a farther walker merged with a nearer object (it stands taller than an arm)
-                if ((c1 - c0) < opt.new.min_widths * w or sub.sum() < opt.new.min_fill * w * h * n
-                        or span < opt.new.min_height * h
-                        or (lifted and span < opt.new.lifted_height * min(h, vb + 1.0))):
-                    continue
-                for k in range(n):
-                    a0, a1 = c0 + (c1 - c0) * k // n, c0 + (c1 - c0) * (k + 1) // n
-                    r = np.flatnonzero(crop[:, a0:a1].any(axis=1))
-                    if not free_slots:
-                        self.full_frames.append(self.n_frames)
-                        return new
-                    z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1])) if r.size else None
-                    if z is not None and self._in_range(z):
-                        p = Pedestrian(slot=free_slots.pop(0), born=self.n_frames)
-                        p.z, p.z_width = z, float(a1 - a0)  # its share of the run
-                        new.append(p)
-        self.peds += new
-        return new
+        """Refinement: new pedestrians on unexplained blob columns (`refinement`)."""
+        return new_pedestrians(self, blobs, labels)
 
     def _in_range(self, uv) -> bool:
-        """The foot point's ground point lies in the config's detection range (range_min to
-        range_max m ahead): where `rhythmjax track` detects, and where a new pedestrian starts."""
-        if not self.opt.new.in_range:
-            return True
-        _, y, ok = ground_point(self.shape.camera, *uv)
-        thr = self.cfg.thresholds
-        return bool(ok) and float(thr.range_min) <= float(y) <= float(thr.range_max)
+        """`refinement.in_range`: the foot point's ground point in the detection range."""
+        return in_range(self, uv)
+
+    def new_pedestrian(self, slot: int) -> Pedestrian:
+        """A pedestrian born this frame in filter slot `slot` (sampling the candidate windows B
+        when `verdicts.window_candidates` is on)."""
+        return Pedestrian(slot=slot, born=self.n_frames,
+                          candidate_rows=[] if self.opt.verdicts.window_candidates else None)
 
     def _after(self, p: Pedestrian, out: FilterOut, index, t, dt, boxes, D) -> None:
         s = p.slot
         if out.started[s] < 0.5:  # the first measurement had no ground point (above the horizon)
             self.peds.remove(p)
             return
-        measured = _finite(p.z)
+        measured = finite_uv(p.z)
         p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
         p.coast = 0.0 if measured else p.coast + dt
         (eu, ev), (nu, nv) = out.est_uv[s], out.next_uv[s]
@@ -364,6 +291,8 @@ class PedestrianLevel:
         fu, fv = p.z if measured else p.est_uv
         W = float(self.shape.size(fu, fv)[0])
         inten = math.nan if D is None else window_b_intensity(D, fu, fv, W)
+        if p.candidate_rows is not None:  # `verdicts.window_candidates`
+            p.candidate_rows.append(sample_candidates(D, fu, fv, W, inten))
         state = TrackState.OBSERVE if measured else TrackState.PREDICT
         p.rows.append(TrackRow(index, t, p.z[0], p.z[1], p.z_width if measured else math.nan,
                                inten, gx, gy, int(state)))
@@ -371,7 +300,7 @@ class PedestrianLevel:
                               gy, bool(ok)))
         vx, vy = out.velocity[s] if self.opt.dynamics == "3d" else (math.nan, math.nan)
         p.ground.append(GroundRow(gx, gy, vx, vy, *out.image_velocity[s]))
-        p.blobs = meeting(self._box(p.est_uv), boxes, 0.1)
+        p.blobs = meeting(self.patch_at(p.est_uv), boxes, 0.1)
         if p.track_id == 0:
             if p.hits >= self.opt.life.confirm_hits:
                 p.track_id, self.next_id = self.next_id, self.next_id + 1
@@ -387,6 +316,8 @@ class PedestrianLevel:
         jump = self.still_rows if still else self._velocity_jump(p)  # into the background
         if jump:  # lost its object: the implausible frames go, the track ends before them
             p.rows, p.boxes, p.ground = p.rows[:-jump], p.boxes[:-jump], p.ground[:-jump]
+            if p.candidate_rows is not None:
+                p.candidate_rows = p.candidate_rows[:-jump]
         if still:
             self.absorb.append((u - w, v - 1.2 * h, u + w, v + 0.1 * h))
         if p.coast > self.coast_s or outside or jump:
@@ -423,6 +354,8 @@ class PedestrianLevel:
         if p.track_id == 0 or last < 0:  # tentative, or no measured row left (still_s)
             return
         p.rows, p.boxes, p.ground = p.rows[:last + 1], p.boxes[:last + 1], p.ground[:last + 1]
+        if p.candidate_rows is not None:
+            p.candidate_rows = p.candidate_rows[:last + 1]
         self.finished.append(p)
 
     def snapshot(self) -> list[dict]:

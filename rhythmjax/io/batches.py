@@ -82,7 +82,9 @@ def read_batches(path: PathLike, *, batch_rows: int = BATCH_ROWS, row_start: int
     p = os.fspath(path)
     suffix = check_table_path(p)
     if columns is None:
-        required, optional = TRACK_COLUMNS, OPTIONAL_TRACK_COLUMNS
+        # the tracker's `state` is for selfcal and people, not the classifier: not streamed
+        required = TRACK_COLUMNS
+        optional = tuple(c for c in OPTIONAL_TRACK_COLUMNS if c != "state")
     else:
         required, optional = tuple(columns), ()
     types = {k: v for k, v in TRACK_TYPES.items() if k in (*required, *optional)}

@@ -35,16 +35,33 @@ from .tables import (
     read_table as read_table,
     write_table as write_table,
 )
+from .track_checks import (
+    check_track_rows,
+    check_track_units,
+    first_true,
+    time_steps,
+    track_order,
+    track_starts,
+)
 
 
 TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity")
-OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top")
+# Candidate windows B (issue 16): I(k) summed again with window B moved by this many walker
+# widths W (negative: up), one optional column each; a file has all of them or none. Every
+# classifier takes, per rhythm window, the candidate (`intensity` included) whose strongest
+# spectral peak is highest (`model.candidates`).
+WINDOW_CANDIDATES = (("intensity_up20", -0.2), ("intensity_up10", -0.1),
+                     ("intensity_down10", 0.1))
+CANDIDATE_COLUMNS = tuple(name for name, _ in WINDOW_CANDIDATES)
+OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top", "state", *CANDIDATE_COLUMNS)
 LABELS = ("pedestrian", "bicycle", "dog", "car", "other")
-MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top")
+TRACK_STATES = ("none", "detect", "observe", "predict")  # `state` (`status.TrackState` names)
+MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top", *CANDIDATE_COLUMNS)
 MAX_ABS = 1e12
 TRACK_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
                "width_px": "float", "intensity": "float", "label": "str", "x": "float",
-               "y": "float", "v_top": "float"}
+               "y": "float", "v_top": "float", "state": "str",
+               **{name: "float" for name in CANDIDATE_COLUMNS}}
 TRACK_NOT_EMPTY = ("track_id", "frame", "t")
 TRACK_KEY = "track_id" + KEY_SUFFIX  # a Table's codes of its track ids (`tables.convert_parquet`)
 
@@ -72,6 +89,8 @@ class Tracks:
     v_top: np.ndarray | None = None  # top row px of the moving region (the head); NaN missing
     notes: list[str] = field(default_factory=list)
     track_key: np.ndarray | None = None  # int64 codes equal where track_id is (`run_key`)
+    state: np.ndarray | None = None  # object array of `TRACK_STATES` ("" = not given)
+    candidates: np.ndarray | None = None  # (rows, K) float64: `CANDIDATE_COLUMNS`' I(k)
 
     def __len__(self) -> int:
         return int(self.frame.shape[0])
@@ -79,7 +98,7 @@ class Tracks:
     @property
     def ids(self) -> list[str]:
         """Track ids in file order."""
-        return [str(i) for i in self.track_id[_starts(run_key(self))]]
+        return [str(i) for i in self.track_id[track_starts(run_key(self))]]
 
     def by_span(self, rows: int) -> list[Tracks]:
         """The tracks in groups to pad and classify apart: first those spanning at most `rows`
@@ -87,7 +106,7 @@ class Tracks:
         its own, so that one long track does not pad every other to its length. Each group
         keeps the file order; a group is all the tracks when none is longer."""
         key = run_key(self)
-        starts = _starts(key)
+        starts = track_starts(key)
         if not len(starts):
             return [self]
         ends = np.r_[starts[1:], len(self.frame)] - 1
@@ -107,7 +126,8 @@ class Tracks:
             u=take(self.u), v=take(self.v), width_px=take(self.width_px),
             intensity=take(self.intensity), line=take(self.line), label=take(self.label),
             x=take(self.x), y=take(self.y), v_top=take(self.v_top), notes=[],
-            track_key=take(self.track_key))
+            track_key=take(self.track_key), state=take(self.state),
+            candidates=take(self.candidates))
 
     def to_batch(self, *, max_gap_frames: int, min_len: int, bucket: bool = True,
                  fps: float | int | None = None) -> TrackBatch:
@@ -133,6 +153,7 @@ class TrackBatch:
     labels: list[str] | None = None
     xy: np.ndarray | None = None  # (B, T, 2) m
     v_top: np.ndarray | None = None  # (B, T) px, the top row (head) where the file has it
+    candidates: np.ndarray | None = None  # (B, T, K): the candidate windows' I(k), if any
 
 
 # ----------------------------------------------------------------------------------------------
@@ -153,25 +174,37 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
     (track, frame), frames and times per track, units. `grouped`: the caller knows each track's
     rows are contiguous (`io.stream` reads whole tracks), so only the frames within a track are
     sorted. Raises `BadInput`."""
-    bad_t = _first(~np.isfinite(tab["t"]))
+    bad_t = first_true(~np.isfinite(tab["t"]))
     if bad_t is not None:
         raise tab.where(p, bad_t, "t", f"{float(tab['t'][bad_t])!r} is not a finite time (s)")
     for c in MEASUREMENTS:
         if c not in tab:
             continue
         a = tab[c]
-        i = _first(np.abs(a) > MAX_ABS)  # inf too; NaN (a missing value) never
+        i = first_true(np.abs(a) > MAX_ABS)  # inf too; NaN (a missing value) never
         if i is not None:
             raise tab.where(p, i, c, f"{float(a[i])!r} is not a usable value (inf or |value| > "
                             "1e12); leave the cell empty for a missing measurement")
-        if c in ("width_px", "intensity"):
-            i = _first(a < 0)
+        if c in ("width_px", "intensity", *CANDIDATE_COLUMNS):
+            i = first_true(a < 0)
             if i is not None:
                 raise tab.where(p, i, c, f"{float(a[i])!r} is negative")
+    have = [c for c in CANDIDATE_COLUMNS if c in tab]
+    if have and len(have) < len(CANDIDATE_COLUMNS):
+        missing = [c for c in CANDIDATE_COLUMNS if c not in tab]
+        raise BadInput(p, f"candidate window columns come together: {', '.join(have)} given, "
+                       f"{', '.join(missing)} missing", column=missing[0])
+    if "state" in tab:
+        state = np.asarray(tab["state"], dtype=object)
+        known = np.isin(state, TRACK_STATES + ("",))
+        i = first_true(~known)
+        if i is not None:
+            raise tab.where(p, i, "state", f"unknown state {state[i]!r} (expected one of "
+                            f"{', '.join(TRACK_STATES)}, or empty)")
     labels = label_key = None
     if "label" in tab:
         labels, label_key, known = _labels(tab)
-        i = _first(~known)
+        i = first_true(~known)
         if i is not None:
             raise tab.where(p, i, "label", f"unknown label {tab['label'][i]!r} (expected one of "
                             f"{', '.join(LABELS)}, or empty)")
@@ -182,7 +215,7 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
         run = np.cumsum(np.r_[False, key[1:] != key[:-1]]) if len(tid) else np.zeros(0, int)
         order = np.lexsort((tab["frame"], run))
     else:
-        order = _track_order(tid, tab["frame"])
+        order = track_order(tid, tab["frame"])
     if np.any(order != np.arange(len(order))):
         moved = int(np.flatnonzero(order != np.arange(len(order)))[0])
         notes.append(f"{p}: rows were not grouped by track and ordered by frame (first at "
@@ -190,18 +223,20 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
     else:  # the rows are in order: taken as they are
         order = None
     col = {k: tab[k] if order is None else tab[k][order] for k in tab if k != "label"}
+    candidates = (np.stack([col[c] for c in CANDIDATE_COLUMNS], axis=1).astype(np.float64)
+                  if have else None)
     lines = tab.lines if order is None else tab.lines[order]
     if order is not None:
         tid = tid[order]
         labels, label_key = (None, None) if labels is None else (labels[order], label_key[order])
     key = col.get(TRACK_KEY, tid)
-    _check_tracks(p, tab.unit, tid, key, col["frame"], col["t"], lines, labels, label_key)
-    _check_units(p, tab.unit, tid, key, col, lines, fps, notes)
+    check_track_rows(p, tab.unit, tid, key, col["frame"], col["t"], lines, labels, label_key)
+    check_track_units(p, tab.unit, tid, key, col, lines, fps, notes)
     return Tracks(path=p, track_id=tid, frame=col["frame"].astype(np.int64), t=col["t"],
                   u=col["u"], v=col["v"], width_px=col["width_px"], intensity=col["intensity"],
                   line=lines, unit=tab.unit, label=labels, x=col.get("x"), y=col.get("y"),
                   fps=None if fps is None else float(fps), v_top=col.get("v_top"), notes=notes,
-                  track_key=col.get(TRACK_KEY))
+                  track_key=col.get(TRACK_KEY), state=col.get("state"), candidates=candidates)
 
 
 def run_key(rows) -> np.ndarray:
@@ -212,104 +247,17 @@ def run_key(rows) -> np.ndarray:
     return rows.get(TRACK_KEY, rows["track_id"])
 
 
-def _first(mask: np.ndarray) -> int | None:
-    idx = np.flatnonzero(mask)
-    return int(idx[0]) if idx.size else None
-
-
-def _starts(tid: np.ndarray) -> np.ndarray:
-    """Index of the first row of each track in rows grouped by track."""
-    if len(tid) == 0:
-        return np.zeros(0, np.int64)
-    return np.flatnonzero(np.r_[True, tid[1:] != tid[:-1]])
-
-
-def _steps(tid: np.ndarray, frame: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Time per frame of each step between consecutive rows of a track (frames increasing)."""
-    if len(tid) < 2:
-        return np.zeros(0)
-    same = (tid[1:] == tid[:-1]) & (np.diff(frame) > 0)
-    return (np.diff(t)[same] / np.diff(frame)[same]).astype(np.float64)
-
-
-def _track_order(tid: np.ndarray, frame: np.ndarray) -> np.ndarray:
-    """Stable permutation grouping rows by track (in order of first appearance), then by frame."""
-    if len(tid) == 0:
-        return np.zeros(0, np.int64)
-    _, first, inverse = np.unique(tid.astype(str), return_index=True, return_inverse=True)
-    rank = np.empty(len(first), np.int64)
-    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
-    return np.lexsort((frame, rank[inverse.reshape(-1)]))
-
-
 def _labels(tab: Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per row of `tab`, its label normalised (stripped, lower case; an object array), int64
     codes equal where those are, and whether it is known (`LABELS` or ""). Normalised once per
     run of equal cells (found on the reader's codes of the column when it kept them)."""
     raw = np.asarray(tab["label"], dtype=object)
     key = tab.get("label" + KEY_SUFFIX, raw)
-    first = _starts(key)
+    first = track_starts(key)
     norm, code = map_text(raw[first], lambda s: s.strip().lower(), codes=True)
     size = np.diff(np.r_[first, len(raw)]).astype(np.int64)
     known = np.isin(norm, LABELS + ("",))
     return np.repeat(norm, size), np.repeat(code, size), np.repeat(known, size)
-
-
-def _check_tracks(p, unit, tid, key, frame, t, lines, labels, label_key) -> None:
-    if len(tid) < 2:
-        return
-    same = key[1:] == key[:-1]
-    dup = _first(same & (frame[1:] == frame[:-1]))
-    if dup is not None:
-        a, b = sorted((int(lines[dup]), int(lines[dup + 1])))
-        raise BadInput(p, f"frame {frame[dup]} appears twice ({unit}s {a} and {b})",
-                       track_id=str(tid[dup]), line=b)
-    k = _first(same & (t[1:] <= t[:-1]))
-    if k is not None:
-        what = ("decreases" if t[k + 1] < t[k] else
-                f"does not increase ({float(t[k])!r} s at frames {frame[k]} and {frame[k + 1]})")
-        raise BadInput(p, f"t {what} at frame {frame[k + 1]} ({unit} {lines[k + 1]})",
-                       track_id=str(tid[k]), line=int(lines[k + 1]), column="t")
-    if labels is not None:
-        k = _first(same & (label_key[1:] != label_key[:-1]))
-        if k is not None:
-            raise BadInput(p, f"label changes from {labels[k]!r} to {labels[k + 1]!r} at frame "
-                           f"{frame[k + 1]} ({unit} {lines[k + 1]})", track_id=str(tid[k]),
-                           line=int(lines[k + 1]), column="label")
-
-
-def _check_units(p, unit, tid, key, col, lines, fps, notes) -> None:
-    frame, t = col["frame"], col["t"]
-    if len(t) >= 2:
-        step = _steps(key, frame, t)
-        if step.size:
-            med = float(np.median(step))
-            ms = 300.0 < med * fps < 3000.0 if fps else med > 1.0
-            if ms:
-                expect = f"; at {fps:g} fps expect {1 / fps:.4g} s" if fps else ""
-                raise BadInput(p, f"column 't' looks like milliseconds (median step {med:.4g} "
-                               f"per frame{expect}); give seconds", column="t")
-            if fps and not 0.5 < med * fps < 2.0:
-                notes.append(f"{p}: median time step {med:.4g} s per frame disagrees with "
-                             f"{fps:g} fps (expected {1 / fps:.4g} s)")
-    starts = _starts(key)
-    if len(starts):
-        u, v = col["u"], col["v"]
-        meas = np.isfinite(u) & np.isfinite(v)
-        unit01 = meas & (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
-        n_meas = np.add.reduceat(meas.astype(np.int64), starts)
-        n01 = np.add.reduceat(unit01.astype(np.int64), starts)
-        b = _first((n_meas > 3) & (n01 == n_meas))
-        if b is not None:
-            s = starts[b]
-            raise BadInput(p, f"u, v all lie in [0, 1]: looks normalised, expected pixels "
-                           f"({unit} {lines[s]})", track_id=str(tid[s]), line=int(lines[s]))
-    if "x" in col and "y" in col:
-        r = np.hypot(col["x"], col["y"])
-        r = r[np.isfinite(r)]
-        if r.size and float(np.median(r)) > 300.0:
-            notes.append(f"{p}: x, y (median distance {float(np.median(r)):.4g}) look like "
-                         "centimetres; expected metres")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -333,7 +281,7 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
         raise ValueError("max_gap_frames and min_len must be >= 1")
     tid, key, frame, t = tracks.track_id, run_key(tracks), tracks.frame, tracks.t
     n = len(frame)
-    starts = _starts(key)
+    starts = track_starts(key)
     B = len(starts)
     seg = np.cumsum(np.r_[False, key[1:] != key[:-1]]) if n else np.zeros(0, np.int64)
     df = np.diff(frame)
@@ -342,7 +290,7 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
     if fps:
         dt0 = 1.0 / fps
     else:
-        steps = _steps(key, frame, t)
+        steps = time_steps(key, frame, t)
         dt0 = float(np.median(steps)) if steps.size else 1.0
     ins = np.zeros(n, np.int64)
     if n > 1:
@@ -378,11 +326,15 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
         tg = np.where(present, tg, t_last[:, None] + dt0 * (idx[None, :] - length[:, None] + 1))
     dt = np.concatenate([np.full((B, 1), dt0), np.diff(tg, axis=1)], axis=1)
     labels = None if tracks.label is None else [str(s) for s in tracks.label[starts]]
+    candidate_grid = None
+    if tracks.candidates is not None:
+        candidate_grid = grid(*tracks.candidates.T)
+        candidate_grid = candidate_grid.reshape(B, T, tracks.candidates.shape[1])
     return TrackBatch(ids=[str(s) for s in tid[starts]], z=grid(tracks.u, tracks.v),
                       width=grid(tracks.width_px), intensity=grid(tracks.intensity),
                       t=tg.astype(np.float32), dt=dt.astype(np.float32), present=present,
                       length=length, labels=labels, xy=grid(tracks.x, tracks.y),
-                      v_top=grid(tracks.v_top))
+                      v_top=grid(tracks.v_top), candidates=candidate_grid)
 
 
 __all__: Sequence[str] = (

@@ -194,14 +194,17 @@ def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progr
             intensity=take(batch.intensity), t=take(batch.t), dt=take(batch.dt),
             present=take(batch.present), length=batch.length[short],
             labels=None if batch.labels is None else [batch.labels[i] for i in short],
-            xy=take(batch.xy))
+            xy=take(batch.xy), candidates=take(batch.candidates))
         res, owner = classify_fast(cfg, sub, chunk, place)
         parts.append({k: res[k] for k in CODES})
         owners.append(short[owner])
     for i in long:
         L = int(batch.length[i])
-        pieces = classify_long_track(cfg, batch.z[i, :L], batch.width[i, :L],
-                                     batch.intensity[i, :L], batch.dt[i, :L],
+        signal = batch.intensity[i, :L]
+        if batch.candidates is not None:
+            signal = np.concatenate([signal[:, None], batch.candidates[i, :L]], axis=1)
+        pieces = classify_long_track(cfg, batch.z[i, :L], batch.width[i, :L], signal,
+                                     batch.dt[i, :L],
                                      segment_rows=segment_rows)
         parts.append({k: np.asarray([p[k] for p in pieces]) for k in CODES})
         owners.append(np.full(len(pieces), i))

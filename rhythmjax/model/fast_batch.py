@@ -20,6 +20,10 @@ Here, in three steps:
    (`window_block.classify_block`: (12)-(15), the exact fast median), its inputs uploaded as
    one array and its results fetched as one.
 
+Where the batch carries candidate windows B (`TrackBatch.candidates`, `model.candidates`), each
+window is classified once per candidate (the paper's window B first) and the candidate whose
+strongest peak is highest decides it (`candidate`: 0 the paper's, c the c-th candidate column).
+
 The result per segment is the first Pedestrian window's, else window 0's (`window_row`: that
 window's first row in the batch, -1 for none, so the spectra can be drawn); a segment with no
 complete window is Unclassified, `too-short` (or `no-measurements` when no row has a finite
@@ -31,6 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .candidates import strongest
 from .devices import Placement
 from .params import Config
 from .rhythm import N_PEAKS
@@ -40,7 +45,7 @@ from .windows import WINDOW_BLOCK, classify_windows_packed
 
 
 CODES = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
-         "peak_freq", "peak_power", "peak_mask", "window_row")
+         "peak_freq", "peak_power", "peak_mask", "window_row", "candidate")
 
 
 class Segments:
@@ -72,6 +77,8 @@ class Segments:
         for k, v in joined.items():
             setattr(self, k, v[order])
         self.n, self.hop = n_win, hop
+        extra = rounds[0].rest.candidates if rounds else None
+        self.n_candidates = 1 + (0 if extra is None else int(extra.shape[-1]))
 
     def __len__(self) -> int:
         return len(self.owner)
@@ -83,9 +90,10 @@ class Segments:
         p = self.gather_packed(seg, j)
         return p[0], p[1], np.moveaxis(p[2:4], 0, -1), np.moveaxis(p[4:6], 0, -1)
 
-    def gather_packed(self, seg: np.ndarray, j: np.ndarray) -> np.ndarray:
+    def gather_packed(self, seg: np.ndarray, j: np.ndarray, candidate: int = 0) -> np.ndarray:
         """`gather`'s rows packed as one (6, W, N) float32 array: intensity, dt s, xy m (2),
-        observed px (2) (`windows.classify_windows_packed`'s input)."""
+        observed px (2) (`windows.classify_windows_packed`'s input). `candidate` c > 0: the
+        intensity of the c-th candidate window B (`TrackBatch.candidates[..., c - 1]`)."""
         W, N = len(seg), self.n
         out = np.zeros((6, W, N), np.float32)
         rnd = self.round[seg]
@@ -98,7 +106,11 @@ class Segments:
             # (the same elements as indexing by (row, column), at a fraction of the cost)
             at = (self.row[seg[w]] * T + self.k0[seg[w]] + self.hop * j[w])[:, None] \
                 + np.arange(N)[None, :]
-            out[0, w] = np.take(rd.rest.intensity, at)
+            if candidate:
+                K = rd.rest.candidates.shape[-1]
+                out[0, w] = np.take(rd.rest.candidates, at * K + (candidate - 1))
+            else:
+                out[0, w] = np.take(rd.rest.intensity, at)
             out[1, w] = np.take(rd.rest.dt, at)
             seen = np.take(rd.valid, at)
             out[2, w], out[3, w] = np.take(rd.xy, 2 * at), np.take(rd.xy, 2 * at + 1)
@@ -113,6 +125,19 @@ def phases(max_windows: int):
     while lo < max_windows:
         yield lo, hi
         lo, hi = hi, 2 * hi
+
+
+def classify_candidates(cfg: Config, segs: Segments, seg: np.ndarray, j: np.ndarray,
+                        place: Placement, block: int) -> tuple[dict, np.ndarray]:
+    """Windows j of segments `seg` classified (`classify_windows_packed`), once per candidate
+    window B when the batch has candidates, the strongest kept (`candidates.strongest`).
+    Returns the results and each window's candidate (0: the paper's window B)."""
+    packed = segs.gather_packed(seg, j)
+    results = [classify_windows_packed(cfg, packed, place, block)]
+    for c in range(1, segs.n_candidates):
+        packed[0] = segs.gather_packed(seg, j, c)[0]
+        results.append(classify_windows_packed(cfg, packed, place, block))
+    return strongest(results)
 
 
 def classify_segments(cfg: Config, segs: Segments, place: Placement | None = None,
@@ -130,8 +155,9 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
            "peak_freq": np.zeros((S, N_PEAKS), np.float32),
            "peak_power": np.zeros((S, N_PEAKS), np.float32),
            "peak_mask": np.zeros((S, N_PEAKS), bool),
-           "window_row": np.full(S, -1, np.int64)}  # the deciding window's first batch row
-    fields = [k for k in CODES if k not in ("n_samples", "window_row")]
+           "window_row": np.full(S, -1, np.int64),  # the deciding window's first batch row
+           "candidate": np.zeros(S, np.int64)}  # ... and its window B (0: the paper's)
+    fields = [k for k in CODES if k not in ("n_samples", "window_row", "candidate")]
     decided = np.zeros(S, bool)
     block = place.rows(block)
     for lo, hi in phases(int(segs.windows.max(initial=0))):
@@ -141,7 +167,7 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
         count = np.minimum(segs.windows[todo], hi) - lo
         seg = np.repeat(todo, count)
         j = lo + np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
-        res = classify_windows_packed(cfg, segs.gather_packed(seg, j), place, block)
+        res, chosen = classify_candidates(cfg, segs, seg, j, place, block)
         ped = res["verdict"] == Verdict.PEDESTRIAN
         # per segment, its first Pedestrian window of the phase, else (phase 0) window 0
         take = np.zeros(len(seg), bool)
@@ -155,6 +181,7 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
         for k in fields:
             out[k][at] = res[k][take]
         out["window_row"][at] = segs.first[at] + segs.k0[at] + segs.hop * j[take]
+        out["candidate"][at] = chosen[take]
         decided[seg[ped]] = True
     return out
 

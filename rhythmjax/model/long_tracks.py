@@ -41,6 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import ekf_fused
+from .candidates import strongest
 from .ekf import Carry, empty_carry
 from .gates import PaperGates
 from .params import Config
@@ -127,14 +128,15 @@ def _unclassified(reason: int, n_tracked: int) -> dict:
     return {"verdict": int(Verdict.UNCLASSIFIED), "reason": int(reason), "pace_hz": nan,
             "stride_m": nan, "ratio": nan, "speed_mps": nan, "n_samples": n_tracked,
             "peak_freq": k, "peak_power": k, "peak_mask": np.zeros(N_PEAKS, bool),
-            "window_row": -1}
+            "window_row": -1, "candidate": 0}
 
 
 def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
                    window_chunk: int = WINDOW_CHUNK) -> dict:
     """`rhythm.classify_track`'s result for one piece of track (rows not split by Fig. 3) from
     the filter's rows: the first complete window that says Pedestrian, else the first window
-    (codes, NumPy scalars)."""
+    (codes, NumPy scalars). `intensity` (T,), or (T, C) with candidate windows B in columns 1..
+    (each window judged by the strongest, `candidates.strongest`; `candidate` its column)."""
     n, hop = cfg.thresholds.n, cfg.thresholds.hop_samples
     k0 = int(np.argmax(started)) if len(started) else 0
     n_tracked = int(np.sum(present & started))
@@ -148,8 +150,12 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
     for j0 in range(0, n_windows, window_chunk):
         j = np.arange(j0, min(j0 + window_chunk, n_windows))
         rows = (k0 + hop * j)[:, None] + np.arange(n)[None, :]
-        res = classify_window_rows(cfg, intensity[rows], dt[rows], xy[rows], observed[rows],
-                                   block=min(window_chunk, WINDOW_BLOCK))
+        signals = intensity[rows] if intensity.ndim == 2 else intensity[rows][..., None]
+        res, chosen = strongest([
+            classify_window_rows(cfg, signals[..., c], dt[rows], xy[rows], observed[rows],
+                                 block=min(window_chunk, WINDOW_BLOCK))
+            for c in range(signals.shape[-1])])
+        res["candidate"] = chosen
         res["window_row"] = k0 + hop * j  # the window's first row in the piece
         if first is None:
             first = {k: v[0] for k, v in res.items()}
@@ -161,7 +167,7 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
         pick = first
     out = {k: pick[k] for k in ("verdict", "reason", "pace_hz", "stride_m", "ratio",
                                 "speed_mps", "peak_freq", "peak_power", "peak_mask",
-                                "window_row")}
+                                "window_row", "candidate")}
     out["n_samples"] = n_tracked
     return out
 
@@ -169,8 +175,9 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
 def classify_long_track(cfg: Config, z: np.ndarray, width: np.ndarray, intensity: np.ndarray,
                         dt: np.ndarray, *, segment_rows: int = SEGMENT_ROWS,
                         window_chunk: int = WINDOW_CHUNK) -> list[dict]:
-    """One track's rows (no padding: z (T, 2) px, width, intensity, dt (T,) s, dt[0] the
-    nominal step) cut at Fig. 3's ends; per piece, in time order, its `classify_piece` result.
+    """One track's rows (no padding: z (T, 2) px, width, intensity (T,) or (T, C) with candidate
+    windows B, dt (T,) s, dt[0] the nominal step) cut at Fig. 3's ends; per piece, in time
+    order, its `classify_piece` result.
     `batch.pick_segments` then picks the track's verdict as for the batch path."""
     T = len(dt)
     pieces = []

@@ -195,7 +195,8 @@ def _rows(batch, which: np.ndarray, first: np.ndarray, n: np.ndarray):
         width=masked(batch.width, np.nan), intensity=masked(batch.intensity, np.nan), t=t,
         dt=dt, present=inside, length=n.astype(np.int32),
         labels=None if batch.labels is None else [batch.labels[i] for i in which],
-        xy=masked(batch.xy, np.nan))
+        xy=masked(batch.xy, np.nan),
+        candidates=None if batch.candidates is None else masked(batch.candidates, np.nan))
 
 
 class Round(NamedTuple):

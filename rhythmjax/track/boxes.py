@@ -12,6 +12,10 @@ text) or a foot point and width (the tracks format). Here each box becomes a tra
   paper's "average human width in the image": the mean walker width (`WidthModel.mean`, 0.5 m)
   at the foot point's ground distance through the camera (3) (`vision.detect.walker_width_px`).
 
+With candidate windows B (`offsets`, in W: `io.files.WINDOW_CANDIDATES`; the tracker's
+`body.window_candidates`) I(k) is summed again in window B moved by each offset, NaN exactly
+where the main I(k) is.
+
 No sample (I = NaN) where the tracker would take none: the first frame, a frame that does not
 decode or whose predecessor does not, a duplicated frame (D = 0 everywhere), a global change
 (more than half the pixels with D > the motion threshold), and a foot point outside the image.
@@ -21,7 +25,7 @@ Pure functions on NumPy arrays and the `(index, t, gray)` stream of `vision.vide
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +33,7 @@ import numpy as np
 from ..io import BadInput, Tracks
 from ..model.params import Config
 from ..vision import detect, stabilise
+from ..vision.window_b import window_b_candidates
 from .options import MotionOptions
 
 
@@ -117,16 +122,20 @@ def window_widths(cfg: Config, u: np.ndarray, v: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class BoxSignal:
     """I(k) per row (grey levels; NaN = no sample), the frames read from the video, and the
-    frames that gave no sample: `glitch` (duplicate or global change) and `bad` (not decoded)."""
+    frames that gave no sample: `glitch` (duplicate or global change) and `bad` (not decoded).
+    `candidates`: (rows, K) float64, I(k) of window B moved by each of K offsets (NaN exactly
+    where `intensity` is); None when no offsets were asked for."""
 
     intensity: np.ndarray
     n_frames: int
     glitch: list[int]
     bad: list[int]
+    candidates: np.ndarray | None = None
 
 
 def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.ndarray,
-                    W: np.ndarray, *, motion: MotionOptions = MotionOptions()) -> BoxSignal:
+                    W: np.ndarray, *, motion: MotionOptions = MotionOptions(),
+                    offsets: Sequence[float] = ()) -> BoxSignal:
     """I(k) of window B for rows (frame, u, v, W) (0-based frame index, px) over the
     `(index, t, gray | None)` stream `frames`, one pass, holding two frames: the sum of
     D = |gray_k - gray_(k-1)| over W x W/5 px ending at the foot row (`window_b_intensity`).
@@ -134,9 +143,13 @@ def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.nd
     frame (`motion`: the online tracker's thresholds), a foot point outside the image and a
     non-finite W. Rows at frames the stream never reaches stay NaN (the caller checks). Camera
     shake is compensated as in the tracker (`motion.stabilise`, `vision.stabilise.Stabiliser`),
-    on the frames with rows to sample (a fixed camera's D is unchanged)."""
+    on the frames with rows to sample (a fixed camera's D is unchanged). `offsets` (walker widths
+    W, negative: up): also I(k) of window B moved down by offset x W px, per offset
+    (`vision.window_b.window_b_candidates`), as `BoxSignal.candidates`."""
     frame = np.asarray(frame, np.int64)
     out = np.full(frame.shape, np.nan)
+    offsets = tuple(float(o) for o in offsets)
+    cand = np.full(frame.shape + (len(offsets),), np.nan) if offsets else None
     order = np.argsort(frame, kind="stable")
     fs = frame[order]
     cuts = np.flatnonzero(np.r_[True, fs[1:] != fs[:-1]]) if len(fs) else np.zeros(0, np.int64)
@@ -164,7 +177,10 @@ def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.nd
                             math.isfinite(W[r]) and W[r] > 0:
                         out[r] = detect.window_b_intensity(D, float(u[r]), float(v[r]),
                                                            float(W[r]))
+                        if cand is not None:
+                            cand[r] = window_b_candidates(D, float(u[r]), float(v[r]),
+                                                          float(W[r]), offsets)
         prev = gray
         if index >= last:
             break
-    return BoxSignal(out, n, glitch, bad)
+    return BoxSignal(out, n, glitch, bad, cand)

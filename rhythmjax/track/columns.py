@@ -1,5 +1,6 @@
 """The tracker's output tables: tracks (ARCHITECTURE.md's format plus the filter's ground
-estimate and the state) and verdicts, one row per track, from the tracker's objects."""
+estimate, the state and, where the tracker sampled them, the candidate windows' I(k)) and
+verdicts, one row per track, from the tracker's objects."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import math
 
 import numpy as np
 
+from ..io.files import CANDIDATE_COLUMNS
 from ..model.status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
 from .rows import TrackRow
 
@@ -14,9 +16,17 @@ from .rows import TrackRow
 TRACK_COLUMNS = ["track_id", *TrackRow._fields]  # track_id, then the fields of a `TrackRow`
 
 
-def tracks_columns(objs: list) -> dict[str, np.ndarray]:
+def candidate_columns(columns) -> list[str]:
+    """The candidate-window columns (`io.files.CANDIDATE_COLUMNS`) that `columns` (a mapping of
+    tracks columns) holds, in their order: what a writer appends to its column order."""
+    return [c for c in CANDIDATE_COLUMNS if c in columns]
+
+
+def tracks_columns(objs: list, *, candidates: bool | None = None) -> dict[str, np.ndarray]:
     """The tracks format (ARCHITECTURE.md) plus the filter's ground estimate and the state, from
-    objects with a track_id and rows (`TrackRow`)."""
+    objects with a track_id and rows (`TrackRow`). `candidates`: also the candidate windows'
+    I(k) (grey levels; float64 columns `io.files.CANDIDATE_COLUMNS`) from each object's
+    `candidate_rows` (one tuple per row, that order); None: where the objects have them."""
     rows = [(o.track_id, *r) for o in objs for r in o.rows]
     cols = list(zip(*rows)) if rows else [[] for _ in TRACK_COLUMNS]
     out = {k: np.asarray(c) for k, c in zip(TRACK_COLUMNS, cols)}
@@ -26,6 +36,19 @@ def tracks_columns(objs: list) -> dict[str, np.ndarray]:
                               dtype=object)
     for k in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est", "v_top"):
         out[k] = out[k].astype(np.float64)
+    if candidates is None:
+        candidates = any(getattr(o, "candidate_rows", None) is not None for o in objs)
+    if candidates:
+        for o in objs:
+            if o.candidate_rows is None or len(o.candidate_rows) != len(o.rows):
+                raise ValueError(f"track {o.track_id}: candidate windows' I(k) for "
+                                 f"{None if o.candidate_rows is None else len(o.candidate_rows)}"
+                                 f" of its {len(o.rows)} rows")
+        k = len(CANDIDATE_COLUMNS)
+        values = np.asarray([c for o in objs for c in o.candidate_rows], np.float64)
+        values = values.reshape(-1, k)
+        for j, name in enumerate(CANDIDATE_COLUMNS):
+            out[name] = values[:, j].copy()
     return out
 
 

@@ -10,7 +10,9 @@ paper's `count.pedestrian_level.PedestrianLevel`; `count` imports `track`, never
   (its measurements slid onto another object): the rows to drop before the track ends;
 - `match_window`: (13)-(15) of the rhythm paper (Sec. 4.2) on the next completed window of N
   rows of a track (`model.rhythm.classify_window_jit`), one every `thresholds.hop_samples`,
-  until one says Pedestrian.
+  until one says Pedestrian; where the object carries candidate windows B, once per candidate
+  and the strongest kept (`model.candidates.strongest`); `window_signal` gives the I(k) that
+  decided.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..model.candidates import strongest
 from ..model.ekf import empty_carry
 from ..model.flat_tree import join, split
 from ..model.params import Config
@@ -34,6 +37,8 @@ from .rows import Layout, TrackRow
 
 RESULT_FIELDS = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "peak_freq",
                  "peak_power", "peak_mask")  # the window outcome a tracker keeps (`match_window`)
+# ... plus "window" (first row, end row) and, where the object has candidate windows B,
+# "candidate" (0: the paper's window B, c: candidate c - 1 of its `candidate_rows`)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -118,6 +123,23 @@ class RhythmWindows(Protocol):
     windows_done: int  # windows judged
     result: dict | None  # the deciding (or first) window's outcome, `RESULT_FIELDS` + window
     decided: bool  # a window said Pedestrian: matching stops
+    # optional, not part of the protocol: `candidate_rows`, per row a tuple of the candidate
+    # windows' I(k) (`track.tracker`, `body.window_candidates`); absent or None: window B only
+
+
+def window_signal(obj, start: int, end: int, candidate: int = 0) -> np.ndarray:
+    """I(k) (grey levels, float64, NaN = no sample) of rows start..end-1 of `obj`: candidate 0
+    is window B's `intensity` (the paper's), candidate c >= 1 the (c-1)-th entry of the
+    object's `candidate_rows` (`match_window`'s result["candidate"] names the one that
+    decided)."""
+    if candidate == 0:
+        return np.asarray([r.intensity for r in obj.rows[start:end]], np.float64)
+    return np.asarray([c[candidate - 1] for c in obj.candidate_rows[start:end]], np.float64)
+
+
+def _outcome(res) -> dict:
+    """A `classify_window_jit` result as `RESULT_FIELDS` of NumPy arrays."""
+    return {name: np.asarray(getattr(res, name)) for name in RESULT_FIELDS}
 
 
 def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
@@ -130,7 +152,12 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
     (mixed with a neighbour) is not judged; the next starts after its last missing sample.
     measured_speed: the speed of (12) from the foot points of the OBSERVE rows (else the
     filtered ground positions only). final (the track ends with N rows or more and no window
-    judged, every one having been skipped): the N rows with the fewest missing are judged."""
+    judged, every one having been skipped): the N rows with the fewest missing are judged.
+    Candidate windows B (`obj.candidate_rows`, not None): the window is judged once on window
+    B's I(k) and once on each candidate's (the same times, ground track and foot points), and
+    the candidate whose strongest peak is highest decides (`model.candidates.strongest`; window
+    B on ties); the missing-sample rules read window B's I(k) only (a candidate is NaN exactly
+    where it is)."""
     n = cfg.thresholds.n
     rows = obj.rows
     k = obj.win_start
@@ -156,10 +183,23 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
         observed = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE
                                else (math.nan, math.nan) for r in window], np.float64)
         args += (jnp.asarray(observed, jnp.float32),)
-    res = classify_window_jit(*args)
+    out = _outcome(classify_window_jit(*args))
+    cands = getattr(obj, "candidate_rows", None)
+    chosen = None
+    if cands is not None:
+        results = [out]
+        for c in range(1, len(cands[k]) + 1):  # a row's tuple: one I(k) per candidate
+            sig = window_signal(obj, k, k + n, c)
+            res_c = classify_window_jit(cfg, jnp.asarray(sig, jnp.float32), *args[2:])
+            results.append(_outcome(res_c))
+        merged, best = strongest([{f: v[None] for f, v in r.items()} for r in results])
+        out = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}
+        chosen = int(best[0])
     obj.windows_done += 1
-    pedestrian = int(res.verdict) == Verdict.PEDESTRIAN
+    pedestrian = int(out["verdict"]) == Verdict.PEDESTRIAN
     if obj.result is None or pedestrian:
-        obj.result = {name: np.asarray(getattr(res, name)) for name in RESULT_FIELDS}
+        obj.result = out
         obj.result["window"] = (k, k + n)
+        if chosen is not None:
+            obj.result["candidate"] = chosen
     obj.decided = pedestrian

@@ -5,11 +5,12 @@ first moved onto this one where the camera shook (`vision.stabilise`); for each 
 object a detection inside a small window centred on its predicted foot point; connected regions
 elsewhere start new objects (DETECT). Then ONE jitted call advances every object slot with the
 core's EKF step (`ekf_fused.step`: `ekf.step` entry by entry) and the paper's gates (10) and
-(11) (`gates.PaperGates`), so the per-frame cost is arithmetic, not tracing. A DETECT becomes
-OBSERVE when the first measurement lies in the detection range, else NONE; OBSERVE/PREDICT
-follow the gate decision; PREDICT ends (NONE) after `predict_timeout_s` or when the estimate
-leaves the range. Each tracked frame samples the rhythm
-signal I(k) in window B at the foot point; each completed window of N frames (one starts every
+(11) (`gates.PaperGates`; `slot_step.advance_slots`), so the per-frame cost is arithmetic, not
+tracing. A DETECT becomes OBSERVE when the first measurement lies in the detection range, else
+NONE; OBSERVE/PREDICT follow the gate decision; PREDICT ends (NONE) after `predict_timeout_s`
+or when the estimate leaves the range. Each tracked frame samples the rhythm signal I(k) in
+window B at the foot point (with `body.window_candidates` also in window B moved by each offset
+of `io.files.WINDOW_CANDIDATES`); each completed window of N frames (one starts every
 `thresholds.hop_samples` frames) is matched with `rhythm.classify_window` until one says
 Pedestrian (then matching stops, tracking goes on), the same windows `rhythm.classify_track`
 uses on stored tracks, so `rhythmjax classify` re-judges the written tracks alike. A track that
@@ -23,50 +24,20 @@ import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
-from ..model.camera import image_width, measure
+from ..io.files import WINDOW_CANDIDATES
 from ..model.camera_np import camera_tuple
-from ..model.ekf import Carry, empty_carry
-from ..model.ekf_fused import predict, step
-from ..model.gates import PaperGates
 from ..model.params import Config
 from ..model.status import VERDICT_LABELS, TrackState
 from ..vision import detect, stabilise
+from ..vision.window_b import window_b_candidates
 from . import relink
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
-from .rows import NAN_VELOCITY, Layout, TrackRow, Velocity
+from .rows import NAN_VELOCITY, TrackRow, Velocity
+from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
 from .toolkit import PendingStep, SlotSteps, match_window
-
-
-class FrameIn(NamedTuple):
-    """A frame's inputs per slot, packed (`FRAME_IN`) in one (S, 6) float32 array: one
-    host-to-device transfer instead of five halves the jitted call's cost (~110 to ~50 us)."""
-
-    reset: np.ndarray  # (S,) 1: the slot starts a new object this frame
-    z: np.ndarray  # (S, 2) measured foot point (u, v) px, NaN: none
-    width: np.ndarray  # (S,) measured image width px (gate (10)), NaN: none
-    present: np.ndarray  # (S,) 1: the slot holds an object
-    dt: np.ndarray  # (S,) s since the last frame (the same in every row)
-
-
-class StepOut(NamedTuple):
-    """A frame's results per slot, packed (`STEP_OUT`) in one (S, 13) array: one transfer."""
-
-    valid: np.ndarray  # (S,) 1: the gates accepted the measurement
-    started: np.ndarray  # (S,) 1: the filter has started
-    mean: np.ndarray  # (S, 4) filtered ground state (x, vx, y, vy) m, m/s
-    next_uv: np.ndarray  # (S, 2) predicted foot point for the next frame px
-    est_uv: np.ndarray  # (S, 2) foot point of the filtered state px
-    W: np.ndarray  # (S,) window-B width W px at the filtered ground point
-    W_next: np.ndarray  # (S,) W px at the predicted ground point
-
-
-FRAME_IN = Layout(FrameIn, (1, 2, 1, 1, 1))
-STEP_OUT = Layout(StepOut, (1, 1, 4, 2, 2, 1, 1))
 
 
 @dataclass
@@ -85,6 +56,8 @@ class _Object:
     high_run: int = 0  # frames in a row its measured foot point lay too high (_foot_too_high)
     vel: list[Velocity] = field(default_factory=list)  # EKF ground velocity m/s per row
     top: float = math.nan  # top row px of the last detection (`detect.Detection.top`)
+    candidate_rows: list[tuple[float, ...]] | None = None  # per row, I(k) of the candidate
+    # windows B (`io.files.WINDOW_CANDIDATES` order; NaN where `intensity` is); None: option off
 
 
 class _Lost(NamedTuple):
@@ -95,36 +68,13 @@ class _Lost(NamedTuple):
     windows: tuple  # its rhythm windows then: (win_start, result, decided, windows_done)
 
 
-def _advance(cfg: Config, carry: Carry, frame_in):
-    """Every slot one frame (`FrameIn` packed): reset new slots, `ekf_fused.step` with the paper's
-    gates, and what the next frame needs (predicted foot point) and this frame's window-B size
-    W (px), packed as `StepOut`."""
-    fin = FRAME_IN.unpack(frame_in)
-    reset, z, width = fin.reset > 0.5, fin.z, fin.width
-    present, dt = fin.present > 0.5, fin.dt[0]
-    empty = empty_carry(z.dtype)
-    carry = jax.vmap(lambda r, c: jax.tree.map(lambda a, b: jnp.where(r, b, a), c, empty))(
-        reset, carry)
-    gates = PaperGates(cfg.width, cfg.thresholds)
-    run = jax.vmap(step, in_axes=(None, None, None, 0, 0, 0, None, 0))
-    carry, out = run(cfg.camera, cfg.noise, gates, carry, z, width, dt, present)
-    nxt = jax.vmap(lambda s: predict(cfg.noise, s, jnp.asarray(cfg.camera.dt, z.dtype)))(
-        carry.state)
-    next_uv = jax.vmap(lambda m: measure(cfg.camera, m))(nxt.mean)
-    est_uv = jax.vmap(lambda m: measure(cfg.camera, m))(out.mean)
-    W = image_width(cfg.camera, cfg.width.mean, out.mean[:, 2])
-    W_next = image_width(cfg.camera, cfg.width.mean, nxt.mean[:, 2])
-    return carry, STEP_OUT.pack(z.dtype, valid=out.valid, started=out.started, mean=out.mean,
-                                next_uv=next_uv, est_uv=est_uv, W=W, W_next=W_next)
-
-
 class OnlineTracker:
     """Feed frames with `update(index, t, frame)`; `finish()` returns tracks and verdicts."""
 
     def __init__(self, cfg: Config, options: TrackerOptions | None = None):
         self.cfg, self.opt = cfg, options or TrackerOptions()
         S = self.opt.max_objects
-        self._steps = SlotSteps(_advance, cfg, S)  # every slot's filter, one jitted call
+        self._steps = SlotSteps(advance_slots, cfg, S)  # every slot's filter, one jitted call
         self._slots: list[_Object | None] = [None] * S
         self._next_uv = np.full((S, 2), np.nan)
         self._next_W = np.full(S, np.nan)  # W (px) at the predicted ground point
@@ -146,6 +96,8 @@ class OnlineTracker:
         self._camera = camera_tuple(cfg.camera)
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
+        self._offsets = (tuple(float(off) for _, off in WINDOW_CANDIDATES)
+                         if self.opt.body.window_candidates else None)  # in W, + = down
 
     # ------------------------------------------------------------------------------------------
     def update(self, index: int, t: float, frame: np.ndarray | None) -> None:
@@ -223,7 +175,8 @@ class OnlineTracker:
                      if not any(math.hypot(d.u - nu, d.v - nv) < r for nu, nv, r in near)]
             for det in found[:len(free)]:
                 s = free.pop(0)
-                self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top)
+                self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top,
+                                         candidate_rows=None if self._offsets is None else [])
                 present[s], reset[s] = True, True
                 z[s], width[s] = (det.u, det.v), det.width
         fin.reset[:], fin.present[:], fin.dt[:] = reset, present, dt
@@ -327,6 +280,9 @@ class OnlineTracker:
         fu, fv = (z if measured and not self.opt.body.sample_estimate else est_uv)
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         intensity = math.nan if no_sample or D is None else detect.window_b_intensity(D, fu, fv, W)
+        if obj.candidate_rows is not None:  # NaN exactly where `intensity` is
+            obj.candidate_rows.append((math.nan,) * len(self._offsets) if math.isnan(intensity)
+                                      else window_b_candidates(D, fu, fv, W, self._offsets))
         top, obj.top = (obj.top if measured else math.nan), math.nan  # this frame's only
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
                                  float(mean[0]), float(mean[2]), int(obj.state), float(top)))
@@ -386,6 +342,9 @@ class OnlineTracker:
         gap = relink.gap_rows(rows[-1], index, t, (mean[0], mean[2]))
         obj.rows = rows + gap
         obj.vel = vel + [NAN_VELOCITY] * len(gap)
+        if old.candidate_rows is not None:
+            obj.candidate_rows = old.candidate_rows[:kept] + [(math.nan,) * len(
+                self._offsets)] * len(gap)
         obj.track_id = old.track_id
         self.relinked += 1
         return True
@@ -398,7 +357,8 @@ class OnlineTracker:
             if obj is not None:
                 self._end(s)
         objs = sorted(self._finished, key=lambda o: o.track_id)
-        return tracks_columns(objs), verdict_columns(objs, self.cfg.thresholds.n), objs
+        return (tracks_columns(objs, candidates=self._offsets is not None),
+                verdict_columns(objs, self.cfg.thresholds.n), objs)
 
 
 def _box(uv, w, h) -> detect.WindowBox:

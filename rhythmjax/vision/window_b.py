@@ -8,6 +8,7 @@ integers.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import cv2
 import jax
@@ -49,6 +50,17 @@ def window_b_intensity(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
         return 0.0
     s = float(cv2.sumElems(absdiff[y0:y1, x0:x1])[0])
     return s / ((x1 - x0) * (y1 - y0)) if mean else s
+
+
+def window_b_candidates(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
+                        offsets: Sequence[float]) -> tuple[float, ...]:
+    """The rhythm signal I(k) (grey levels) of window B moved vertically, once per offset:
+    `window_b_intensity(absdiff, u_p, v_p + offset * W, W)`, i.e. the same W x W/5 px window
+    with its bottom row `offset` walker widths W (px) below the foot row v_p (negative: above;
+    -0.1 moves it up by W/10 px), u_p and W unchanged. Used for the candidate windows B of
+    issue 16 (`io.files.WINDOW_CANDIDATES`). The NaN rules of `window_b_intensity`: every value
+    NaN if u_p, v_p or W is not finite or W <= 0; 0 for a moved window outside the image."""
+    return tuple(window_b_intensity(absdiff, u_p, v_p + float(off) * W, W) for off in offsets)
 
 
 @jax.jit

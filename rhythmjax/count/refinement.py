@@ -1,0 +1,87 @@
+"""Refinement of the pedestrians level (`pedestrian_level.PedestrianLevel`): blob columns no
+tracked pedestrian's patch explains start new pedestrians (`new_pedestrians`), one per walker
+width of the run, in the config's detection range (`in_range`). Units: px, patch widths W and
+heights H at the foot point (`patches.ShapeModel`), m on the ground. `level` is the
+`PedestrianLevel` (not imported here: it imports this module)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .patches import ground_point
+from .pedestrian import Pedestrian, finite_uv
+
+
+__all__ = ["in_range", "new_pedestrians"]
+
+
+def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
+    """Runs of blob columns no patch covers (`new.walker_widths` W around each foot point),
+    wide and full enough for a pedestrian, reaching the blob's bottom or lifted and tall
+    enough (`new.*`): one new pedestrian per walker width of the run, side by side (groups),
+    its foot point in the detection range (`in_range`). They are added to `level.peds` and
+    returned; when the free slots run out the frame is listed in `level.full_frames` and those
+    started so far are returned without being added (as the level always did)."""
+    opt = level.opt
+    cover = []
+    for p in level.peds:
+        b = level.patch_at(p.z if finite_uv(p.z) else p.next_uv)
+        half = 0.5 * opt.new.walker_widths * (b[2] - b[0])
+        cover.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3]))
+    free_slots = sorted(set(range(level.filter.slots)) - {p.slot for p in level.peds})
+    new: list[Pedestrian] = []
+    for b in blobs:
+        x0, y0, x1, y1 = b.box
+        free = np.ones(x1 - x0, bool)  # columns no patch covers
+        for c in cover:
+            if c[1] < y1 and c[3] > y0:
+                free[max(0, int(math.floor(c[0])) - x0):max(0, int(math.ceil(c[2])) - x0)] \
+                    = False
+        if not free.any():  # every column covered: no run (the blob's pixels not needed)
+            continue
+        hb = float(level.shape.size(0.5 * (x0 + x1 - 1), y1 - 1)[1])
+        crop = labels[y0:y1, x0:x1] == b.label
+        ext = np.zeros(free.size + 2, np.int8)  # run edges of the free blob columns
+        np.logical_and(crop.any(axis=0), free, out=ext[1:-1].view(bool))
+        edges = np.flatnonzero(np.diff(ext))
+        for c0, c1 in zip(edges[::2], edges[1::2]):
+            sub = crop[:, c0:c1]
+            rows = np.flatnonzero(sub.any(axis=1))
+            vb = y0 + int(rows[-1])
+            w, h = (float(q) for q in level.shape.size(x0 + 0.5 * (c0 + c1 - 1), vb))
+            if not (math.isfinite(w) and w > 0):
+                continue
+            n = max(1, int(round((c1 - c0) / (opt.new.walker_widths * w))))
+            span = rows[-1] - rows[0] + 1
+            lifted = vb < y1 - 1 - opt.new.max_lift * hb  # above the blob's bottom: an arm,
+            # or a farther walker merged with a nearer object (it stands taller than an arm)
+            if ((c1 - c0) < opt.new.min_widths * w or sub.sum() < opt.new.min_fill * w * h * n
+                    or span < opt.new.min_height * h
+                    or (lifted and span < opt.new.lifted_height * min(h, vb + 1.0))):
+                continue
+            for k in range(n):
+                a0, a1 = c0 + (c1 - c0) * k // n, c0 + (c1 - c0) * (k + 1) // n
+                r = np.flatnonzero(crop[:, a0:a1].any(axis=1))
+                if not free_slots:
+                    level.full_frames.append(level.n_frames)
+                    return new  # (as before the split: these are not added to level.peds)
+                z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1])) if r.size else None
+                if z is not None and in_range(level, z):
+                    p = level.new_pedestrian(free_slots.pop(0))
+                    p.z, p.z_width = z, float(a1 - a0)  # its share of the run
+                    new.append(p)
+    level.peds += new
+    return new
+
+
+def in_range(level, uv) -> bool:
+    """The foot point `uv` (px) has its ground point in the config's detection range (range_min
+    to range_max m ahead): where `rhythmjax track` detects, and where a new pedestrian starts;
+    always True with `new.in_range` off."""
+    if not level.opt.new.in_range:
+        return True
+    _, y, ok = ground_point(level.shape.camera, *uv)
+    thr = level.cfg.thresholds
+    return bool(ok) and float(thr.range_min) <= float(y) <= float(thr.range_max)
