@@ -30,7 +30,8 @@ and how many non-walkers were among them; each fit's line also gives the clearan
 used foot points below the fitted horizon (`fit.selfcal_checks`: under 4 px it is refused).
 `--outliers` turns on the foot-point outlier rule (`fit.selfcal_outliers`, off by default) to
 compare. h is not determined by ``speed`` alone (scale-free):
-its h column is left out.
+its h column is left out. The simulator writes no tracker `state` column, so the observed-rows
+rule (`fit.selfcal_rows`, the command's `--observed-only`) has nothing to act on here.
 """
 
 from __future__ import annotations

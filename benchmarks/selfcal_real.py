@@ -20,10 +20,13 @@ the classical approach), gait+height and gait+speed+width+height. Rows:
   No truth camera is published: estimate and SE only.
 
     python benchmarks/selfcal_real.py [--data ../shared/data] [--work /tmp/selfcal_real]
-        [-o docs/data/selfcal_real.csv] [--only pets,dev,casia] [--outliers]
+        [-o docs/data/selfcal_real.csv] [--only pets,dev,casia] [--outliers] [--observed-only]
 
 `--outliers` turns on the fit's foot-point outlier rule (`fit.selfcal_outliers`, off by default)
 to compare; give it its own `--work` for the re-tracked PETS rows (tracked with the fitted camera).
+`--observed-only` likewise turns on the observed-rows rule (`fit.selfcal_rows`, the command's
+`--observed-only`, off by default: only the rows whose tracker state is observe keep their foot
+point, width and top row).
 
 Tracks are made under `--work` (WORK/SOURCE/CLIP/tracks.parquet) unless already there, so a
 rerun only fits; the videos are read where they lie and nothing of them is copied into the
@@ -55,6 +58,7 @@ FIELDS = ("source", "tracking camera", "cues", "tracks", "walkers", "h_m", "h_se
           "refused")
 PETS_TRUTH = (7.07, 16.5, 742.0)
 OUTLIERS = [False]  # the outlier rule of the fits (`--outliers` sets it on)
+OBSERVED = [False]  # the observed-rows rule of the fits (`--observed-only` sets it on)
 
 
 def say(msg: str) -> None:
@@ -114,8 +118,14 @@ def pooled_batch(paths: list[Path], size: tuple[int, int], fps: float, window_s=
     with tempfile.TemporaryDirectory() as d:
         f = Path(d) / "pooled.parquet"
         pq.write_table(pa.concat_tables(parts, promote_options="default"), f)
-        batch = read_tracks(f, fps=fps).to_batch(max_gap_frames=5, min_len=cfg.thresholds.n,
-                                                 fps=fps)
+        tr = read_tracks(f, fps=fps)
+    if OBSERVED[0]:
+        from fit.selfcal_rows import observed_rows
+
+        tr, n_left = observed_rows(tr)
+        say(f"{n_left} foot points of rows not observed left out (of "
+            f"{int(np.sum(np.isfinite(tr.u))) + n_left})")
+    batch = tr.to_batch(max_gap_frames=5, min_len=cfg.thresholds.n, fps=fps)
     return cfg, batch
 
 
@@ -220,8 +230,10 @@ def main(argv=None) -> int:
     a.add_argument("-o", "--output", default=str(ROOT / "docs" / "data" / "selfcal_real.csv"))
     a.add_argument("--only", default="pets,dev,casia")
     a.add_argument("--outliers", action="store_true")
+    a.add_argument("--observed-only", action="store_true")
     args = a.parse_args(argv)
     OUTLIERS[0] = args.outliers
+    OBSERVED[0] = args.observed_only
     data, work = Path(args.data), Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     rows = []

@@ -30,8 +30,12 @@ The spreads of the three shape residuals (speed, width, height change) are measu
 a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
 `SHAPE_FLOOR`. Every residual goes through Cauchy's loss (c = 2.385 spreads): bicycles and dogs
 that slip through the gait selection (a bicycle's stride is 1.4-1.9 m: 8-13 spreads) do not pull
-the scale. A hinge keeps every used foot point below the horizon; foot points far from their
-track's image path can be left out first (`fit.selfcal_outliers`, off by default). The fit is
+the scale. Rows used: every cue but the pace reads every row with a foot point (a `predict` row
+of the tracker's holds the detection its gates refused); `rhythmjax-fit selfcal --observed-only`
+keeps only the `observe` rows' foot points, widths and top rows where the tracks give the state
+(`fit.selfcal_rows`, off by default), the rhythm signal on every row. A hinge keeps every used
+foot point below the horizon; foot points far from their track's image path can be left out
+first (`fit.selfcal_outliers`, off by default). The fit is
 Levenberg-Marquardt (optimistix) over log a f, log h and the tilt (and the roll, the principal
 point when asked), in float64, from the best points of a grid over tilt and a f with h set by
 the median stride. ``speed`` alone leaves h free; ``gait`` or ``width`` fix it. Standard errors
@@ -51,7 +55,17 @@ import optimistix as optx
 
 from fit.camera import NAMES, UNITS, CameraParams, se_limits
 from fit.selfcal_checks import HORIZON_MARGIN_PX, geometry_reasons
-from fit.selfcal_data import camera_of, camera_values, gait_peaks, make_params, radial
+from fit.selfcal_data import (
+    MIN_ROWS,
+    SPEED_SAMPLES,
+    Data,
+    camera_of,
+    camera_values,
+    make_data,
+    make_params,
+    radial,
+    select,
+)
 from fit.selfcal_height import HEIGHT_STD_M, MIN_TOP_ROWS, height_cues, top_walkers
 from fit.selfcal_outliers import without_outliers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
@@ -65,30 +79,13 @@ DEFAULT_CUES = CUES  # the height cue is dropped (a note) where the tracks have 
 CAUCHY_C = 2.385  # Cauchy's constant at 95 % efficiency, in spreads
 SHAPE_START = 0.1  # start spread of the shape residuals (relative change over a track)
 SHAPE_FLOOR = 0.02  # their spread is never below this (set a priori; seeds 0-5 checked)
-SPEED_SAMPLES = 48  # the Theil-Sen speed of a track over at most this many of its frames
-PAD_TRACKS = 8  # the used tracks are padded to a multiple of this
 N_BLOCKS = 6  # residual blocks per track (`standardised`)
 MIN_WALKERS = 5  # fewer tracks with a clear gait peak: refused
-MIN_ROWS = 20  # a track needs this many measured rows
 MIN_ROW_SPREAD = 0.02  # walkers' median foot rows (10-90 %) span less of the image: refused
 # (a quarter of the smallest on the development seeds 0-5, 0.083; added after CASIA-B's walks)
 FITTABLE = ("af", "h", "theta", "roll", "uc", "vc")  # what `fit_selfcal` can fit
 THETA_GRID = (3.0, 6.0, 10.0, 15.0, 20.0, 26.0, 33.0, 40.0, 50.0, 60.0)
 AF_GRID = (0.3, 0.42, 0.6, 0.8, 1.05, 1.35, 1.8, 2.4)  # x the image width
-
-
-class Data(eqx.Module):
-    """The used tracks, padded (B, T), float64: foot points z (px, 0 where `obs` is False),
-    widths (px, NaN missing), times (s from the track's middle), pace F (Hz), top rows v_top
-    (px, NaN missing)."""
-
-    z: jax.Array
-    width: jax.Array
-    t: jax.Array
-    obs: jax.Array
-    pace: jax.Array
-    valid: jax.Array  # False on the padding (copies of the first track, weight 0)
-    v_top: jax.Array
 
 
 class Weights(eqx.Module):
@@ -200,41 +197,6 @@ def _grid_cost(stack, static, args):
 
 
 # ----------------------------------------------------------------------------------------------
-
-def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
-    """(used mask (B,), pace Hz (B,)) of a `rhythmjax.io.TrackBatch`: tracks with a clear gait
-    peak (`gait_peaks`), at least `MIN_ROWS` measured foot points and two on the frames the
-    speed takes (every k-th of the padded length, `raw_cues`; else the speed is undefined)."""
-    peaks = gait_peaks(cfg, batch.intensity, batch.length)
-    z = np.asarray(batch.z)
-    seen = batch.present & np.all(np.isfinite(z), -1)
-    k = -(-(z.shape[1] - z.shape[1] % -SPEED_SAMPLES) // SPEED_SAMPLES)
-    ok = (np.sum(seen, 1) >= MIN_ROWS) & (np.sum(seen[:, ::k], 1) >= 2)
-    return peaks.clear & ok, peaks.pace_hz
-
-
-def make_data(batch, used: np.ndarray, pace: np.ndarray) -> Data:
-    """`Data` of the used tracks of a batch, float64 (call inside ``jax.enable_x64``)."""
-    z = np.asarray(batch.z, np.float64)[used]
-    obs = batch.present[used] & np.all(np.isfinite(z), -1)
-    t = np.asarray(batch.t, np.float64)[used]
-    lo = np.min(np.where(obs, t, np.inf), 1)
-    hi = np.max(np.where(obs, t, -np.inf), 1)
-    t = np.where(obs, t - 0.5 * (lo + hi)[:, None], 0.0)
-    B, T = obs.shape
-    pad = np.r_[np.arange(B), np.zeros(-B % PAD_TRACKS, np.int64)]  # one compiled shape per
-    # PAD_TRACKS tracks and per SPEED_SAMPLES frames (the speed's stride k is kept: no change)
-    cols = -T % SPEED_SAMPLES
-    wide = lambda a, fill: np.pad(a, [(0, 0), (0, cols)] + [(0, 0)] * (a.ndim - 2),
-                                  constant_values=fill)
-    top = (np.full(obs.shape, np.nan) if getattr(batch, "v_top", None) is None
-           else np.where(obs, np.asarray(batch.v_top, np.float64)[used], np.nan))
-    return Data(*(jnp.asarray(a[pad]) for a in (
-        wide(np.where(obs[..., None], z, 0.0), 0.0),
-        wide(np.asarray(batch.width, np.float64)[used], np.nan), wide(t, 0.0),
-        wide(obs, False), pace[used])), jnp.asarray(np.arange(pad.size) < B),
-        jnp.asarray(wide(top, np.nan)[pad]))
-
 
 def param_spec(fitted) -> CameraParams:
     """The filter spec (True = fitted) of `CameraParams` for names of `fit.camera.NAMES`."""

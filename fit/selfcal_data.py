@@ -1,5 +1,7 @@
-"""What self-calibration (`fit.selfcal`) reads from tracks: each track's gait peak, and synthetic
-scenes of walkers (and bicycles, dogs) seen by random cameras for its tests and benchmark.
+"""What self-calibration (`fit.selfcal`) reads from tracks: each track's gait peak, the used tracks'
+arrays (`select`, `make_data`: the rows with a foot point; `fit.selfcal_rows` can restrict them to
+the tracker's observed rows first), and synthetic scenes of walkers (and bicycles, dogs) seen by
+random cameras for its tests and benchmark.
 
 The gait peak does not depend on the camera: the pace F of (12) is a peak of the MEM spectrum of
 the rhythm signal I(k) (window B, Sec. 4.1), computed here exactly as the classifier computes it
@@ -102,6 +104,63 @@ def gait_peaks(cfg: Config, intensity: np.ndarray, length: np.ndarray) -> GaitPe
         cfg, jnp.asarray(x), jnp.asarray(length, jnp.int32), jnp.float32(1.0 / cfg.camera.fps)))
     clear = np.isfinite(f) & (r > float(cfg.thresholds.r_thr))
     return GaitPeaks(np.where(clear, f, np.nan), p, r, clear)
+
+
+# ----------------------------------------------------------------------------------------------
+# the used tracks as the fit reads them (moved from fit.selfcal)
+
+SPEED_SAMPLES = 48  # the Theil-Sen speed of a track over at most this many of its frames
+PAD_TRACKS = 8  # the used tracks are padded to a multiple of this
+MIN_ROWS = 20  # a track needs this many measured rows
+
+
+class Data(eqx.Module):
+    """The used tracks, padded (B, T), float64: foot points z (px, 0 where `obs` is False),
+    widths (px, NaN missing), times (s from the track's middle), pace F (Hz), top rows v_top
+    (px, NaN missing)."""
+
+    z: jax.Array
+    width: jax.Array
+    t: jax.Array
+    obs: jax.Array
+    pace: jax.Array
+    valid: jax.Array  # False on the padding (copies of the first track, weight 0)
+    v_top: jax.Array
+
+
+def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
+    """(used mask (B,), pace Hz (B,)) of a `rhythmjax.io.TrackBatch`: tracks with a clear gait
+    peak (`gait_peaks`), at least `MIN_ROWS` measured foot points and two on the frames the
+    speed takes (every k-th of the padded length, `raw_cues`; else the speed is undefined)."""
+    peaks = gait_peaks(cfg, batch.intensity, batch.length)
+    z = np.asarray(batch.z)
+    seen = batch.present & np.all(np.isfinite(z), -1)
+    k = -(-(z.shape[1] - z.shape[1] % -SPEED_SAMPLES) // SPEED_SAMPLES)
+    ok = (np.sum(seen, 1) >= MIN_ROWS) & (np.sum(seen[:, ::k], 1) >= 2)
+    return peaks.clear & ok, peaks.pace_hz
+
+
+def make_data(batch, used: np.ndarray, pace: np.ndarray) -> Data:
+    """`Data` of the used tracks of a batch, float64 (call inside ``jax.enable_x64``)."""
+    z = np.asarray(batch.z, np.float64)[used]
+    obs = batch.present[used] & np.all(np.isfinite(z), -1)
+    t = np.asarray(batch.t, np.float64)[used]
+    lo = np.min(np.where(obs, t, np.inf), 1)
+    hi = np.max(np.where(obs, t, -np.inf), 1)
+    t = np.where(obs, t - 0.5 * (lo + hi)[:, None], 0.0)
+    B, T = obs.shape
+    pad = np.r_[np.arange(B), np.zeros(-B % PAD_TRACKS, np.int64)]  # one compiled shape per
+    # PAD_TRACKS tracks and per SPEED_SAMPLES frames (the speed's stride k is kept: no change)
+    cols = -T % SPEED_SAMPLES
+    wide = lambda a, fill: np.pad(a, [(0, 0), (0, cols)] + [(0, 0)] * (a.ndim - 2),
+                                  constant_values=fill)
+    top = (np.full(obs.shape, np.nan) if getattr(batch, "v_top", None) is None
+           else np.where(obs, np.asarray(batch.v_top, np.float64)[used], np.nan))
+    return Data(*(jnp.asarray(a[pad]) for a in (
+        wide(np.where(obs[..., None], z, 0.0), 0.0),
+        wide(np.asarray(batch.width, np.float64)[used], np.nan), wide(t, 0.0),
+        wide(obs, False), pace[used])), jnp.asarray(np.arange(pad.size) < B),
+        jnp.asarray(wide(top, np.nan)[pad]))
 
 
 # ----------------------------------------------------------------------------------------------

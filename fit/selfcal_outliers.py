@@ -1,17 +1,18 @@
 """Foot points self-calibration (`fit.selfcal`) leaves out: each track's outliers in the image.
 
 The tracks file holds a foot point on some rows the tracker's gates did not accept (the `predict`
-rows keep the gated-out detection, so that `rhythmjax classify` can gate again), and the file
-does not say which. One such foot point far from its walker (on the dev clips, the sliver of a
-head 27 px above the horizon, 98 px above the walker's feet) pins the fit's horizon hinge and
-enters every cue. The rule here needs no camera: per track, each image coordinate u(t) and v(t)
-(px) is fitted by a polynomial of degree `DEGREE` in time by iteratively reweighted least squares
-with Tukey's biweight (c = 4.685 spreads, `IRLS_STEPS` steps from the least-squares fit); the
-spread is 1.4826 x the MAD of the residuals, at least `SIGMA_FLOOR_PX`. A row whose residual in u
-or in v exceeds `K_SIGMA` spreads is dropped (its foot point, width and top row are made missing;
+rows keep the gated-out detection, so that `rhythmjax classify` can gate again); its optional
+`state` column says which (`fit.selfcal_rows` can leave them all out, `--observed-only`), a
+hand-made or converted file may not. One such foot point far from its walker (on the dev clips, the
+sliver of a head 27 px above the horizon, 98 px above the walker's feet) pins the fit's horizon
+hinge and enters every cue. The rule here needs no camera: per track, each image coordinate u(t) and
+v(t) (px) is fitted by a polynomial of degree `DEGREE` in time by iteratively reweighted least
+squares with Tukey's biweight (c = 4.685 spreads, `IRLS_STEPS` steps from the least-squares fit);
+the spread is 1.4826 x the MAD of the residuals, at least `SIGMA_FLOOR_PX`. A row whose residual in
+u or in v exceeds `K_SIGMA` spreads is dropped (its foot point, width and top row are made missing;
 its intensity, the rhythm signal, is kept). A walker's path on the ground is a line walked at a
-constant pace, which the camera maps to a smooth curve in the image; a quadratic in time follows
-it over the few seconds of a track, and the biweight gives no weight to a far outlier. Tracks with
+constant pace, which the camera maps to a smooth curve in the image; a quadratic in time follows it
+over the few seconds of a track, and the biweight gives no weight to a far outlier. Tracks with
 fewer than `MIN_POINTS` measured rows are left as they are.
 
 The constants were set a priori (a 5-spread cut, the usual biweight constant, a 1 px floor: the

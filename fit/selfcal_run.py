@@ -47,6 +47,10 @@ def add_parser(sub, size_type, at_least) -> None:
     s.add_argument("--outliers", action="store_true", help="leave out each track's foot points "
                    "far from its image path (fit.selfcal_outliers: 5 robust spreads from a "
                    "biweight quadratic of u(t), v(t)); off by default (docs/selfcal.md)")
+    s.add_argument("--observed-only", action="store_true", help="use the foot points, widths "
+                   "and top rows of the rows whose state (the tracks' state column) is observe "
+                   "only, leaving out the detections the tracker's gates refused "
+                   "(fit.selfcal_rows); off by default (docs/selfcal.md)")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
@@ -106,10 +110,13 @@ def start_config(args, d: dict, fps_tracks):
 def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
     """(fit, start Config, the settled config dict) of `rhythmjax.io.Tracks` `tr` with the
     start config dict `d` and the command's options; raises `BadInput` naming `source`.
-    Notes (the height cue dropped) go to the fit's notes and to `notes`."""
+    With `--observed-only` the rows the tracker did not observe lose their foot point, width
+    and top row first (`fit.selfcal_rows.observed_rows`). Notes (the height cue dropped, the
+    rows left out) go to the fit's notes and to `notes`."""
     import numpy as np
 
     from fit.selfcal import fit_selfcal
+    from fit.selfcal_rows import observed_rows
     from rhythmjax.io import BadInput, to_batch
 
     cues, more = parse_cues(args.cues)
@@ -123,6 +130,11 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
     fps_tracks = tr.fps or (1.0 / float(np.median(dt)) if dt.size and np.median(dt) > 0
                             else None)
     cfg, d = start_config(args, d, fps_tracks)
+    if getattr(args, "observed_only", False):
+        tr, n_left = observed_rows(tr)
+        if n_left:
+            more.append(f"{n_left} foot points of rows the tracker did not observe (state "
+                        "predict: detections its gates refused) left out (fit.selfcal_rows)")
     batch = to_batch(tr, max_gap_frames=5, min_len=cfg.thresholds.n, fps=cfg.camera.fps)
     fit = ("af", "h", "theta") + (("roll",) if args.fit_roll else ()) + (
         ("uc", "vc") if args.fit_center else ())

@@ -3,7 +3,12 @@
 Reference: hand-built tracks, the foot points of a straight walk at constant speed projected by
 a known camera (`rhythmjax.model.camera.project`) with 1.5 px Gaussian noise (seeded), and the
 same track with one planted outlier. Tolerance: exact, the rule drops the planted row and no
-other (the planted rows are 25-40 spreads out; the clean rows are under the 5-spread cut)."""
+other (the planted rows are 25-40 spreads out; the clean rows are under the 5-spread cut).
+
+Also the observed-rows rule (`fit.selfcal_rows`, `--observed-only`): hand-built rows of each
+state, and the tests' scene of 20 walkers (seed 11) with every 5th row turned into a refused
+detection (state predict, a deliberately wrong foot point), against the same tracks with those
+rows' foot points missing: equal fits to 1e-9 relative with the state, different without it."""
 
 from __future__ import annotations
 
@@ -93,3 +98,93 @@ def test_the_batch_loses_the_row_s_foot_point_width_and_top_but_keeps_its_rhythm
     assert np.isnan(clean.v_top[0, 50]) and clean.intensity[0, 50] == 1.0
     assert np.isfinite(clean.z[0, :120]).sum() == 2 * 119
     assert K_SIGMA == 5.0  # the constant docs/selfcal.md states
+
+
+# ----------------------------------------------------------------------------------------------
+# rows used: measured and observed (`fit.selfcal_rows`, the tracker's `state` column)
+
+def _tracks_of(**cols):
+    from rhythmjax.io import Tracks
+
+    n = len(cols["u"])
+    base = dict(path="t", track_id=np.array(["a"] * n, object), frame=np.arange(n),
+                t=np.arange(n) / 15.0, width_px=np.full(n, 30.0), intensity=np.ones(n),
+                line=np.arange(n) + 2, v_top=np.full(n, 100.0))
+    return Tracks(**{**base, **cols})
+
+
+def test_only_observed_rows_keep_their_foot_point_width_and_top():
+    from fit.selfcal_rows import observed_rows, unobserved
+
+    state = np.array(["observe", "predict", "none", "", "detect", "predict"], object)
+    u = np.array([1.0, 2.0, np.nan, 4.0, 5.0, np.nan])
+    tr = _tracks_of(u=u, v=u + 100, state=state)
+    assert unobserved(tr).tolist() == [False, True, True, False, True, True]
+    out, n = observed_rows(tr)
+    assert n == 2  # rows 1 and 4 held a foot point
+    assert np.isfinite(out.u).tolist() == [True, False, False, True, False, False]
+    for a in (out.v, out.width_px, out.v_top):
+        assert np.isfinite(a).tolist() == [True, False, False, True, False, False]
+    assert (out.intensity == 1.0).all() and out.state is tr.state  # the rhythm is kept
+    same, n = observed_rows(_tracks_of(u=u, v=u + 100))  # no state column: used as before
+    assert n == 0 and same.u is u
+
+
+@pytest.fixture(scope="module")
+def gated_out():
+    """20 walkers (seed 11) and, on every 5th row of each track, a detection the gates refused:
+    state predict, the foot point 40 px up and 25 px right, width x 1.6, top 30 px up."""
+    from fit.walking import make_labelled
+
+    cols, _ = make_labelled(n_walkers=20, seed=11, camera=CAM)
+    keep = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "v_top")
+    cols = {k: cols[k] for k in keep}
+    first = np.r_[True, cols["track_id"][1:] != cols["track_id"][:-1]]
+    pos = np.arange(len(first)) - np.maximum.accumulate(np.where(first, np.arange(len(first)),
+                                                                 0))
+    bad = (pos % 5 == 3) & np.isfinite(cols["u"])
+    missing = {**cols, **{k: np.where(bad, np.nan, cols[k]) for k in ("u", "v", "width_px",
+                                                                     "v_top")}}
+    wrong = {**cols, "u": np.where(bad, cols["u"] + 25.0, cols["u"]),
+             "v": np.where(bad, cols["v"] - 40.0, cols["v"]),
+             "width_px": np.where(bad, 1.6 * cols["width_px"], cols["width_px"]),
+             "v_top": np.where(bad, cols["v_top"] - 30.0, cols["v_top"]),
+             "state": np.where(bad, "predict", "observe").astype(object)}
+    return missing, wrong, int(bad.sum())
+
+
+def _selfcal(tmp_path, name, cols, capsys, *extra):
+    import json
+
+    from fit.cli import main as fit_main
+    from rhythmjax.io import write_table
+
+    p, out = tmp_path / f"{name}.parquet", tmp_path / f"{name}.json"
+    write_table(p, cols, list(cols))
+    capsys.readouterr()
+    rc = fit_main(["selfcal", str(p), "--image-size", "1280x720", "--fps", "15", "-o",
+                   str(out), "--json", *extra])
+    return rc, json.loads(capsys.readouterr().out)
+
+
+def test_predicted_rows_do_not_reach_the_fit_when_the_state_is_given(tmp_path, gated_out,
+                                                                     capsys):
+    """With `--observed-only` the refused detections (deliberately wrong foot points on predict
+    rows) change nothing when the tracks give the state: the fit is the one of the tracks
+    without those rows (to 1e-9); without the state column they are used and the fit moves (h by
+    more than 1 % or the tilt by more than 0.3 deg), so the test can fail."""
+    missing, wrong, n_bad = gated_out
+    assert n_bad > 300
+    rc0, ref = _selfcal(tmp_path, "missing", missing, capsys)
+    rc1, given = _selfcal(tmp_path, "given", wrong, capsys, "--observed-only")
+    assert rc0 == 0 and rc1 == 0, (ref["reasons"], given["reasons"])
+    for k in ("h", "theta", "af"):
+        assert abs(given["values"][k] - ref["values"][k]) <= 1e-9 * abs(ref["values"][k]), k
+    assert any(f"{n_bad} foot points of rows the tracker did not observe" in q
+               for q in given["notes"]), given["notes"]
+    absent = {k: v for k, v in wrong.items() if k != "state"}
+    _, used = _selfcal(tmp_path, "absent", absent, capsys, "--observed-only")
+    assert used["values"] is not None
+    moved = (abs(used["values"]["h"] / ref["values"]["h"] - 1) > 0.01
+             or abs(used["values"]["theta"] - ref["values"]["theta"]) > 0.3)
+    assert moved, (used["values"], ref["values"])
