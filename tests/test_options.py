@@ -30,7 +30,7 @@ TRACKER_DEFAULTS = [
     ("sample_estimate", "body.sample_estimate", False),
     ("high_foot_widths", "body.high_foot_widths", 0.0),
     ("high_foot_frames", "body.high_foot_frames", 3),
-    ("(new: issue 16 item 2)", "body.window_candidates", False),
+    ("(new: issue 16 item 2)", "body.window_candidates", True),
     ("min_area", "new.min_area", 40),
     ("outside_margin_px", "new.outside_margin_px", 8),
     ("near_widths", "new.near_widths", 1.0),

@@ -98,14 +98,17 @@ def test_classify_reproduces_tracker_verdicts(tmp_path):
     from rhythmjax.cli.common import TRACK_ORDER
     from rhythmjax.io import read_tracks, to_batch, write_table
     from rhythmjax.model.batch import classify_tracks
+    from rhythmjax.track.columns import candidate_columns
 
     scene = _walker_scene(n_frames=120)
     tr = _run(CFG, scene.frames)
     tracks, verdicts, _ = tr.finish()
     assert any(n >= CFG.thresholds.n for n in verdicts["n_samples"])
     path = tmp_path / "tracks.csv"
-    write_table(str(path), tracks, TRACK_ORDER)
+    # with the candidate windows' columns, as `run` and `track` write them
+    write_table(str(path), tracks, TRACK_ORDER + candidate_columns(tracks))
     back = read_tracks(str(path), fps=CFG.camera.fps)
+    assert back.candidates is not None
     n = CFG.thresholds.n
     batch = to_batch(back, max_gap_frames=max(1, round(float(CFG.thresholds.predict_timeout)
                                                         * CFG.camera.fps)), min_len=n)

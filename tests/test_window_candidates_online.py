@@ -113,12 +113,12 @@ def runs(hidden_walker):
         calls.append((D.copy(), u, v, W, value))
         return value
 
-    off = _run(hidden_walker)
-    off_key = _run(hidden_walker, TrackerOptions(body=BodyOptions(window_candidates=False)))
+    off = _run(hidden_walker, TrackerOptions(body=BodyOptions(window_candidates=False)))
+    default = _run(hidden_walker)  # the default is on
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(detect, "window_b_intensity", spy)
         on = _run(hidden_walker, ON)
-    return off, off_key, on, calls
+    return off, default, on, calls
 
 
 def _same_columns(a: dict, b: dict, names) -> None:
@@ -131,13 +131,15 @@ def _same_columns(a: dict, b: dict, names) -> None:
 
 
 def test_option_off_writes_no_candidates_and_changes_nothing(runs):
-    (_, tracks, verdicts, objs), (_, tracks_k, verdicts_k, _), (_, tracks_on, _, _), _ = runs
+    (_, tracks, verdicts, objs), (_, tracks_d, verdicts_d, _), (_, tracks_on, verdicts_on, _), \
+        _ = runs
     assert not set(CANDIDATE_COLUMNS) & set(tracks)
     assert all(o.candidate_rows is None and (o.result is None or "candidate" not in o.result)
                for o in objs)
-    assert set(tracks) == set(tracks_k)
-    _same_columns(tracks, tracks_k, tracks)
-    _same_columns(verdicts, verdicts_k, verdicts)
+    # the default is on: the same tables as the option given as True
+    assert set(tracks_d) == set(tracks_on) == set(tracks) | set(CANDIDATE_COLUMNS)
+    _same_columns(tracks_d, tracks_on, tracks_on)
+    _same_columns(verdicts_d, verdicts_on, verdicts_on)
     # the option changes what is sampled, never the tracking: every other column equal
     assert set(tracks_on) == set(tracks) | set(CANDIDATE_COLUMNS)
     _same_columns(tracks, tracks_on, tracks)
@@ -340,7 +342,8 @@ def test_box_intensities_candidates_match_a_float64_loop():
 def test_rhythm_verb_writes_the_candidate_columns(tmp_path, capsys):
     """Eight 512 x 512 frames (PNG, lossless) and one MOT box track: with
     --window-candidates the tracks file has the three columns, each the float64 loop at the
-    moved window; without it none, also when BOXES is a tracks file that had them."""
+    moved window (also by default); with --no-window-candidates none, also when BOXES is a
+    tracks file that had them."""
     rng = np.random.default_rng(7)
     video = tmp_path / "frames"
     video.mkdir()
@@ -375,11 +378,17 @@ def test_rhythm_verb_writes_the_candidate_columns(tmp_path, capsys):
             assert col[i] == _loop(frames[fr - 1], frames[fr], t["u"][i], t["v"][i] + off * W[i],
                                    W[i]), (name, i)
     plain = tmp_path / "off"
-    assert cli_main(base + ["-o", str(plain)]) == 0
+    assert cli_main(base + ["-o", str(plain), "--no-window-candidates"]) == 0
     capsys.readouterr()
     back = tmp_path / "again"
     assert cli_main(["rhythm", str(video), "--boxes", str(out / "tracks.parquet"), "-o", str(back),
-                 "--json", "--no-camera-check", "--fps", "15"]) == 0
+                 "--json", "--no-camera-check", "--fps", "15", "--no-window-candidates"]) == 0
+    capsys.readouterr()
+    default = tmp_path / "default"  # the default is on
+    assert cli_main(base + ["-o", str(default)]) == 0
+    got = read_table(default / "tracks.parquet", ["intensity"], list(CANDIDATE_COLUMNS))
+    for name in CANDIDATE_COLUMNS:
+        np.testing.assert_array_equal(got[name], t[name])
     capsys.readouterr()
     for d in (plain, back):
         cols = read_table(d / "tracks.parquet", ["intensity"], list(CANDIDATE_COLUMNS))
