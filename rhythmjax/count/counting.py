@@ -58,6 +58,7 @@ import numpy as np
 from ..io.files import CANDIDATE_COLUMNS
 from ..io.mot import VELOCITY_COLUMNS
 from ..model.params import Config
+from ..track.columns import candidate_table
 from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
 from .explain import explain_tracks, measured_points
@@ -66,7 +67,7 @@ from .pedestrian_level import Pedestrian, PedestrianLevel
 from .rows import BlobRow, BoxRow, GroundRow
 from .still import never_moved, peek_background
 from .stitch import stitch_level
-from .window_candidates import align_candidates, candidate_table, candidates_by_row
+from .window_candidates import align_candidates, candidates_by_row
 
 
 __all__ = ["COUNT_RULE", "CountResult", "build_result", "count_frames", "finish_count",
@@ -347,7 +348,7 @@ def _columns(records: list, fields: tuple[str, ...]) -> dict[str, tuple]:
 def tracks_table(peds: list[Pedestrian], candidates: bool = False) -> dict[str, np.ndarray]:
     """The tracks format of the pedestrians' rows (`track.rows.TrackRow`), their track ids
     first; with `candidates` also the candidate windows' I(k) (`io.files.CANDIDATE_COLUMNS`,
-    `window_candidates.candidate_table`)."""
+    `track.columns.candidate_table`)."""
     from ..model.status import TrackState
 
     rows = [r for p in peds for r in p.rows]

@@ -2,10 +2,10 @@
 I(k) in window B at its foot point, each pedestrian samples I(k) in window B moved vertically by
 each offset of `io.files.WINDOW_CANDIDATES` (-0.2, -0.1, +0.1 W; negative: up), one tuple a
 row (`Pedestrian.candidate_rows`, NaN exactly where the row's intensity is). They become the
-tracks' candidate columns (`io.files.CANDIDATE_COLUMNS`), and the classifier judges each rhythm
-window once per candidate and keeps the one whose strongest spectral peak is highest
-(`model.candidates.strongest`). Units: px, grey levels, walker widths W (the patch width at the
-foot point)."""
+tracks' candidate columns (`io.files.CANDIDATE_COLUMNS`, `track.columns.candidate_table`),
+and the classifier judges each rhythm window once per candidate and keeps the one whose
+strongest spectral peak is highest (`model.candidates.strongest`). Units: px, grey levels,
+walker widths W (the patch width at the foot point)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..io.files import CANDIDATE_COLUMNS, WINDOW_CANDIDATES
+from ..io.files import WINDOW_CANDIDATES
 from ..vision.window_b import window_b_candidates
 
 
@@ -22,8 +22,7 @@ if TYPE_CHECKING:
     from .pedestrian import Pedestrian
 
 
-__all__ = ["OFFSETS", "align_candidates", "candidate_table", "candidates_by_row",
-           "sample_candidates"]
+__all__ = ["OFFSETS", "align_candidates", "candidates_by_row", "sample_candidates"]
 
 OFFSETS = tuple(off for _, off in WINDOW_CANDIDATES)  # W, in `CANDIDATE_COLUMNS` order
 
@@ -57,17 +56,3 @@ def align_candidates(peds: list[Pedestrian], by_row: dict[int, tuple[float, ...]
         if p.candidate_rows is not None:
             p.candidate_rows = [by_row[id(r)] for r in p.rows]
     return peds
-
-
-def candidate_table(peds: list[Pedestrian]) -> dict[str, np.ndarray]:
-    """The candidate columns (`io.files.CANDIDATE_COLUMNS`, float64 grey levels) of the
-    pedestrians' rows in order (as `counting.tracks_table` lists them); every pedestrian must
-    carry one tuple per row."""
-    k = len(CANDIDATE_COLUMNS)
-    for p in peds:
-        if p.candidate_rows is None or len(p.candidate_rows) != len(p.rows):
-            n = None if p.candidate_rows is None else len(p.candidate_rows)
-            raise ValueError(f"track {p.track_id}: candidate windows' I(k) for {n} of its "
-                             f"{len(p.rows)} rows")
-    values = np.asarray([c for p in peds for c in p.candidate_rows], np.float64).reshape(-1, k)
-    return {name: values[:, j].copy() for j, name in enumerate(CANDIDATE_COLUMNS)}

@@ -39,17 +39,22 @@ def tracks_columns(objs: list, *, candidates: bool | None = None) -> dict[str, n
     if candidates is None:
         candidates = any(getattr(o, "candidate_rows", None) is not None for o in objs)
     if candidates:
-        for o in objs:
-            if o.candidate_rows is None or len(o.candidate_rows) != len(o.rows):
-                raise ValueError(f"track {o.track_id}: candidate windows' I(k) for "
-                                 f"{None if o.candidate_rows is None else len(o.candidate_rows)}"
-                                 f" of its {len(o.rows)} rows")
-        k = len(CANDIDATE_COLUMNS)
-        values = np.asarray([c for o in objs for c in o.candidate_rows], np.float64)
-        values = values.reshape(-1, k)
-        for j, name in enumerate(CANDIDATE_COLUMNS):
-            out[name] = values[:, j].copy()
+        out.update(candidate_table(objs))
     return out
+
+
+def candidate_table(objs: list) -> dict[str, np.ndarray]:
+    """The candidate windows' I(k) (grey levels; float64 columns `io.files.CANDIDATE_COLUMNS`)
+    of objects' rows in order, from each object's `candidate_rows` (one tuple per row, in
+    that order). Raises ValueError naming the track when an object has none or too few."""
+    for o in objs:
+        if o.candidate_rows is None or len(o.candidate_rows) != len(o.rows):
+            n = None if o.candidate_rows is None else len(o.candidate_rows)
+            raise ValueError(f"track {o.track_id}: candidate windows' I(k) for {n} of its "
+                             f"{len(o.rows)} rows")
+    values = np.asarray([c for o in objs for c in o.candidate_rows], np.float64)
+    values = values.reshape(-1, len(CANDIDATE_COLUMNS))
+    return {name: values[:, j].copy() for j, name in enumerate(CANDIDATE_COLUMNS)}
 
 
 def verdict_columns(objs: list, n: int) -> dict[str, np.ndarray]:
