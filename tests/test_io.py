@@ -229,7 +229,7 @@ def test_sigkill_mid_write_leaves_old_file(tmp_path):
     (tmp_path / "verdicts.csv").write_bytes(b"old")
     child = run_child("""
         import sys, time
-        from rhythmjax.io.tables import atomic_write
+        from rhythmjax.io.atomic import atomic_write
         with atomic_write("verdicts.csv") as f:
             f.write(b"half"); f.flush()
             print("writing", flush=True)

@@ -14,6 +14,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .atomic import (
+    atomic_path as atomic_path,
+    atomic_write as atomic_write,
+    check_writable as check_writable,
+    make_output_dir as make_output_dir,
+)
 from .configs import (
     config_or_bad_input as config_or_bad_input,
     dumps_json as dumps_json,
@@ -22,18 +28,14 @@ from .configs import (
     write_config as write_config,
 )
 from .footprints import Footprints as Footprints, read_footprints as read_footprints
+from .table_write import write_table as write_table
 from .tables import (
     KEY_SUFFIX,
     BadInput as BadInput,
     PathLike,
     Table as Table,
-    atomic_path as atomic_path,
-    atomic_write as atomic_write,
-    check_writable as check_writable,
-    make_output_dir as make_output_dir,
     map_text,
     read_table as read_table,
-    write_table as write_table,
 )
 from .track_checks import (
     check_track_rows,

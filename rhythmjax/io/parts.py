@@ -26,7 +26,8 @@ import shutil
 
 from .atomic import atomic_path, atomic_write, signals_deferred
 from .errors import BadInput, PathLike
-from .tables import arrow_table, table_suffix
+from .table_write import arrow_table
+from .tables import table_suffix
 
 
 MANIFEST = "_rhythmjax_manifest.json"

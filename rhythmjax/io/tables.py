@@ -1,10 +1,11 @@
-"""Tables (CSV, Parquet) read strictly and written atomically; the `BadInput` error.
+"""Tables (CSV, Parquet) read strictly; the `BadInput` error.
 
 Reading is validation at the edge (RELIABILITY.md sections 3 and 6): CSV is parsed by pyarrow with
 every column as text and an `invalid_row_handler` that records the line of each row with the wrong
 number of fields (the first data row and a truncated last row included); numbers are converted
-here so that the first bad cell is reported with its line and column. Every output goes through
-`atomic_write`: a temp file beside the target that keeps the suffix, fsync, then `os.replace`.
+here so that the first bad cell is reported with its line and column. Writing is
+`io.table_write` (through `atomic_write`: a temp file beside the target that keeps the suffix,
+fsync, then `os.replace`).
 """
 
 from __future__ import annotations
@@ -22,7 +23,6 @@ import pyarrow.csv as pacsv
 
 from .atomic import (
     atomic_path as atomic_path,
-    atomic_write,
     check_writable as check_writable,
     make_output_dir as make_output_dir,
 )
@@ -398,42 +398,3 @@ def _parquet_column(p: str, col: pa.Array, name: str, kind: str | None, required
             return i, f"{float(values[i])!r} is out of range (at most 2^63 in size)"
         ints = values.astype(np.int64)
     return ints if kind == "int" else np.asarray([str(v) for v in ints.tolist()], dtype=object)
-
-
-# ----------------------------------------------------------------------------------------------
-# Writing
-
-def _arrow_column(name: str, a: Any) -> pa.Array:
-    a = np.asarray(a)
-    if a.ndim != 1:
-        raise ValueError(f"column {name!r} must be one-dimensional, got shape {a.shape}")
-    if a.dtype.kind in "US":
-        return pa.array(a.astype(str).tolist(), pa.string())
-    return pa.array(a, from_pandas=True)  # NaN (float or object) -> null
-
-
-def arrow_table(columns: Mapping[str, Any], order: Sequence[str]) -> pa.Table:
-    """`columns` in `order` as the Arrow table `write_table` writes (NaN as null)."""
-    arrays = [_arrow_column(n, columns[n]) for n in order]
-    if len({len(a) for a in arrays}) > 1:
-        raise ValueError(f"write_table: columns differ in length: "
-                         f"{ {n: len(a) for n, a in zip(order, arrays, strict=True)} }")
-    return pa.Table.from_arrays(arrays, names=list(order))
-
-
-def write_table(path: PathLike, columns: Mapping[str, Any], order: Sequence[str]) -> None:
-    """Write `columns` in `order` as CSV (UTF-8, header, NaN as an empty cell) or Parquet (NaN as
-    null), chosen by the extension, atomically."""
-    p = os.fspath(path)
-    suffix = _table_suffix(p)
-    missing = [n for n in order if n not in columns]
-    if missing:
-        raise ValueError(f"write_table: no column {missing[0]!r} to write")
-    table = arrow_table(columns, order)
-    with atomic_write(p, "wb") as f:
-        if suffix == ".csv":
-            pacsv.write_csv(table, f, pacsv.WriteOptions(quoting_style="needed"))
-        else:
-            import pyarrow.parquet as pq
-
-            pq.write_table(table, f)
