@@ -16,7 +16,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from rhythmjax.model.candidates import strongest
-from rhythmjax.model.rhythm import MAX_MISSING_FRACTION, classify_window_jit
+from rhythmjax.model.rhythm import (
+    MAX_MISSING_FRACTION,
+    classify_window_candidates_jit,
+    classify_window_jit,
+)
 from rhythmjax.model.status import TrackState, Verdict
 
 
@@ -42,8 +46,13 @@ def judge(cfg, obj, k: int, candidates: bool = True) -> tuple[dict, int, list[di
     if candidates and obj.candidate_rows is not None:
         for c in range(len(obj.candidate_rows[k])):
             sigs.append(np.asarray([cr[c] for cr in obj.candidate_rows[k:k + n]], np.float64))
-    outs = [_outcome(classify_window_jit(cfg, jnp.asarray(s, jnp.float32), tt, xy,
-                                         jnp.asarray(True), obs)) for s in sigs]
+    if len(sigs) == 1:
+        outs = [_outcome(classify_window_jit(cfg, jnp.asarray(sigs[0], jnp.float32), tt, xy,
+                                             jnp.asarray(True), obs))]
+    else:  # as match_window: every candidate in one call
+        every = _outcome(classify_window_candidates_jit(
+            cfg, jnp.asarray(np.stack(sigs), jnp.float32), tt, xy, jnp.asarray(True), obs))
+        outs = [{f: v[c] for f, v in every.items()} for c in range(len(sigs))]
     merged, best = strongest([{f: v[None] for f, v in r.items()} for r in outs])
     return {f: np.asarray(merged[f][0]) for f in FIELDS}, int(best[0]), outs
 

@@ -235,6 +235,26 @@ def classify_window(
 classify_window_jit = eqx.filter_jit(classify_window)
 
 
+def classify_window_candidates(
+    cfg: Config,
+    intensities: Float[Array, "c n"],
+    t: Float[Array, " n"],
+    xy: Float[Array, "n 2"],
+    usable: Bool[Array, ""],
+    observed: Float[Array, "n 2"] | None = None,
+) -> RhythmResult:
+    """`classify_window` on each of C signals of one window (candidate windows B,
+    `model.candidates`: the same times, ground track and foot points, so the speed of (12) is
+    computed once), every field with a leading axis of C. One call instead of C: the online
+    trackers' per-call cost (dispatch, the Config's flattening) is most of a window's."""
+    speed = window_speed(cfg, t, xy, observed)
+    return jax.vmap(lambda x: classify_window(cfg, x, t, xy, usable, observed, speed))(
+        intensities)
+
+
+classify_window_candidates_jit = eqx.filter_jit(classify_window_candidates)
+
+
 def window_times(dt: Float[Array, " n"]) -> Float[Array, " n"]:
     """Times (s) of a window's samples from its first: 0, dt[1], dt[1] + dt[2], ... (dt[k] the
     step into sample k). Relative to the window, so they keep float32 precision however far

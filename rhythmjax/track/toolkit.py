@@ -30,7 +30,11 @@ from ..model.candidates import strongest
 from ..model.ekf import empty_carry
 from ..model.flat_tree import join, split
 from ..model.params import Config
-from ..model.rhythm import MAX_MISSING_FRACTION, classify_window_jit
+from ..model.rhythm import (
+    MAX_MISSING_FRACTION,
+    classify_window_candidates_jit,
+    classify_window_jit,
+)
 from ..model.status import TrackState, Verdict
 from .rows import Layout, TrackRow
 
@@ -156,8 +160,9 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
     Candidate windows B (`obj.candidate_rows`, not None): the window is judged once on window
     B's I(k) and once on each candidate's (the same times, ground track and foot points), and
     the candidate whose strongest peak is highest decides (`model.candidates.strongest`; window
-    B on ties); the missing-sample rules read window B's I(k) only (a candidate is NaN exactly
-    where it is)."""
+    B on ties), every candidate judged in one call (`rhythm.classify_window_candidates_jit`);
+    the missing-sample rules read window B's I(k) only (a candidate is NaN exactly where it
+    is)."""
     n = cfg.thresholds.n
     rows = obj.rows
     k = obj.win_start
@@ -183,16 +188,17 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
         observed = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE
                                else (math.nan, math.nan) for r in window], np.float64)
         args += (jnp.asarray(observed, jnp.float32),)
-    out = _outcome(classify_window_jit(*args))
     cands = getattr(obj, "candidate_rows", None)
     chosen = None
-    if cands is not None:
-        results = [out]
-        for c in range(1, len(cands[k]) + 1):  # a row's tuple: one I(k) per candidate
-            sig = window_signal(obj, k, k + n, c)
-            res_c = classify_window_jit(cfg, jnp.asarray(sig, jnp.float32), *args[2:])
-            results.append(_outcome(res_c))
-        merged, best = strongest([{f: v[None] for f, v in r.items()} for r in results])
+    if cands is None:
+        out = _outcome(classify_window_jit(*args))
+    else:  # window B, then one I(k) per candidate (a row's tuple), judged in one call
+        sigs = [intensity] + [window_signal(obj, k, k + n, c)
+                              for c in range(1, len(cands[k]) + 1)]
+        every = _outcome(classify_window_candidates_jit(
+            cfg, jnp.asarray(np.stack(sigs), jnp.float32), *args[2:]))
+        merged, best = strongest([{f: v[c][None] for f, v in every.items()}
+                                  for c in range(len(sigs))])
         out = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}
         chosen = int(best[0])
     obj.windows_done += 1
