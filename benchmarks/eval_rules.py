@@ -28,6 +28,9 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - shared_overlap: the tracker's `body.shared_overlap` 0.8 vs 0.5 (the default): two tracks'
   detections are one shared blob (no measurement, no rhythm sample for either) only when they
   overlap by 0.8 of the smaller box (issue 16, why walkers are missed: docs/rules.md).
+- split_shared: the tracker's `body.split_shared` True vs False (the default): a shared blob
+  is split between its sharers, each re-detected in a window as wide as its predicted body box
+  (`track/split.py`; docs/rules.md, why walkers are missed).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each
@@ -98,6 +101,9 @@ RULES = {
                    "none: offsets -0.2, -0.1, +0.1 W set a priori (docs/window_b.md)"),
     "shared_overlap": ("tracker", "body.shared_overlap", 0.8, 0.5, TRACKER_SOURCES,
                        "own training seeds 5555, 6666 (benchmarks/study_missed_walkers.py)"),
+    "split_shared": ("tracker", "body.split_shared", True, False, TRACKER_SOURCES,
+                     "own training seeds 5555, 6666 (split_near_widths 0.3; "
+                     "benchmarks/study_missed_walkers.py)"),
     "count_candidates": ("count", "verdicts.window_candidates", True, False, COUNT_SOURCES,
                          "none: offsets -0.2, -0.1, +0.1 W set a priori (docs/window_b.md)"),
     "reid": ("count", "stitch.reid", True, False, COUNT_SOURCES,
@@ -112,7 +118,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
-              "shared_overlap": ()}
+              "shared_overlap": (), "split_shared": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

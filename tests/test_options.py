@@ -27,6 +27,8 @@ TRACKER_DEFAULTS = [
     ("body_widths", "body.parts_widths", 1.8),
     ("fraction", "body.slice_fraction", 0.1),
     ("shared_overlap", "body.shared_overlap", 0.5),
+    ("(new: issue 16, missed walkers)", "body.split_shared", False),
+    ("(new: issue 16, missed walkers)", "body.split_near_widths", 0.3),
     ("sample_estimate", "body.sample_estimate", False),
     ("high_foot_widths", "body.high_foot_widths", 0.0),
     ("high_foot_frames", "body.high_foot_frames", 3),

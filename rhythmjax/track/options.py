@@ -67,6 +67,16 @@ class BodyOptions:
     # nearest its foot point (in W) when the others' are more than twice as far, else none (they
     # predict); a shared blob's frame gives no rhythm sample (NaN). New objects are not sought
     # inside a tracked object's predicted body box or its detection.
+    split_shared: bool = False  # a shared blob is split between its sharers: each is detected
+    # again in a window as wide as its predicted body box (core_widths W), parts not joined; one
+    # whose re-detection overlaps no other sharer's (shared_overlap) and lies within
+    # split_near_widths W of its predicted foot point takes it as its measurement (and its
+    # rhythm sample); the others as above (track/split.py; docs/rules.md, "Why walkers are
+    # missed"). Off: see docs/rules.md for the figures ON against OFF
+    split_near_widths: float = 0.3  # ... the re-detected foot point's distance to the
+    # predicted one, at most, in W; chosen on own training seeds 5555 and 6666 only (0.15-0.5
+    # tried, benchmarks/study_missed_walkers.py): 0.3 gains the most walkers (+3, +1) and no
+    # non-walker there
     sample_estimate: bool = False  # window B at the measured foot point, the paper's (Sec. 4.1);
     # True: at the filtered one (the measured one scatters ~4 px against a window B of W/5 rows).
     # True was chosen on own seeds 779 and 777 (b02e743) and is off by default since issue 16:

@@ -3,7 +3,9 @@
 Per frame (norfair's readable loop, STYLE R11): the motion image of Sec. 2, the previous frame
 first moved onto this one where the camera shook (`vision.stabilise`); for each tracked
 object a detection inside a small window centred on its predicted foot point; connected regions
-elsewhere start new objects (DETECT). Then ONE jitted call advances every object slot with the
+elsewhere start new objects (DETECT); two objects' overlapping detections are one shared
+blob, measured by neither unless one is clearly nearest (or, with `body.split_shared`, each
+re-detects its own part, split.py). Then ONE jitted call advances every object slot with the
 core's EKF step (`ekf_fused.step`: `ekf.step` entry by entry) and the paper's gates (10) and
 (11) (`gates.PaperGates`; `slot_step.advance_slots`), so the per-frame cost is arithmetic, not
 tracing. A DETECT becomes OBSERVE when the first measurement lies in the detection range, else
@@ -37,6 +39,7 @@ from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F40
 from .options import TrackerOptions
 from .rows import NAN_VELOCITY, TrackRow, Velocity
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
+from .split import Predicted, split_shared
 from .toolkit import PendingStep, SlotSteps, match_window
 
 
@@ -131,7 +134,7 @@ class OnlineTracker:
                 self.glitch_frames.append(index)
                 glitch = True
         self._flush()  # the previous frame's step ran meanwhile (XLA dispatch is asynchronous)
-        boxes, near, cores, dets = [], [], {}, {}
+        boxes, near, cores, dets, predicted = [], [], {}, {}, {}
         for s, obj in enumerate(self._slots):
             if obj is None:
                 continue
@@ -154,15 +157,22 @@ class OnlineTracker:
                                           if opt.body.parts_widths > 0 else None)
             if det is not None:
                 dets[s] = det
+                predicted[s] = Predicted(centre, box_h, cores[s], (uv[0], uv[1]), Wp)
         shared = detect.shared_detections(dets, opt.body.shared_overlap)
-        shared -= self._nearest_claims(dets, shared)
+        claims = self._nearest_claims(dets, shared)
+        split = split_shared(M, shared, predicted, overlap=opt.body.shared_overlap,
+                             near_widths=opt.body.split_near_widths,
+                             fraction=opt.body.slice_fraction
+                             ) if shared and opt.body.split_shared else {}
+        shared -= claims | split.keys()
         held = set()  # slots whose object was seen, its foot point unusable: no time-out
         for s, det in dets.items():
-            if s not in shared and self._foot_too_high(s, det):
+            own = split.get(s, det)  # a sharer split off measures its own re-detection
+            if s not in shared and self._foot_too_high(s, own):
                 held.add(s)
             elif s not in shared:
-                z[s], width[s] = (det.u, det.v), det.width
-                self._slots[s].top = det.top
+                z[s], width[s] = (own.u, own.v), own.width
+                self._slots[s].top = own.top
             boxes.append(det.box)
         outside = 0 if glitch else detect.motion_outside(M, boxes, opt.new.outside_margin_px)
         if not glitch and outside >= opt.new.min_area:
