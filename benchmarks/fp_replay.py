@@ -32,9 +32,23 @@ def _outcome(res) -> dict:
     return {k: np.asarray(getattr(res, k)) for k in FIELDS}
 
 
-def judge(cfg, obj, k: int, candidates: bool = True) -> tuple[dict, int, list[dict]]:
+def filled(x: np.ndarray) -> np.ndarray:
+    """x with its NaN entries linearly interpolated as `rhythm.fill_gaps` does (ends held at
+    the nearest known value); x itself when none is known."""
+    known = np.isfinite(x)
+    if known.all() or not known.any():
+        return x
+    i = np.arange(len(x))
+    return np.where(known, x, np.interp(i, i[known], x[known]))
+
+
+def judge(cfg, obj, k: int, candidates: bool = True,
+          fill: bool = False) -> tuple[dict, int, list[dict]]:
     """The rhythm window of rows k..k+N-1 as `match_window` judges it: (merged outcome, the
-    deciding candidate, every candidate's outcome)."""
+    deciding candidate, every candidate's outcome). fill: every signal's missing samples are
+    interpolated here (`filled`, the same values `rhythm.fill_gaps` gives the spectrum), so
+    the classifier's own missing-fraction test (`MAX_MISSING_FRACTION`) passes: the window is
+    judged as it would be with a larger fraction allowed."""
     n = cfg.thresholds.n
     w = obj.rows[k:k + n]
     t = np.asarray([r.t for r in w], np.float64)
@@ -46,6 +60,8 @@ def judge(cfg, obj, k: int, candidates: bool = True) -> tuple[dict, int, list[di
     if candidates and obj.candidate_rows is not None:
         for c in range(len(obj.candidate_rows[k])):
             sigs.append(np.asarray([cr[c] for cr in obj.candidate_rows[k:k + n]], np.float64))
+    if fill:
+        sigs = [filled(x) for x in sigs]
     if len(sigs) == 1:
         outs = [_outcome(classify_window_jit(cfg, jnp.asarray(sigs[0], jnp.float32), tt, xy,
                                              jnp.asarray(True), obs))]
@@ -57,19 +73,25 @@ def judge(cfg, obj, k: int, candidates: bool = True) -> tuple[dict, int, list[di
     return {f: np.asarray(merged[f][0]) for f in FIELDS}, int(best[0]), outs
 
 
-def replay(cfg, obj, *, candidates: bool = True, rule=None, stop: bool = True) -> list[dict]:
+def replay(cfg, obj, *, candidates: bool = True, rule=None, stop: bool = True,
+           max_missing: float = MAX_MISSING_FRACTION) -> list[dict]:
     """Every rhythm window `match_window` judges on the stored rows (with `stop`, up to the
     first Pedestrian one), each {k, out, cand, outs, ped}; `rule(window, obj, k)` (True: keep a
-    Pedestrian verdict) applies a post-hoc rule to each Pedestrian window."""
+    Pedestrian verdict) applies a post-hoc rule to each Pedestrian window. max_missing: the
+    largest fraction of a window's N samples that may be missing (NaN) for it to be judged
+    (the library's `MAX_MISSING_FRACTION`, 0.25, by default); a window with more than
+    `MAX_MISSING_FRACTION` but at most max_missing missing is judged on its interpolated
+    signals (`judge` with fill)."""
     n, hop, rows = cfg.thresholds.n, cfg.thresholds.hop_samples, obj.rows
     intens = np.asarray([r.intensity for r in rows], np.float64)
     res, k = [], 0
     while k + n <= len(rows):
         missing = np.flatnonzero(~np.isfinite(intens[k:k + n]))
-        if len(missing) > MAX_MISSING_FRACTION * n:
+        if len(missing) > max_missing * n:
             k = k + int(missing[-1]) + 1
             continue
-        out, cand, outs = judge(cfg, obj, k, candidates)
+        fill = len(missing) > MAX_MISSING_FRACTION * n
+        out, cand, outs = judge(cfg, obj, k, candidates, fill)
         ped = int(out["verdict"]) == Verdict.PEDESTRIAN
         w = {"k": k, "out": out, "cand": cand, "outs": outs, "ped": ped}
         if ped and rule is not None:
@@ -81,7 +103,8 @@ def replay(cfg, obj, *, candidates: bool = True, rule=None, stop: bool = True) -
     if not res and len(rows) >= n:  # `final`: the N rows with the fewest missing
         bad = np.concatenate([[0], np.cumsum(~np.isfinite(intens))])
         k = int(np.argmin(bad[n:] - bad[:-n]))
-        out, cand, outs = judge(cfg, obj, k, candidates)
+        few = MAX_MISSING_FRACTION * n < bad[k + n] - bad[k] <= max_missing * n
+        out, cand, outs = judge(cfg, obj, k, candidates, bool(few))
         ped = int(out["verdict"]) == Verdict.PEDESTRIAN
         w = {"k": k, "out": out, "cand": cand, "outs": outs, "ped": ped}
         if ped and rule is not None:
