@@ -8,7 +8,7 @@ and fps (h 4 m, tilt 15 deg, a f = the image width: the grid of starts does the 
 set is fitted (`fit.selfcal.fit_selfcal`, the CLI's function) and compared with the truth.
 
     python benchmarks/eval_selfcal.py [n_scenes=20] [first_seed=0] [--mix] [--sets A+B,C]
-        [--outliers]
+        [--outliers] [--frame-union]
     python benchmarks/eval_selfcal.py --tracks T.parquet [T2.parquet ...] --image-size WxH
         --fps F --truth H_M,TILT_DEG[,AF_PX]
 
@@ -29,7 +29,9 @@ how many fits were flagged ill-determined (the CLI would refuse them), the media
 and how many non-walkers were among them; each fit's line also gives the clearance (px) of the
 used foot points below the fitted horizon (`fit.selfcal_checks`: under 4 px it is refused).
 `--outliers` turns on the foot-point outlier rule (`fit.selfcal_outliers`, off by default) to
-compare. h is not determined by ``speed`` alone (scale-free):
+compare; `--frame-union` the frame-difference correction (`fit.selfcal_union`, off by
+default): the simulator draws no union, so this measures what the correction costs where there
+is nothing to correct. h is not determined by ``speed`` alone (scale-free):
 its h column is left out. The simulator writes no tracker `state` column, so the observed-rows
 rule (`fit.selfcal_rows`, the command's `--observed-only`) has nothing to act on here.
 """
@@ -61,7 +63,8 @@ def start_config(cam: Camera) -> Config:
                                 image_width=cam.image_width, image_height=cam.image_height))
 
 
-def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool = False) -> dict:
+def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool = False,
+        frame_union: bool = False) -> dict:
     rows = {c: [] for c in cue_sets}
     for seed in range(seed0, seed0 + n_scenes):
         rng = np.random.default_rng(seed)
@@ -72,7 +75,7 @@ def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool 
         labels = dict(zip(b.ids, b.labels, strict=True))
         for cues in cue_sets:
             t0 = time.perf_counter()
-            r = fit_selfcal(cfg, b, cues=cues, outliers=outliers)
+            r = fit_selfcal(cfg, b, cues=cues, outliers=outliers, frame_union=frame_union)
             dt = time.perf_counter() - t0
             if r.camera is None:
                 rows[cues].append(None)
@@ -163,5 +166,7 @@ if __name__ == "__main__":
     if sets_arg:
         sets = tuple(tuple(c.split("+")) for c in sets_arg.split(","))
     on = "--outliers" in sys.argv
-    table(run(n, s0, mix, sets, on), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 walkers"
-          + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on else ""))
+    fu = "--frame-union" in sys.argv
+    table(run(n, s0, mix, sets, on, fu), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 walkers"
+          + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on else "")
+          + (", frame union undone" if fu else ""))

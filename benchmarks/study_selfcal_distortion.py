@@ -76,7 +76,7 @@ import rhythmjax.sim.tracks as st
 from fit.selfcal import fit_selfcal
 from fit.selfcal_data import camera_values, scene_batch
 from fit.walking import make_labelled
-from rhythmjax.evaluation.datasets import _pets_from, pets_tsai
+from rhythmjax.evaluation.datasets import pets_camera_from, pets_tsai
 from rhythmjax.io import config_or_bad_input
 from rhythmjax.model.camera_np import project_3d
 from rhythmjax.model.params import Camera
@@ -92,7 +92,7 @@ VARIANTS = ("ideal", "pinhole", "tsai", "undistorted")
 def cameras():
     """(Tsai calibration, CameraFrom of its nearest (3), the ideal (3) camera)."""
     tsai = pets_tsai()
-    cf = _pets_from(None, SCALE)
+    cf = pets_camera_from(None, SCALE)
     pin = cf.camera()
     af = float(pin.a) * float(pin.f)
     ideal = Camera(f=float(pin.f), h=float(pin.h), theta=float(pin.theta), a=af / float(pin.f),

@@ -35,7 +35,9 @@ of the tracker's holds the detection its gates refused); `rhythmjax-fit selfcal 
 keeps only the `observe` rows' foot points, widths and top rows where the tracks give the state
 (`fit.selfcal_rows`, off by default), the rhythm signal on every row. A hinge keeps every used
 foot point below the horizon; foot points far from their track's image path can be left out
-first (`fit.selfcal_outliers`, off by default). The fit is
+first (`fit.selfcal_outliers`, off by default), and before that the frame-difference detector's
+union of two frames can be undone in the foot points, widths and top rows (`fit.selfcal_union`,
+off by default). The fit is
 Levenberg-Marquardt (optimistix) over log a f, log h and the tilt (and the roll, the principal
 point when asked), in float64, from the best points of a grid over tilt and a f with h set by
 the median stride. ``speed`` alone leaves h free; ``gait`` or ``width`` fix it. Standard errors
@@ -69,6 +71,7 @@ from fit.selfcal_data import (
 from fit.selfcal_height import HEIGHT_STD_M, MIN_TOP_ROWS, height_cues, top_walkers
 from fit.selfcal_outliers import without_outliers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
+from fit.selfcal_union import undo_union
 from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
 from rhythmjax.model.params import Camera, Config
 from rhythmjax.model.rhythm import ground_speed
@@ -264,7 +267,8 @@ def _refused(cam0, cues, fitted, n_tracks, n_used, ids, reason) -> SelfcalFit:
 
 def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                 fit=("af", "h", "theta"), max_steps: int = 200, n_starts: int = 3,
-                width_scale: bool | None = None, outliers: bool = False) -> SelfcalFit:
+                width_scale: bool | None = None, outliers: bool = False,
+                frame_union: bool = False) -> SelfcalFit:
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
     track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
@@ -273,7 +277,9 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     fit ill-determined when a fitted parameter is not determined (module doc). The height cue
     needs top rows (`batch.v_top`) on `MIN_TOP_ROWS` rows of `MIN_WALKERS` walkers: alone it is
     refused without them, with other cues it is dropped (a note says so). With `outliers` the
-    foot points of `fit.selfcal_outliers`' rule are left out first (a note gives how many)."""
+    foot points of `fit.selfcal_outliers`' rule are left out first (a note gives how many);
+    with `frame_union`, before that, the frame-difference union is undone in the foot points,
+    widths and top rows (`fit.selfcal_union`, at the config's fps)."""
     bad = [c for c in cues if c not in CUES]
     cues = tuple(c for c in CUES if c in cues)
     if bad or not cues:
@@ -282,6 +288,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     if not {"af", "h", "theta"} <= set(fitted) or set(fit) - set(FITTABLE):
         raise ValueError(f"fit {fit}: af, h and theta, optionally roll, uc, vc")
     cam0 = cfg.camera
+    if frame_union:
+        batch = undo_union(batch, float(cam0.fps))[0]
     batch, dropped = without_outliers(batch) if outliers else (batch, None)
     used, pace = select(cfg, batch)
     ids = [i for i, u in zip(batch.ids, used, strict=True) if u]

@@ -51,6 +51,10 @@ def add_parser(sub, size_type, at_least) -> None:
                    "and top rows of the rows whose state (the tracks' state column) is observe "
                    "only, leaving out the detections the tracker's gates refused "
                    "(fit.selfcal_rows); off by default (docs/selfcal.md)")
+    s.add_argument("--frame-union", action="store_true", help="undo the frame-difference "
+                   "detector's union of two frames in the foot points, widths and top rows "
+                   "(fit.selfcal_union: from each track's image velocity); off by default "
+                   "(docs/selfcal.md)")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
@@ -139,7 +143,7 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
     fit = ("af", "h", "theta") + (("roll",) if args.fit_roll else ()) + (
         ("uc", "vc") if args.fit_center else ())
     r = fit_selfcal(cfg, batch, cues=cues, fit=fit, max_steps=args.max_steps,
-                    outliers=args.outliers)
+                    outliers=args.outliers, frame_union=getattr(args, "frame_union", False))
     r.notes = more + r.notes
     if notes is not None:
         notes += more

@@ -158,10 +158,13 @@ def pets_camera(root=None, *, scale: float = PETS_SCALE) -> Camera:
     `rhythmjax camera --tsai` writes) for the 480x360 video at 7 fps: exact but for the lens
     distortion (2-3 % at the corners) and a f != b f with roll; its ground frame is the
     camera's (y along the optical axis), so map world points with `pets_ground`."""
-    return _pets_from(root, scale).camera()
+    return pets_camera_from(root, scale).camera()
 
 
-def _pets_from(root, scale: float):
+def pets_camera_from(root=None, scale: float = PETS_SCALE):
+    """`model.camera_from.camera_from_tsai` of the Tsai calibration for the video scaled by
+    `scale` (7 fps): the camera of (3) and the world -> ground transform (`pets_camera`,
+    `pets_ground`)."""
     t = pets_tsai(root)
     size = PETS_SIZE if scale == PETS_SCALE else (round(t.width * scale), round(t.height * scale))
     return camera_from_tsai(t, image_size=size, fps=PETS_FPS)
@@ -169,7 +172,7 @@ def _pets_from(root, scale: float):
 
 def pets_ground(x, y, root=None) -> tuple[np.ndarray, np.ndarray]:
     """World (TrajNet/Tsai, m) -> the ground frame of `pets_camera` (m): x right, y ahead."""
-    return _pets_from(root, PETS_SCALE).transform.apply(x, y)
+    return pets_camera_from(root, PETS_SCALE).transform.apply(x, y)
 
 
 # ----------------------------------------------------------------------------------------------
