@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import logging
 import os
 import socket
 import sys
@@ -52,6 +51,7 @@ from ..model.batch import VERDICT_COLUMNS, summarise
 from ..model.long_tracks import SEGMENT_ROWS
 from ..model.params import Config, config_from_dict, config_to_dict
 from .classify import classify_partition, classify_source, run_key
+from .cluster import local_cluster
 
 
 ROWS_PER_PARTITION = 1 << 18  # rows per task: ~2 900 tracks of 90 rows
@@ -141,10 +141,11 @@ def print_stderr(msg: str) -> None:
 @contextlib.contextmanager
 def connect(scheduler=None, n_workers: int = 2) -> Iterator:
     """A `dask.distributed.Client`: a LocalCluster of `n_workers` processes with one thread each
-    for None or "local", the scheduler at an address ("tcp://host:8786"), or a Client given (used
-    as it is, not closed). An unreachable address, or Dask not installed, is a `BadInput`."""
+    for None or "local" (`cluster.local_cluster`), the scheduler at an address
+    ("tcp://host:8786"), or a Client given (used as it is, not closed). An unreachable address,
+    or Dask not installed, is a `BadInput`."""
     try:
-        from dask.distributed import Client, LocalCluster
+        from dask.distributed import Client
     except ImportError:
         raise BadInput("--dask", "needs dask.distributed, which is not installed: pip install "
                                  "'rhythmjax[dask]'") from None
@@ -153,9 +154,7 @@ def connect(scheduler=None, n_workers: int = 2) -> Iterator:
         yield scheduler
         return
     if scheduler is None or scheduler == "local":
-        with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                          dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
-                Client(cluster) as client:
+        with local_cluster(n_workers) as cluster, Client(cluster) as client:
             yield client
         return
     try:
