@@ -111,6 +111,7 @@ def test_local_cluster_workers_keep_glibc_default_malloc(client):
     assert len(got) == 2
     for settings in got.values():
         assert "MALLOC_TRIM_THRESHOLD_" not in settings["environ"]
+        assert settings["environ"].get("MALLOC_ARENA_MAX") == "1"
         assert settings["profile"] is False
     # the Dask config is set only while the cluster starts, not left in the client process
     for key, value in LOCAL_WORKER_CONFIG.items():

@@ -54,7 +54,7 @@ from .classify import classify_partition, classify_source, run_key
 from .cluster import local_cluster
 
 
-ROWS_PER_PARTITION = 1 << 18  # rows per task: ~2 900 tracks of 90 rows
+ROWS_PER_PARTITION = 1 << 20  # rows per task: ~11 600 tracks of 90 rows (docs/distributed.md)
 CONNECT_TIMEOUT_S = 30  # seconds to reach a scheduler given by address
 _BAD_INPUT_FIELDS = ("path", "message", "line", "row", "column", "track_id", "key")
 
