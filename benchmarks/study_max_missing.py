@@ -74,15 +74,16 @@ def replayed_verdicts(cfg, objs, max_missing: float) -> tuple[dict, int]:
 def rules_main(value: float, argv: list[str]) -> int:
     """eval_rules.py's main with the rule `max_missing` (module doc)."""
     import eval_rules as er
+    import eval_rules_table as ert
 
     import rhythmjax.model.fast_window as fw
     import rhythmjax.model.rhythm as rh
     import rhythmjax.track.toolkit as tk
 
-    er.RULES["max_missing"] = (
-        "constant", "MAX_MISSING_FRACTION", value, 0.25, er.TRACKER_SOURCES,
+    ert.RULES["max_missing"] = (
+        "constant", "MAX_MISSING_FRACTION", value, 0.25, ert.TRACKER_SOURCES,
         "own training seeds 5555, 6666 (replay, benchmarks/study_max_missing.py)")
-    er.DEFAULT_ON["max_missing"] = ()
+    ert.DEFAULT_ON["max_missing"] = ()
     if argv[:3] == ["run", "max_missing", "on"]:
         for m in (rh, fw, tk):
             m.MAX_MISSING_FRACTION = value

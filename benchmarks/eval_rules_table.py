@@ -1,0 +1,227 @@
+"""The rules `eval_rules.py` measures (`RULES`: kind, key, ON and OFF values, the sources each
+can change, what it was chosen on; `DEFAULT_ON`: where ON is a source's default) and its
+`table` of saved runs: per rule and source, the change ON - OFF (module doc of eval_rules.py)."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from eval_rules_fit import TRAIN_SEEDS, ba_cells  # noqa: E402
+
+
+TRACKER_SOURCES = ("synthetic", "dev", "pets", "ucsd", "casia")
+COUNT_SOURCES = ("count", "dev_count", "pets_count")
+
+# rule -> (kind, key, ON value, OFF value, sources it can change, chosen on)
+RULES = {
+    "half_pace": ("config", ("thresholds", "harmonic_max_ratio"), 0.25, 0.0,
+                  TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",),
+                  "own training seeds 5555, 6666 (validation.md sources table)"),
+    "high_foot": ("tracker", "body.high_foot_widths", 0.25, 0.0, TRACKER_SOURCES,
+                  "own training seeds 5555, 6666; left off by default because of PETS09"),
+    "hop": ("hop", None, "N/2", "N", TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",),
+            "own training seeds 5555, 6666"),
+    "relink": ("tracker", "relink.within_s", 3.0, 0.0, TRACKER_SOURCES,
+               "own training seeds 5555, 6666"),
+    "stitch": ("count", "stitch.enabled", True, False, COUNT_SOURCES,
+               "own counting seeds 42024, 7, 44024 (gap, velocity-jump end)"),
+    "parts": ("tracker", "body.parts_widths", 1.8, 0.0, TRACKER_SOURCES,
+              "own synthetic seeds (b02e743: 20240603, 779, 777)"),
+    "sample_estimate": ("tracker", "body.sample_estimate", True, False, TRACKER_SOURCES,
+                        "own synthetic seeds (b02e743: 20240603, 779, 777)"),
+    "velocity_jump": ("count", "life.max_dv_mps", 1.5, 1e9, COUNT_SOURCES,
+                      "own counting seeds 42024, 7, 44024; checked on PETS (746aacb)"),
+    "still": ("count", "life.still_s", 5.0, 0.0, COUNT_SOURCES,
+              "none: set from geometry (1ad0850, issue 16 item 4)"),
+    "stabilise": ("tracker", "motion.stabilise", True, False, TRACKER_SOURCES,
+                  "own scenes, seeds 4100-7100 with 1 px shake (docs/window_b.md; 95875e0)"),
+    "candidates": ("tracker", "body.window_candidates", True, False,
+                   TRACKER_SOURCES + ("pets_boxes",),
+                   "none: offsets -0.2, -0.1, +0.1 W set a priori (docs/window_b.md)"),
+    "shared_overlap": ("tracker", "body.shared_overlap", 0.8, 0.5, TRACKER_SOURCES,
+                       "own training seeds 5555, 6666 (benchmarks/study_missed_walkers.py)"),
+    "split_shared": ("tracker", "body.split_shared", True, False, TRACKER_SOURCES,
+                     "own training seeds 5555, 6666 (split_near_widths 0.3; "
+                     "benchmarks/study_missed_walkers.py)"),
+    "count_candidates": ("count", "verdicts.window_candidates", True, False, COUNT_SOURCES,
+                         "none: offsets -0.2, -0.1, +0.1 W set a priori (docs/window_b.md)"),
+    "reid": ("count", "stitch.reid", True, False, COUNT_SOURCES,
+             "own counting seeds (left off: neutral there; 95875e0)"),
+    "still_end": ("patch", "PedestrianLevel._still", "on", "off (ghost drop kept)",
+                  COUNT_SOURCES, "none: set from geometry (1ad0850, issue 16 item 4)"),
+}
+# the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
+# sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
+ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
+DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), "hop": ALL,
+              "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
+              "velocity_jump": ALL, "still": ALL, "still_end": ALL,
+              "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
+              "shared_overlap": (), "split_shared": ()}
+COUNT_VARIANTS = {
+    "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
+    "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",
+    "judged_only": "judged Pedestrian only (walkers_low)",
+    "every_track": "every track (the counting paper, no classifier)",
+}
+
+
+
+
+def rows_of(out: dict) -> dict[str, dict]:
+    """source row name -> {"v": verdict columns, "c": count clips} of a saved run."""
+    import eval_all as ea
+
+    out = ea.rescore(out)
+    rows = {}
+    for name, r in out["sources"].items():
+        if "skipped" in r:
+            continue
+        if name in ("synthetic", "count"):
+            for seed, s in r.items():
+                rows[f"{name} {seed}"] = {"v": s.get("verdicts"), "c": s.get("clips")
+                                          if name == "count" else None}
+        elif name == "pets_count":
+            rows[name] = {"v": None, "c": [r["clip"]]}
+        else:
+            rows[name] = {"v": r.get("verdicts"), "c": r.get("clips") if name == "dev_count"
+                          else None}
+    return rows
+
+
+def _frac(a, b):
+    return "-" if not b else f"{a}/{b}"
+
+
+def verdict_cells(v, extra=False):
+    if not v:
+        return ["-"] * (4 if extra else 3)
+    f = lambda x, fmt: "-" if x is None or not math.isfinite(x) else format(x, fmt)  # noqa: E731
+    more = [f"{f(v.get('pace_mae_hz'), '.3f')} Hz, {f(v.get('step_median_err_cm'), '.1f')} cm"
+            ] if extra else []
+    return more + [_frac(v.get("walkers_pedestrian", 0), v.get("walkers_judged", 0)),
+            _frac(v.get("classifiable_pedestrian", 0), v.get("walkers_classifiable", 0))
+            if "walkers_classifiable" in v else "-",
+            _frac(v.get("others_pedestrian", 0), v.get("others", 0))]
+
+
+def count_cell(clips, variant="default"):
+    if not clips:
+        return "-"
+    got = [c.get("variants", {}).get(variant, {"counted": c["counted"],
+                                               "others_counted": c.get("others_counted", 0)})
+           for c in clips]
+    true = sum(c["true"] for c in clips)
+    unowned = "?"
+    if all("owner_kind" in c for c in clips):  # counted tracks that follow no truth object
+        unowned = sum(sum(1 for m, o in zip(variant_mask(c["verdicts"], c["too_fast"], variant),
+                                             c["owner_kind"]) if m and o is None)
+                      for c in clips)
+    err = sum(abs(g["counted"] - c["true"]) for g, c in zip(got, clips)) / true if true else \
+        math.nan
+    mota = [c["mota"] for c in clips if math.isfinite(c.get("mota", math.nan))]
+    mota = f", MOTA {sum(mota) / len(mota):.3f}" if mota and variant == "default" else ""
+    return f"{sum(g['counted'] for g in got)}/{true} ({100 * err:.1f} %{mota}, " \
+           f"{sum(g['others_counted'] for g in got)} non-walkers, {unowned} on no object)"
+
+
+def rule_table(rule: str, on: dict, off: dict) -> str:
+    a, b = rows_of(on), rows_of(off)
+    lines = [f"### {rule}: ON {RULES[rule][2]!r} vs OFF (paper) {RULES[rule][3]!r}; chosen on: "
+             f"{RULES[rule][5]}", "",
+             "| source | walkers Ped./judged ON / OFF | walkers Ped./all classifiable ON / OFF | "
+             "non-walkers Ped./all ON / OFF | pace MAE, step err. median ON / OFF | walkers "
+             "counted/true (err., non-walkers counted) ON / OFF | quick |",
+             "|---|---|---|---|---|---|---|"]
+    for name in a:
+        if name not in b:
+            continue
+        va, vb = verdict_cells(a[name]["v"], True), verdict_cells(b[name]["v"], True)
+        va, vb = va[1:] + va[:1], vb[1:] + vb[:1]
+        cells = [f"{x} / {y}" + (" **changed**" if x != y else "") for x, y in zip(va, vb)]
+        ca, cb = count_cell(a[name]["c"]), count_cell(b[name]["c"])
+        cells.append(f"{ca} / {cb}" + (" **changed**" if ca != cb else ""))
+        lines.append(f"| {name} | " + " | ".join(cells) + f" | {on.get('quick')} |")
+    return "\n".join(lines)
+
+
+def count_rule_table(out: dict) -> str:
+    rows = rows_of(out)
+    lines = ["### counting of unjudged tracks and the speed cut (one run, the defaults)", "",
+             "| source | " + " | ".join(COUNT_VARIANTS) + " |", "|---|" + "---|" * len(
+                 COUNT_VARIANTS)]
+    for name, r in rows.items():
+        if r["c"]:
+            lines.append(f"| {name} | " + " | ".join(count_cell(r["c"], k)
+                                                    for k in COUNT_VARIANTS) + " |")
+    return "\n".join(lines) + "\n\n" + "\n".join(f"- {k}: {d}" for k, d in COUNT_VARIANTS.items())
+
+
+def seeds_tables(outdir: Path) -> None:
+    """Rules run on other own-scene seeds (`--seeds`): ON and OFF files side by side."""
+    for rule in RULES:
+        for on in sorted(outdir.glob(f"{rule}-on-seeds-*.json")):
+            off = outdir / on.name.replace("-on-", "-off-")
+            if off.is_file():
+                print(rule_table(rule, json.loads(on.read_text()), json.loads(off.read_text()))
+                      .replace("### ", f"### (seeds {on.stem.split('-seeds-')[1]}) ", 1))
+                print()
+    for d in sorted(outdir.glob("still-on-seeds-*.json")):  # the defaults' counting run
+        print(count_rule_table(json.loads(d.read_text())).replace(
+            "### ", f"### (seeds {d.stem.split('-seeds-')[1]}) ", 1).split("\n\n- ")[0])
+        print()
+
+
+def table(outdir: Path) -> None:
+    seeds_tables(outdir)
+    for rule in RULES:
+        on, off = outdir / f"{rule}-on.json", outdir / f"{rule}-off.json"
+        d = outdir / "default-on.json"
+        base = json.loads(d.read_text()) if d.is_file() else {"sources": {}}
+        sides = {}
+        for state, path in (("on", on), ("off", off)):
+            got = json.loads(path.read_text()) if path.is_file() else {"sources": {}}
+            # a source the rule's side was not run on: the defaults' run, where the default
+            # is that side
+            for n, r in base["sources"].items():
+                if n not in got["sources"] and n in RULES[rule][4] and \
+                        (n in DEFAULT_ON[rule]) == (state == "on"):
+                    got["sources"][n] = r
+                    got.setdefault("quick", base.get("quick"))
+            sides[state] = got
+        if sides["on"]["sources"] and sides["off"]["sources"]:
+            print(rule_table(rule, sides["on"], sides["off"]))
+            print()
+    d = outdir / "default-on.json"
+    if d.is_file():
+        print(count_rule_table(json.loads(d.read_text())))
+    f = outdir / "fitted-on.json"
+    if f.is_file() and d.is_file():
+        fit = json.loads((outdir / "fitted_sets.json").read_text())
+        print("\n### walking model and P_thr, R_thr, k_sigma3 fitted on own training seeds "
+              f"{TRAIN_SEEDS}: " + ", ".join(f"{a}.{b}={c:.4g}" for a, b, c in fit["sets"]))
+        b = fit["fit"]["balanced_accuracy"]
+        print(f"\nfitting layer's own split (training seeds' tracks, 30 % held out): train "
+              f"{b['train']:.3f}, held-out {b['test']:.3f}, held-out with the start config "
+              f"{b['test_start']:.3f}\n")
+        print("| held-out own seed (labelled tracks, batch classifier) | start config | fitted "
+              "| fitted walking and thresholds, start width model |\n|---|---|---|---|")
+        for seed, r in fit["held_out_seeds"].items():
+            print(f"| {seed} | " + " | ".join(
+                f"BA {r[k]['ba']:.3f} (TPR {r[k]['tpr']:.3f}, TNR {r[k]['tnr']:.3f}; "
+                f"{r[k]['judged']}/{r[k]['labelled']} judged)" for k in
+                ("start", "fitted", "fitted_no_width")) + " |")
+        a, c = rows_of(json.loads(d.read_text())), rows_of(json.loads(f.read_text()))
+        print("\n| source (eval_all, by object) | defaults | fitted walking + thresholds |"
+              "\n|---|---|---|")
+        for name in c:
+            if name in a and c[name]["v"]:
+                print(f"| {name} | {ba_cells(a[name]['v'])}; "
+                      f"{' / '.join(verdict_cells(a[name]['v']))} | {ba_cells(c[name]['v'])}; "
+                      f"{' / '.join(verdict_cells(c[name]['v']))} |")
