@@ -74,6 +74,7 @@ from eval_rules_table import (  # noqa: E402
     COUNT_VARIANTS,
     RULES,
     table,
+    variant_mask,
 )
 
 
@@ -114,18 +115,6 @@ def _patch_hop_n() -> None:
     from rhythmjax.model.params import Thresholds
 
     Thresholds.hop_samples = property(lambda self: self.n)
-
-
-def variant_mask(verdict, fast, name) -> list[bool]:
-    """Per track, whether count variant `name` counts it."""
-    if name == "default":
-        return [w != "non-pedestrian" and not (w == "unclassified" and f)
-                for w, f in zip(verdict, fast)]
-    if name == "no_speed_cut":
-        return [w != "non-pedestrian" for w in verdict]
-    if name == "judged_only":
-        return [w == "pedestrian" for w in verdict]
-    return [True] * len(verdict)
 
 
 def count_clip(cfg, frames, truth, kinds, offset) -> dict:

@@ -74,6 +74,18 @@ COUNT_VARIANTS = {
 
 
 
+def variant_mask(verdict, fast, name) -> list[bool]:
+    """Per track, whether count variant `name` counts it."""
+    if name == "default":
+        return [w != "non-pedestrian" and not (w == "unclassified" and f)
+                for w, f in zip(verdict, fast)]
+    if name == "no_speed_cut":
+        return [w != "non-pedestrian" for w in verdict]
+    if name == "judged_only":
+        return [w == "pedestrian" for w in verdict]
+    return [True] * len(verdict)
+
+
 def rows_of(out: dict) -> dict[str, dict]:
     """source row name -> {"v": verdict columns, "c": count clips} of a saved run."""
     import eval_all as ea
