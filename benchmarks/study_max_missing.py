@@ -42,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from eval_synthetic import RECOMMENDED  # noqa: E402
 from fp_replay import deciding, replay  # noqa: E402
-from study_false_positives import dev_scenes, own_scenes  # noqa: E402
+from study_tracks import dev_scenes, own_scenes  # noqa: E402
 
 from rhythmjax.model.params import config_from_dict  # noqa: E402
 from rhythmjax.model.status import Verdict  # noqa: E402

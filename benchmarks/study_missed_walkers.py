@@ -59,7 +59,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import eval_window_b as ew  # noqa: E402
 from eval_synthetic import RECOMMENDED, scene_specs  # noqa: E402
 from fp_replay import replay  # noqa: E402
-from study_false_positives import dev_scenes, nearest_per_row, track_scene  # noqa: E402
+from study_tracks import dev_scenes, nearest_per_row, track_scene  # noqa: E402
 from study_window_offsets import judge_window  # noqa: E402
 
 from rhythmjax.model.camera_np import ground_of_pixels, image_width_of  # noqa: E402
