@@ -73,6 +73,7 @@ from eval_rules_fit import fit_rules  # noqa: E402
 from eval_rules_table import (  # noqa: E402
     COUNT_VARIANTS,
     RULES,
+    TRACKER_WITH,
     table,
     variant_mask,
 )
@@ -170,7 +171,7 @@ def run(rule: str, state: str, only, quick: bool, outdir: Path, seeds=None) -> P
         if kind == "config":
             sets = [(key[0], key[1], val)]
         elif kind == "tracker":
-            _patch_tracker({key: val})
+            _patch_tracker({key: val, **(TRACKER_WITH.get(rule, {}) if state == "on" else {})})
             if key == "body.window_candidates":  # `rhythm --boxes` runs in a subprocess
                 ea.RHYTHM_FLAGS.append(f"--{'' if val else 'no-'}window-candidates")
         elif kind == "count":

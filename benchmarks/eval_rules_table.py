@@ -49,6 +49,9 @@ RULES = {
     "split_shared": ("tracker", "body.split_shared", True, False, TRACKER_SOURCES,
                      "own training seeds 5555, 6666 (split_near_widths 0.3; "
                      "benchmarks/study_missed_walkers.py)"),
+    "split_depth": ("tracker", "body.split_depth_widths", 0.5, 0.0, TRACKER_SOURCES,
+                    "own training seeds 5555, 6666 (benchmarks/study_depth_split.py); ON also "
+                    "sets body.split_shared (TRACKER_WITH), OFF is the default"),
     "count_candidates": ("count", "verdicts.window_candidates", True, False, COUNT_SOURCES,
                          "none: offsets -0.2, -0.1, +0.1 W set a priori (docs/window_b.md)"),
     "reid": ("count", "stitch.reid", True, False, COUNT_SOURCES,
@@ -58,12 +61,14 @@ RULES = {
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
+# tracker keys a rule's ON side sets besides its own (its OFF side is the defaults)
+TRACKER_WITH = {"split_depth": {"body.split_shared": True}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
-              "shared_overlap": (), "split_shared": ()}
+              "shared_overlap": (), "split_depth": (), "split_shared": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

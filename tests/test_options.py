@@ -29,6 +29,8 @@ TRACKER_DEFAULTS = [
     ("shared_overlap", "body.shared_overlap", 0.5),
     ("(new: issue 16, missed walkers)", "body.split_shared", False),
     ("(new: issue 16, missed walkers)", "body.split_near_widths", 0.3),
+    ("(new: issue 16, missed walkers)", "body.split_depth_widths", 0.0),
+    ("(new: issue 16, missed walkers)", "body.split_depth_margin_widths", 0.1),
     ("sample_estimate", "body.sample_estimate", False),
     ("high_foot_widths", "body.high_foot_widths", 0.0),
     ("high_foot_frames", "body.high_foot_frames", 3),

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from rhythmjax.track.options import BodyOptions
-from rhythmjax.track.split import Predicted, split_shared
+from rhythmjax.track.split import Predicted, front_split, split_shared
 from rhythmjax.vision.detect import detect_in_window, shared_detections
 
 
@@ -59,3 +59,39 @@ def test_a_re_detection_far_from_its_prediction_is_refused():
     predicted = {0: _predicted(45.0, 80.0), 1: _predicted(57.0, 90.0)}  # 0: feet 9 px lower
     assert set(_split(M, predicted)) == {1}
     assert set(_split(M, predicted, near_widths=1.0)) == {0, 1}
+
+
+def _at(u: float, foot_v: float) -> Predicted:
+    """A window as the tracker places it for a foot point (u, foot_v): 60 px high, its bottom
+    `foot_v` + 6 (centre raised by 24 px), the body box 1.2 W wide and 45 rows high above the
+    foot."""
+    return Predicted(centre=(u, foot_v - 24.0), height=60.0,
+                     core=(int(u - 6), int(foot_v - 44), 12, 45), foot=(u, foot_v), W=W)
+
+
+def test_the_front_sharer_is_measured_below_the_back_ones_feet():
+    """Two walkers 4 px apart across (never split across), the front one's feet 10 px (1 W)
+    lower: front rows 60-99 (feet at row 99), back rows 50-89 (feet at 89)."""
+    M = np.zeros((130, 100), np.uint8)
+    M[50:90, 42:52] = 1  # back object: cols 42-51, feet at row 89
+    M[60:100, 46:56] = 1  # front object: cols 46-55, feet at row 99
+    predicted = {0: _at(47.0, 89.0), 1: _at(51.0, 99.0)}
+    assert _split(M, predicted) == {}  # across: the re-detections overlap
+    out = split_shared(M, set(predicted), predicted, overlap=0.5, near_widths=0.3,
+                       fraction=FRACTION, depth_widths=0.5, margin_widths=0.1)
+    assert set(out) == {1}  # the back sharer gets nothing
+    # the strip: rows 90 (89 + 1 px margin) to 105, cols 45-56: only the front legs, feet at 99
+    assert abs(out[1].u - 51.0) <= 1 and out[1].v == 99
+    # width and top from the whole body box (cols 45-56, rows 55-99): both objects' motion there
+    whole = detect_in_window(M, predicted[1].centre, (12, 60), fraction=FRACTION,
+                             core=predicted[1].core, body_px=None)
+    assert out[1].width == whole.width and out[1].top == whole.top
+    # not in front by more than depth_widths W: nothing
+    assert front_split(M, [1], [0, 1], predicted, depth_widths=1.5, margin_widths=0.1,
+                       near_widths=0.3, fraction=FRACTION) == {}
+    # a foot point farther than near_widths W from the prediction: refused
+    far = {0: predicted[0], 1: _at(51.0, 96.0)}  # predicted 3 px above the measured 99
+    assert front_split(M, [1], [0, 1], far, depth_widths=0.5, margin_widths=0.1,
+                       near_widths=0.2, fraction=FRACTION) == {}
+    assert set(front_split(M, [1], [0, 1], far, depth_widths=0.5, margin_widths=0.1,
+                           near_widths=0.4, fraction=FRACTION)) == {1}

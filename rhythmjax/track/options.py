@@ -77,6 +77,13 @@ class BodyOptions:
     # predicted one, at most, in W; chosen on own training seeds 5555 and 6666 only (0.15-0.5
     # tried, benchmarks/study_missed_walkers.py): 0.3 gains the most walkers (+3, +1) and no
     # non-walker there
+    split_depth_widths: float = 0.0  # with split_shared, a sharer left whose predicted foot row
+    # lies more than this many W below every other sharer over its columns (in front of them)
+    # is re-detected in the rows below their foot rows only (track/split.py `front_split`);
+    # 0: off. 0.5 prototyped on own training seeds 5555 and 6666 (docs/rules.md, "A split by
+    # depth"); not yet measured on the other sources, so off
+    split_depth_margin_widths: float = 0.1  # ... the strip starts this many W below the
+    # lowest of the others' predicted foot rows
     sample_estimate: bool = False  # window B at the measured foot point, the paper's (Sec. 4.1);
     # True: at the filtered one (the measured one scatters ~4 px against a window B of W/5 rows).
     # True was chosen on own seeds 779 and 777 (b02e743) and is off by default since issue 16:

@@ -162,7 +162,9 @@ class OnlineTracker:
         claims = self._nearest_claims(dets, shared)
         split = split_shared(M, shared, predicted, overlap=opt.body.shared_overlap,
                              near_widths=opt.body.split_near_widths,
-                             fraction=opt.body.slice_fraction
+                             fraction=opt.body.slice_fraction,
+                             depth_widths=opt.body.split_depth_widths,
+                             margin_widths=opt.body.split_depth_margin_widths
                              ) if shared and opt.body.split_shared else {}
         shared -= claims | split.keys()
         held = set()  # slots whose object was seen, its foot point unusable: no time-out
