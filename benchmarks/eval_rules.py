@@ -28,9 +28,10 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - shared_overlap: the tracker's `body.shared_overlap` 0.8 vs 0.5 (the default): two tracks'
   detections are one shared blob (no measurement, no rhythm sample for either) only when they
   overlap by 0.8 of the smaller box (issue 16, why walkers are missed: docs/rules.md).
-- split_shared: the tracker's `body.split_shared` True vs False (the default): a shared blob
+- split_shared: the tracker's `body.split_shared` True (the default) vs False: a shared blob
   is split between its sharers, each re-detected in a window as wide as its predicted body box
-  (`track/split.py`; docs/rules.md, why walkers are missed).
+  (`track/split.py`; docs/rules.md, why walkers are missed); split_depth: its depth split,
+  `body.split_depth_widths` 0.5 (the default, with split_shared) vs 0.
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

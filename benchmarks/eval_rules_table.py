@@ -51,7 +51,8 @@ RULES = {
                      "benchmarks/study_missed_walkers.py)"),
     "split_depth": ("tracker", "body.split_depth_widths", 0.5, 0.0, TRACKER_SOURCES,
                     "own training seeds 5555, 6666 (benchmarks/study_depth_split.py); ON also "
-                    "sets body.split_shared (TRACKER_WITH), OFF is the default"),
+                    "sets body.split_shared (TRACKER_WITH); both on by default since the "
+                    "sixth round"),
     "count_candidates": ("count", "verdicts.window_candidates", True, False, COUNT_SOURCES,
                          "none: offsets -0.2, -0.1, +0.1 W set a priori (docs/window_b.md)"),
     "reid": ("count", "stitch.reid", True, False, COUNT_SOURCES,
@@ -68,7 +69,8 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
-              "shared_overlap": (), "split_depth": (), "split_shared": ()}
+              "shared_overlap": (), "split_depth": TRACKER_SOURCES,
+              "split_shared": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -191,7 +191,9 @@ def test_body_parts_measured_together():
     """A walker crossing at 8 m: its motion splits into parts (torso outlines, legs), and with
     the body's parts within parts_widths W joined the measured width is the body's (median ratio
     to the true width ~0.9), not a part's (0.78 with parts_widths=0, which also broke the walker
-    into more tracks). The high-foot drop is off here: it also removes a part's measurement."""
+    into more tracks). The high-foot drop is off here: it also removes a part's measurement;
+    so is the shared-blob split (`body.split_shared`), which measures duplicate tracks on one
+    walker in their own narrower boxes, parts not joined (median ratio 0.82 with it)."""
     from rhythmjax.track.options import BodyOptions, TrackerOptions
 
     scene = _walker_scene(y=8.0)
@@ -199,7 +201,8 @@ def test_body_parts_measured_together():
     ratio, n_tracks = {}, {}
     for bw in (0.0, BodyOptions().parts_widths):
         tr = OnlineTracker(CFG, TrackerOptions(body=BodyOptions(parts_widths=bw,
-                                                                high_foot_widths=0.0)))
+                                                                high_foot_widths=0.0,
+                                                                split_shared=False)))
         for i, f in enumerate(scene.frames):
             tr.update(i, i / 15.0, f)
         tracks, _, _ = tr.finish()

@@ -98,8 +98,8 @@ def front_split(motion: np.ndarray, left: Iterable[int], shared: Iterable[int],
                                                                              predicted[o].core)]
         if not others or any(p.foot[1] - q.foot[1] <= depth_widths * p.W for q in others):
             continue  # not in front of every sharer over its columns
-        top = max(q.foot[1] for q in others) + margin_widths * p.W
-        bottom = p.centre[1] + p.height / 2.0  # the detection window's bottom row
+        top = float(max(q.foot[1] for q in others) + margin_widths * p.W)
+        bottom = float(p.centre[1] + p.height / 2.0)  # the detection window's bottom row
         det = detect_in_rows(motion, p, top, bottom, fraction)
         if det is None or math.hypot(det.u - p.foot[0], det.v - p.foot[1]) > near_widths * p.W:
             continue
