@@ -1,4 +1,4 @@
-"""A depth split of shared blobs (prototype, issue 16; nothing in the library changes).
+"""A depth split of shared blobs (the prototype, issue 16, of `track.split.front_split`).
 
 `body.split_shared` (track/split.py) re-detects each sharer of a shared blob in a window as wide
 as its predicted body box; it cannot separate sharers whose predicted foot points lie less than
