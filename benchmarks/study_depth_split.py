@@ -72,10 +72,11 @@ def _redetect(motion, p, top: float, bottom: float, fraction: float):
 def make_depth_split(dv_widths: float, margin_widths: float, mode: str):
     """split_shared: today's split, then the depth split for the sharers left."""
 
-    def split_depth(motion, shared, predicted, *, overlap, near_widths, fraction):
+    def split_depth(motion, shared, predicted, *, overlap, near_widths, fraction,
+                    depth_widths=0.0, margin_widths=0.1):  # the library's own depth split off
         shared = list(shared)
         out = TODAY(motion, shared, predicted, overlap=overlap, near_widths=near_widths,
-                    fraction=fraction)
+                    fraction=fraction, depth_widths=0.0)
         left = [s for s in shared if s not in out]
         STATS["sharer_frames"] += len(shared)
         STATS["split_today"] += len(out)
@@ -124,8 +125,8 @@ def make_depth_split(dv_widths: float, margin_widths: float, mode: str):
 def parse_variant(v: str):
     """'off' | 'split' | 'depth:DV[:MODE[:MARGIN]]' -> (label, changes, patch or None)."""
     if v == "off":
-        return v, {}, None
-    on = {"body.split_shared": True}
+        return v, {"body.split_shared": False}, None
+    on = {"body.split_shared": True, "body.split_depth_widths": 0.0}  # today's split alone
     if v == "split":
         return v, on, None
     parts = v.split(":")
