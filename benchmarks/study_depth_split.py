@@ -42,6 +42,7 @@ import rhythmjax.track.split as split_mod  # noqa: E402
 import rhythmjax.track.tracker as tracker_mod  # noqa: E402
 from rhythmjax.model.params import config_from_dict  # noqa: E402
 from rhythmjax.track.options import WindowOptions  # noqa: E402
+from rhythmjax.track.split import columns_overlap, detect_in_rows  # noqa: E402
 from rhythmjax.vision.detect import detect_in_window  # noqa: E402
 
 
@@ -50,23 +51,6 @@ STATS = collections.Counter()
 _WIN = WindowOptions()
 # the usual window reaches this many predicted box heights below the foot point
 BELOW = 0.5 - _WIN.raise_heights / _WIN.heights
-
-
-def _cols_overlap(a, b) -> bool:
-    return a[0] < b[0] + b[2] and b[0] < a[0] + a[2]
-
-
-def _redetect(motion, p, top: float, bottom: float, fraction: float):
-    """Re-detect in p's body-box columns between rows top and bottom (px); the body box
-    clipped to those rows keeps the regions that belong to it."""
-    if bottom - top < 4:
-        return None
-    x0, y0, w, h = p.core
-    c0, c1 = max(y0, int(math.floor(top))), min(y0 + h, int(math.ceil(bottom)))
-    if c1 - c0 < 2:
-        return None
-    return detect_in_window(motion, (x0 + w / 2, (top + bottom) / 2), (w, bottom - top),
-                            fraction=fraction, core=(x0, c0, w, c1 - c0), body_px=None)
 
 
 def make_depth_split(dv_widths: float, margin_widths: float, mode: str):
@@ -84,7 +68,7 @@ def make_depth_split(dv_widths: float, margin_widths: float, mode: str):
         for s in left:
             p = predicted[s]
             others = [predicted[o] for o in shared if o != s
-                      and _cols_overlap(p.core, predicted[o].core)]
+                      and columns_overlap(p.core, predicted[o].core)]
             if not others:
                 continue
             W = p.W
@@ -94,7 +78,7 @@ def make_depth_split(dv_widths: float, margin_widths: float, mode: str):
             if len(back) == len(others):  # s is the front sharer
                 STATS["front_cand"] += 1
                 top = max(q.foot[1] for q in back) + margin_widths * W
-                det = _redetect(motion, p, top, fv + BELOW * p.height, fraction)
+                det = detect_in_rows(motion, p, top, fv + BELOW * p.height, fraction)
                 if det is None:
                     continue
                 if math.hypot(det.u - p.foot[0], det.v - fv) > near_widths * W:
@@ -109,7 +93,7 @@ def make_depth_split(dv_widths: float, margin_widths: float, mode: str):
             elif front and mode == "both":  # s is a back sharer
                 STATS["back_cand"] += 1
                 bottom = min(q.foot[1] for q in front) - margin_widths * W
-                det = _redetect(motion, p, bottom - p.height, bottom, fraction)
+                det = detect_in_rows(motion, p, bottom - p.height, bottom, fraction)
                 if det is None:
                     continue
                 if math.hypot(det.u - p.foot[0], det.v - fv) > near_widths * W:
