@@ -8,7 +8,7 @@ and fps (h 4 m, tilt 15 deg, a f = the image width: the grid of starts does the 
 set is fitted (`fit.selfcal.fit_selfcal`, the CLI's function) and compared with the truth.
 
     python benchmarks/eval_selfcal.py [n_scenes=20] [first_seed=0] [--mix] [--sets A+B,C]
-        [--outliers] [--frame-union]
+        [--outliers] [--frame-union] [--stride-model walk-ratio]
     python benchmarks/eval_selfcal.py --tracks T.parquet [T2.parquet ...] --image-size WxH
         --fps F --truth H_M,TILT_DEG[,AF_PX]
 
@@ -31,9 +31,12 @@ used foot points below the fitted horizon (`fit.selfcal_checks`: under 4 px it i
 `--outliers` turns on the foot-point outlier rule (`fit.selfcal_outliers`, off by default) to
 compare; `--frame-union` the frame-difference correction (`fit.selfcal_union`, off by
 default): the simulator draws no union, so this measures what the correction costs where there
-is nothing to correct. h is not determined by ``speed`` alone (scale-free):
-its h column is left out. The simulator writes no tracker `state` column, so the observed-rows
-rule (`fit.selfcal_rows`, the command's `--observed-only`) has nothing to act on here.
+is nothing to correct. `--stride-model walk-ratio` gives the gait cue a stride that follows the
+pace (`fit.selfcal_gait.expected_stride`); the simulator draws pace and stride independently (Table
+1), so this measures what that model costs where it does not hold. h is not determined by
+``speed`` alone (scale-free): its h column is left out. The simulator writes no tracker `state`
+column, so the observed-rows rule (`fit.selfcal_rows`, the command's `--observed-only`) has
+nothing to act on here.
 """
 
 from __future__ import annotations
@@ -64,7 +67,7 @@ def start_config(cam: Camera) -> Config:
 
 
 def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool = False,
-        frame_union: bool = False) -> dict:
+        frame_union: bool = False, stride_model: str = "table1") -> dict:
     rows = {c: [] for c in cue_sets}
     for seed in range(seed0, seed0 + n_scenes):
         rng = np.random.default_rng(seed)
@@ -75,7 +78,8 @@ def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool 
         labels = dict(zip(b.ids, b.labels, strict=True))
         for cues in cue_sets:
             t0 = time.perf_counter()
-            r = fit_selfcal(cfg, b, cues=cues, outliers=outliers, frame_union=frame_union)
+            r = fit_selfcal(cfg, b, cues=cues, outliers=outliers, frame_union=frame_union,
+                            stride_model=stride_model)
             dt = time.perf_counter() - t0
             if r.camera is None:
                 rows[cues].append(None)
@@ -158,7 +162,9 @@ if __name__ == "__main__":
         real(tracks, (w, h), float(opt("--fps")), [float(q) for q in opt("--truth").split(",")])
         sys.exit(0)
     sets_arg = sys.argv[sys.argv.index("--sets") + 1] if "--sets" in sys.argv else None
-    args = [a for a in sys.argv[1:] if not a.startswith("--") and a != sets_arg]
+    model = (sys.argv[sys.argv.index("--stride-model") + 1] if "--stride-model" in sys.argv
+             else "table1")
+    args = [a for a in sys.argv[1:] if not a.startswith("--") and a not in (sets_arg, model)]
     n = int(args[0]) if args else 20
     s0 = int(args[1]) if len(args) > 1 else 0
     mix = "--mix" in sys.argv
@@ -167,6 +173,7 @@ if __name__ == "__main__":
         sets = tuple(tuple(c.split("+")) for c in sets_arg.split(","))
     on = "--outliers" in sys.argv
     fu = "--frame-union" in sys.argv
-    table(run(n, s0, mix, sets, on, fu), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 walkers"
-          + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on else "")
-          + (", frame union undone" if fu else ""))
+    table(run(n, s0, mix, sets, on, fu, model), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 "
+          "walkers" + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on
+                                                                  else "")
+          + (", frame union undone" if fu else "") + f", stride model {model}")

@@ -21,7 +21,7 @@ the classical approach), gait+height and gait+speed+width+height. Rows:
 
     python benchmarks/selfcal_real.py [--data ../shared/data] [--work /tmp/selfcal_real]
         [-o docs/data/selfcal_real.csv] [--only pets,dev,casia] [--outliers] [--observed-only]
-        [--frame-union] [--sets gait+speed+width+height,...]
+        [--frame-union] [--stride-model walk-ratio] [--sets gait+speed+width+height,...]
 
 `--outliers` turns on the fit's foot-point outlier rule (`fit.selfcal_outliers`, off by default)
 to compare; give it its own `--work` for the re-tracked PETS rows (tracked with the fitted camera).
@@ -29,6 +29,8 @@ to compare; give it its own `--work` for the re-tracked PETS rows (tracked with 
 `--observed-only`, off by default: only the rows whose tracker state is observe keep their foot
 point, width and top row). `--frame-union` undoes the frame-difference union in the foot
 points, widths and top rows (`fit.selfcal_union`, the command's `--frame-union`, off by default).
+`--stride-model walk-ratio` gives the gait cue a stride that follows the pace
+(`fit.selfcal_gait.expected_stride`, the command's `--stride-model`).
 
 Tracks are made under `--work` (WORK/SOURCE/CLIP/tracks.parquet) unless already there, so a
 rerun only fits; the videos are read where they lie and nothing of them is copied into the
@@ -63,6 +65,7 @@ OUTLIERS = [False]  # the outlier rule of the fits (`--outliers` sets it on)
 OBSERVED = [False]  # the observed-rows rule of the fits (`--observed-only` sets it on)
 SETS = [CUE_SETS]  # the cue sets fitted (`--sets A+B,C` chooses)
 UNION = [False]  # the frame-union correction of the fits (`--frame-union` sets it on)
+STRIDE = ["table1"]  # the gait cue's stride model (`--stride-model`)
 
 
 def say(msg: str) -> None:
@@ -143,7 +146,8 @@ def fit_rows(source: str, how: str, paths: list[Path], size, fps, truth,
         return [{"source": source, "tracking camera": how, "refused": "no tracks"}], {}
     cfg, batch = pooled_batch(paths, size, fps, window_s)
     for cues in SETS[0]:
-        r = fit_selfcal(cfg, batch, cues=cues, outliers=OUTLIERS[0], frame_union=UNION[0])
+        r = fit_selfcal(cfg, batch, cues=cues, outliers=OUTLIERS[0], frame_union=UNION[0],
+                        stride_model=STRIDE[0])
         fits[cues] = r
         v, se = (r.values, r.se) if r.camera is not None else ({}, {})
         get = lambda d, k: f"{d[k]:.5g}" if k in d and math.isfinite(d[k]) else ""
@@ -236,11 +240,13 @@ def main(argv=None) -> int:
     a.add_argument("--outliers", action="store_true")
     a.add_argument("--observed-only", action="store_true")
     a.add_argument("--frame-union", action="store_true")
+    a.add_argument("--stride-model", default="table1", choices=("table1", "walk-ratio"))
     a.add_argument("--sets", help="cue sets to fit, e.g. gait+speed+width+height (default all)")
     args = a.parse_args(argv)
     OUTLIERS[0] = args.outliers
     OBSERVED[0] = args.observed_only
     UNION[0] = args.frame_union
+    STRIDE[0] = args.stride_model
     if args.sets:
         SETS[0] = tuple(tuple(c.split("+")) for c in args.sets.split(","))
     data, work = Path(args.data), Path(args.work)

@@ -12,7 +12,11 @@ cues, each a residual per track in units of its spread (`CUES`):
   frame, at most `SPEED_SAMPLES`), against the walking
   model (Table 1 or the config's): (T - stride_mean) / stride_std. Ground distances scale with
   the camera height h, F does not: this fixes the metric scale (and, with walkers in several
-  directions and at several depths, the foreshortening).
+  directions and at several depths, the foreshortening). With ``stride_model="walk-ratio"``
+  (`fit.selfcal_gait.expected_stride`) the stride follows the pace instead: people who step
+  slowly take shorter steps, at a constant walk ratio T / F (Sekiya & Nagasaki 1998 report the
+  walk ratio nearly independent of walking speed), so T ~ N(stride_mean F / pace_mean, sd^2)
+  with the spread that leaves Table 1's spread of T over the population.
 - ``speed``: a walker's ground speed is constant along its track. A quadratic fit of the ground
   positions against time gives the relative change of speed over the track, (a . v) / |v|^2 at
   the track's middle (dimensionless; 0 for the true camera). Scale-free: it fixes the horizon
@@ -68,6 +72,7 @@ from fit.selfcal_data import (
     radial,
     select,
 )
+from fit.selfcal_gait import STRIDE_MODELS, expected_stride
 from fit.selfcal_height import HEIGHT_STD_M, MIN_TOP_ROWS, height_cues, top_walkers
 from fit.selfcal_outliers import without_outliers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
@@ -102,6 +107,7 @@ class Weights(eqx.Module):
     sd_wshape: jax.Array
     height: jax.Array
     sd_hshape: jax.Array
+    stride_power: jax.Array  # the gait cue's stride model (`selfcal_gait`): 0 Table 1's
 
 
 def _cauchy(r):
@@ -161,9 +167,10 @@ def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Ar
     r = raw_cues(camera, data, cfg)
     wk, wm = cfg.walking, cfg.width
     wh = wt.height * r["hok"].astype(wt.height.dtype)
+    t_mean, t_sd = expected_stride(data.pace, wk, wt.stride_power)
     valid = data.valid.astype(wt.gait.dtype)[None, :].repeat(N_BLOCKS, 0).ravel()
     return valid * jnp.concatenate([
-        wt.gait * (r["stride"] - wk.stride_mean) / wk.stride_std,
+        wt.gait * (r["stride"] - t_mean) / t_sd,
         wt.speed * r["dspeed"] / wt.sd_speed,
         wt.width_scale * (r["width"] - wm.mean) / wm.std,
         wt.width * r["dlogw"] / wt.sd_wshape,
@@ -207,19 +214,22 @@ def param_spec(fitted) -> CameraParams:
 
 
 def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=None,
-                sd_hshape=SHAPE_START) -> Weights:
+                sd_hshape=SHAPE_START, stride_model: str = "table1") -> Weights:
     """`Weights` of a cue set; the width's scale term is on with the width cue when
-    `width_scale` is True, or (None) only without gait (module doc)."""
+    `width_scale` is True, or (None) only without gait (module doc); the gait cue's stride
+    model by name (`STRIDE_MODELS`)."""
     on = lambda c: jnp.float64(1.0 if c in cues else 0.0)
     ws = "gait" not in cues if width_scale is None else width_scale
     scale = jnp.float64(1.0 if "width" in cues and ws else 0.0)
     return Weights(on("gait"), on("speed"), on("width"), scale, jnp.float64(sd_speed),
-                   jnp.float64(sd_wshape), on("height"), jnp.float64(sd_hshape))
+                   jnp.float64(sd_wshape), on("height"), jnp.float64(sd_hshape),
+                   jnp.float64(STRIDE_MODELS[stride_model]))
 
 
-def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_scale=None):
-    """The best `n_best` grid points (tilt x a f) with h from the median stride (or height,
-    or width)."""
+def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_scale=None,
+            stride_model: str = "table1"):
+    """The best `n_best` grid points (tilt x a f) with h from the median stride (each over
+    its pace's share of the expected stride, `expected_stride`), or height, or width."""
     f = float(cam0.f)
     grid = []
     for th in THETA_GRID:
@@ -231,11 +241,13 @@ def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_sca
     raw = _grid_raw(h1, cam0, jnp.float64(f), data, cfg)
     raw = [{k: np.asarray(q[i]) for k, q in raw.items()} for i in range(len(grid))]
     valid = np.asarray(data.valid)
+    power = STRIDE_MODELS[stride_model]
+    pace_share = (np.asarray(data.pace)[valid] / float(cfg.walking.pace_mean)) ** power
     nanmedian = lambda a: float(np.median(a[np.isfinite(a)])) if np.isfinite(a).any() else 0.0
     for g, r in zip(grid, raw, strict=True):
         r = {k: q[valid] for k, q in r.items()}
         if "gait" in cues:
-            s = nanmedian(np.asarray(r["stride"]))
+            s = nanmedian(np.asarray(r["stride"]) / pace_share)
             g["h"] = float(cfg.walking.stride_mean) / s if s > 0 else values0["h"]
         elif "height" in cues:
             s = nanmedian(np.where(r["hok"], r["height"], np.nan))
@@ -249,7 +261,7 @@ def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_sca
     dyns = [eqx.partition(make_params(g), spec)[0] for g in grid + [values0]]
     static = eqx.partition(make_params(values0), spec)[1]
     stack = jax.tree.map(lambda *xs: jnp.stack(xs), *dyns)
-    wt = cue_weights(cues, width_scale=width_scale)
+    wt = cue_weights(cues, width_scale=width_scale, stride_model=stride_model)
     cost = np.asarray(_grid_cost(stack, static, (cam0, jnp.float64(f), data, cfg, wt)))
     order = [i for i in np.argsort(cost) if np.isfinite(cost[i])][:n_best]
     return [(grid + [values0])[i] for i in order]
@@ -268,7 +280,7 @@ def _refused(cam0, cues, fitted, n_tracks, n_used, ids, reason) -> SelfcalFit:
 def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                 fit=("af", "h", "theta"), max_steps: int = 200, n_starts: int = 3,
                 width_scale: bool | None = None, outliers: bool = False,
-                frame_union: bool = False) -> SelfcalFit:
+                frame_union: bool = False, stride_model: str = "table1") -> SelfcalFit:
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
     track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
@@ -279,7 +291,11 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     refused without them, with other cues it is dropped (a note says so). With `outliers` the
     foot points of `fit.selfcal_outliers`' rule are left out first (a note gives how many);
     with `frame_union`, before that, the frame-difference union is undone in the foot points,
-    widths and top rows (`fit.selfcal_union`, at the config's fps)."""
+    widths and top rows (`fit.selfcal_union`, at the config's fps). `stride_model` is the gait
+    cue's (`STRIDE_MODELS`, `expected_stride`): "table1" or "walk-ratio"."""
+    if stride_model not in STRIDE_MODELS:
+        raise ValueError(f"stride model {stride_model!r}: choose from "
+                         f"{', '.join(STRIDE_MODELS)}")
     bad = [c for c in cues if c not in CUES]
     cues = tuple(c for c in CUES if c in cues)
     if bad or not cues:
@@ -314,7 +330,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     f = float(cam0.f)
     with jax.enable_x64(True):
         data = make_data(batch, used, pace)
-        starts = _starts(cam0, values0, data, cfg, cues, spec, n_starts, width_scale)
+        starts = _starts(cam0, values0, data, cfg, cues, spec, n_starts, width_scale,
+                         stride_model)
 
         def run(start, wt):
             dyn, static = eqx.partition(make_params(start), spec)
@@ -324,7 +341,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
             cost = float(np.sum(r**2)) if np.all(np.isfinite(r)) else math.inf
             return cost, val, static, args, res, int(steps)
 
-        wt = cue_weights(cues, width_scale=width_scale)
+        wt = cue_weights(cues, width_scale=width_scale, stride_model=stride_model)
         best = min((run(s, wt) for s in starts), key=lambda t: t[0])
         # the shape residuals' spreads from the data (1.4826 MAD), then the final fit
         raw = raw_cues(eqx.combine(best[1], best[2]).camera(cam0, f), data, cfg)
@@ -334,7 +351,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         hok = np.asarray(raw["hok"])[:n_used]
         sd_h = max(mad(np.asarray(raw["dlogh"])[:n_used][hok]) if hok.any() else 0.0,
                    SHAPE_FLOOR)
-        wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h)
+        wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h, stride_model)
         best = run(_values(best[1], best[2]), wt)
         cost, val, static, args, res, steps = best
         J, G, r = jacobians(residuals, val, static, args, fitted)

@@ -55,6 +55,11 @@ def add_parser(sub, size_type, at_least) -> None:
                    "detector's union of two frames in the foot points, widths and top rows "
                    "(fit.selfcal_union: from each track's image velocity); off by default "
                    "(docs/selfcal.md)")
+    s.add_argument("--stride-model", choices=("table1", "walk-ratio"), default="table1",
+                   help="the gait cue's stride given the pace: table1, N(0.72, 0.09^2) m "
+                   "whatever the pace (the walking model's), or walk-ratio, in proportion to "
+                   "the pace (slow steppers take shorter steps; fit.selfcal_gait); "
+                   "default table1 (docs/selfcal.md)")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
@@ -143,7 +148,8 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
     fit = ("af", "h", "theta") + (("roll",) if args.fit_roll else ()) + (
         ("uc", "vc") if args.fit_center else ())
     r = fit_selfcal(cfg, batch, cues=cues, fit=fit, max_steps=args.max_steps,
-                    outliers=args.outliers, frame_union=getattr(args, "frame_union", False))
+                    outliers=args.outliers, frame_union=getattr(args, "frame_union", False),
+                    stride_model=getattr(args, "stride_model", "table1"))
     r.notes = more + r.notes
     if notes is not None:
         notes += more
