@@ -41,7 +41,7 @@ from .params import Config
 from .rhythm import N_PEAKS
 from .segments import filter_rounds
 from .status import Reason, Verdict
-from .windows import WINDOW_BLOCK, classify_windows_packed
+from .windows import WINDOW_BLOCK, classify_windows_packed_candidates
 
 
 CODES = ("verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps", "n_samples",
@@ -129,15 +129,15 @@ def phases(max_windows: int):
 
 def classify_candidates(cfg: Config, segs: Segments, seg: np.ndarray, j: np.ndarray,
                         place: Placement, block: int) -> tuple[dict, np.ndarray]:
-    """Windows j of segments `seg` classified (`classify_windows_packed`), once per candidate
-    window B when the batch has candidates, the strongest kept (`candidates.strongest`).
+    """Windows j of segments `seg` classified (`classify_windows_packed_candidates`), once per
+    candidate window B when the batch has candidates (each window's speed once for all), the
+    strongest kept (`candidates.strongest`).
     Returns the results and each window's candidate (0: the paper's window B)."""
     packed = segs.gather_packed(seg, j)
-    results = [classify_windows_packed(cfg, packed, place, block)]
-    for c in range(1, segs.n_candidates):
-        packed[0] = segs.gather_packed(seg, j, c)[0]
-        results.append(classify_windows_packed(cfg, packed, place, block))
-    return strongest(results)
+    if segs.n_candidates > 1:  # each window's speed once for every signal
+        packed = np.concatenate([packed] + [segs.gather_packed(seg, j, c)[:1]
+                                            for c in range(1, segs.n_candidates)])
+    return strongest(classify_windows_packed_candidates(cfg, packed, place, block))
 
 
 def classify_segments(cfg: Config, segs: Segments, place: Placement | None = None,

@@ -19,6 +19,14 @@ speeds (`classify_window_block_speed`). Here, in one program (`classify_block`):
 3. `fast_window.classify_window_fast` (`rhythm.classify_window`'s Burg, PSD, peaks and
    (13)-(15), the window's median step without a sort) with those speeds, vmapped.
 
+The packed path (`windows.classify_windows_packed_candidates`, the batch classifier's) runs a
+block in one program (`BLOCK_PROGRAM`) where it has one rhythm signal, and with candidate
+windows B as two programs, steps 1-2 then step 3 (`BLOCK_SPEEDS`, `BLOCK_CLASSIFY`): candidate
+windows B (`model.candidates`) share a window's times and ground track, so its speed, which
+takes ~80 % of a block's time on 2 CPU cores; the speeds are computed once and step 3 runs
+once per rhythm signal, the same program on the same shapes for every signal (so equal
+signals give equal floats).
+
 The speeds are `windows.theil_sen_speed`'s floats (the same slopes, the same order
 statistics); the rest is `classify_window`'s operations compiled in another program, equal to
 the float32 rounding (tests/test_classify_fast.py).
@@ -105,7 +113,7 @@ def classify_block(cfg: Config, intensity: Float[Array, "W n"], dt: Float[Array,
     return jax.vmap(one)(intensity, dt, speed), unresolved
 
 
-# the fields of a packed block result (`BLOCK_PROGRAM`), in column order: name, columns, dtype
+# the fields of a packed block result (`BLOCK_CLASSIFY`), in column order: name, columns, dtype
 PACKED_FIELDS = (("verdict", 1, "int32"), ("reason", 1, "int32"), ("pace_hz", 1, "float32"),
                  ("stride_m", 1, "float32"), ("ratio", 1, "float32"),
                  ("speed_mps", 1, "float32"), ("n_samples", 1, "int32"),
@@ -113,13 +121,21 @@ PACKED_FIELDS = (("verdict", 1, "int32"), ("reason", 1, "int32"), ("pace_hz", 1,
                  ("peak_mask", None, "bool"))
 
 
-def _block_packed(cfg: Config, packed: Float[Array, "6 W n"]) -> Float[Array, "c W"]:
-    """`classify_block` of W windows packed as (6, W, n) float32 (intensity, dt s, xy m,
-    observed px), its `RhythmResult` packed as (c, W) float32 in `PACKED_FIELDS` order (the
-    integers' bits as they are, `lax.bitcast_convert_type`; the mask 0/1), so a block goes up
-    as one array and comes back as one."""
-    res = classify_block(cfg, packed[0], packed[1], jnp.moveaxis(packed[2:4], 0, -1),
-                         jnp.moveaxis(packed[4:6], 0, -1))[0]
+def _block_speeds(cfg: Config, track: Float[Array, "5 W n"]) -> Float[Array, "1 W"]:
+    """Steps 1-2 (`block_speeds`) of W windows packed as (5, W, n) float32 (dt s, xy m,
+    observed px): the speeds (1, W) m/s."""
+    return block_speeds(cfg, track[0], jnp.moveaxis(track[1:3], 0, -1),
+                        jnp.moveaxis(track[3:5], 0, -1))[0][None]
+
+
+def _block_classify(cfg: Config, signal: Float[Array, "2 W n"],
+                    speed: Float[Array, "1 W"]) -> Float[Array, "c W"]:
+    """Step 3 of W windows (`signal`: a rhythm signal and dt s, (2, W, n) float32) with their
+    speeds: the `RhythmResult` packed as (c, W) float32 in `PACKED_FIELDS` order (the
+    integers' bits as they are, `lax.bitcast_convert_type`; the mask 0/1), so it comes back
+    as one array."""
+    one = lambda i, d, v: classify_window_fast(cfg, i, window_times(d), v)
+    res = jax.vmap(one)(signal[0], signal[1], speed[0])
     cols = []
     for name, _, kind in PACKED_FIELDS:
         a = getattr(res, name)
@@ -132,11 +148,20 @@ def _block_packed(cfg: Config, packed: Float[Array, "6 W n"]) -> Float[Array, "c
     return jnp.concatenate(cols, axis=1).T
 
 
+def _block_packed(cfg: Config, packed: Float[Array, "6 W n"]) -> Float[Array, "c W"]:
+    """Steps 1-3 in one program (`classify_block`) of W windows packed as (6, W, n) float32
+    (intensity, dt s, xy m, observed px): `_block_classify`'s packed result, the same floats,
+    one program a block where there is one signal."""
+    return _block_classify(cfg, packed[:2], _block_speeds(cfg, packed[1:6]))
+
+
 BLOCK_PROGRAM = ParamProgram(_block_packed)
+BLOCK_SPEEDS = ParamProgram(_block_speeds)
+BLOCK_CLASSIFY = ParamProgram(_block_classify)
 
 
 def unpack_block(packed, k: int) -> dict:
-    """The `RhythmResult` fields (NumPy, one row per window) of `_block_packed`'s (c, W)
+    """The `RhythmResult` fields (NumPy, one row per window) of `_block_classify`'s (c, W)
     float32 output (blocks joined along axis 1); `k` the peaks a window."""
     out, c = {}, 0
     for name, width, kind in PACKED_FIELDS:

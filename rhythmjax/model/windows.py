@@ -46,7 +46,13 @@ from .medians import (  # noqa: F401 (re-exported: the tests and benchmarks' nam
 from .params import Config
 from .rhythm import N_PEAKS, RhythmResult, classify_window, window_times
 from .segments import put_packed
-from .window_block import BLOCK_PROGRAM, classify_block, unpack_block
+from .window_block import (
+    BLOCK_CLASSIFY,
+    BLOCK_PROGRAM,
+    BLOCK_SPEEDS,
+    classify_block,
+    unpack_block,
+)
 
 
 WINDOW_BLOCK = 128  # windows per jitted call (fixed: one compiled shape per N)
@@ -157,17 +163,36 @@ def classify_windows_packed(cfg: Config, packed: np.ndarray, place: Placement | 
     observed px: `fast_batch.Segments.gather_packed`), the same results with less host work a
     block (`place`: where the blocks go, `devices.Placement`):
     each block (the last padded with copies of the first window) goes up as one array and
-    comes back as one (`window_block.BLOCK_PROGRAM`, `classify_block` inside), every block
-    dispatched before the first is fetched. Returns the `RhythmResult` fields as NumPy
+    comes back as one (`window_block.BLOCK_PROGRAM`), every block dispatched before the first
+    is fetched. Returns the `RhythmResult` fields as NumPy
     arrays, one row per window."""
+    return classify_windows_packed_candidates(cfg, packed, place, block)[0]
+
+
+def classify_windows_packed_candidates(cfg: Config, packed: np.ndarray,
+                                       place: Placement | None = None,
+                                       block: int = WINDOW_BLOCK) -> list[dict[str, np.ndarray]]:
+    """`classify_windows_packed` of windows packed as (5 + C, W, n) float32: window B's
+    intensity, dt, xy, observed as there, then C - 1 more rhythm signals of the same windows
+    (candidate windows B). One result per signal (as `classify_windows_packed` gives for that
+    signal alone): with one signal a block is one program (`window_block.BLOCK_PROGRAM`), with
+    more each window's speed is computed once for all (`BLOCK_SPEEDS`), then each signal by
+    `BLOCK_CLASSIFY`."""
     place = place or Placement()
-    run = BLOCK_PROGRAM(cfg)
+    whole, speeds, classify = BLOCK_PROGRAM(cfg), BLOCK_SPEEDS(cfg), BLOCK_CLASSIFY(cfg)
     W = packed.shape[1]
+    rows_of = [0] + list(range(6, packed.shape[0]))  # each signal's row: window B, candidates
     pending = []
     for s in range(0, max(W, 1), block):
         e = min(s + block, W)
         rows = np.r_[np.arange(s, e), np.zeros(block - (e - s), np.int64)]
-        src = packed[:, rows] if W else np.zeros((6, block, packed.shape[2]), np.float32)
-        pending.append((e - s, run(put_packed(place, src))))
-    out = np.concatenate([np.asarray(r)[:, :m] for m, r in pending], axis=1)
-    return unpack_block(out, N_PEAKS)
+        src = (packed[:, rows] if W
+               else np.zeros((packed.shape[0], block, packed.shape[2]), np.float32))
+        if len(rows_of) == 1:
+            pending.append((e - s, [whole(put_packed(place, src))]))
+            continue
+        speed = speeds(put_packed(place, src[1:6]))
+        pending.append((e - s, [classify(put_packed(place, src[[r, 1]]), speed)
+                                for r in rows_of]))
+    return [unpack_block(np.concatenate([np.asarray(r[c])[:, :m] for m, r in pending], axis=1),
+                         N_PEAKS) for c in range(len(rows_of))]
