@@ -149,9 +149,10 @@ def _block_classify(cfg: Config, signal: Float[Array, "2 W n"],
 
 
 def _block_packed(cfg: Config, packed: Float[Array, "6 W n"]) -> Float[Array, "c W"]:
-    """Steps 1-3 in one program (`classify_block`) of W windows packed as (6, W, n) float32
-    (intensity, dt s, xy m, observed px): `_block_classify`'s packed result, the same floats,
-    one program a block where there is one signal."""
+    """Steps 1-3 of W windows packed as (6, W, n) float32 (intensity, dt s, xy m, observed px)
+    in one program: `_block_classify` of `_block_speeds`, the same floats as those two programs
+    run one after the other (and as `classify_block`), one program a block where there is one
+    signal."""
     return _block_classify(cfg, packed[:2], _block_speeds(cfg, packed[1:6]))
 
 

@@ -164,8 +164,7 @@ def classify_windows_packed(cfg: Config, packed: np.ndarray, place: Placement | 
     block (`place`: where the blocks go, `devices.Placement`):
     each block (the last padded with copies of the first window) goes up as one array and
     comes back as one (`window_block.BLOCK_PROGRAM`), every block dispatched before the first
-    is fetched. Returns the `RhythmResult` fields as NumPy
-    arrays, one row per window."""
+    is fetched. Returns the `RhythmResult` fields as NumPy arrays, one row per window."""
     return classify_windows_packed_candidates(cfg, packed, place, block)[0]
 
 
