@@ -241,8 +241,8 @@ def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_sca
     raw = _grid_raw(h1, cam0, jnp.float64(f), data, cfg)
     raw = [{k: np.asarray(q[i]) for k, q in raw.items()} for i in range(len(grid))]
     valid = np.asarray(data.valid)
-    power = STRIDE_MODELS[stride_model]
-    pace_share = (np.asarray(data.pace)[valid] / float(cfg.walking.pace_mean)) ** power
+    expected = expected_stride(data.pace, cfg.walking, STRIDE_MODELS[stride_model])[0]
+    pace_share = np.asarray(expected)[valid] / float(cfg.walking.stride_mean)  # 1 for table1
     nanmedian = lambda a: float(np.median(a[np.isfinite(a)])) if np.isfinite(a).any() else 0.0
     for g, r in zip(grid, raw, strict=True):
         r = {k: q[valid] for k, q in r.items()}

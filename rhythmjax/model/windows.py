@@ -178,9 +178,12 @@ def classify_windows_packed_candidates(cfg: Config, packed: np.ndarray,
     more each window's speed is computed once for all (`BLOCK_SPEEDS`), then each signal by
     `BLOCK_CLASSIFY`."""
     place = place or Placement()
-    whole, speeds, classify = BLOCK_PROGRAM(cfg), BLOCK_SPEEDS(cfg), BLOCK_CLASSIFY(cfg)
     W = packed.shape[1]
     rows_of = [0] + list(range(6, packed.shape[0]))  # each signal's row: window B, candidates
+    if len(rows_of) == 1:
+        whole = BLOCK_PROGRAM(cfg)
+    else:
+        speeds, classify = BLOCK_SPEEDS(cfg), BLOCK_CLASSIFY(cfg)
     pending = []
     for s in range(0, max(W, 1), block):
         e = min(s + block, W)
