@@ -8,7 +8,7 @@ and fps (h 4 m, tilt 15 deg, a f = the image width: the grid of starts does the 
 set is fitted (`fit.selfcal.fit_selfcal`, the CLI's function) and compared with the truth.
 
     python benchmarks/eval_selfcal.py [n_scenes=20] [first_seed=0] [--mix] [--sets A+B,C]
-        [--outliers] [--frame-union] [--stride-model walk-ratio]
+        [--outliers] [--frame-union] [--stride-model walk-ratio] [--height-mean-sd M]
     python benchmarks/eval_selfcal.py --tracks T.parquet [T2.parquet ...] --image-size WxH
         --fps F --truth H_M,TILT_DEG[,AF_PX]
 
@@ -33,7 +33,10 @@ compare; `--frame-union` the frame-difference correction (`fit.selfcal_union`, o
 default): the simulator draws no union, so this measures what the correction costs where there
 is nothing to correct. `--stride-model walk-ratio` gives the gait cue a stride that follows the
 pace (`fit.selfcal_gait.expected_stride`); the simulator draws pace and stride independently (Table
-1), so this measures what that model costs where it does not hold. h is not determined by
+1), so this measures what that model costs where it does not hold. `--height-mean-sd M` is the
+spread of the walkers' mean height about 1.70 m (the command's; default 0.05, 0 holds it; the
+simulator's walkers are N(1.70, 0.07^2) m, so it costs what estimating the mean costs where it
+is known). h is not determined by
 ``speed`` alone (scale-free): its h column is left out. The simulator writes no tracker `state`
 column, so the observed-rows rule (`fit.selfcal_rows`, the command's `--observed-only`) has
 nothing to act on here.
@@ -50,6 +53,7 @@ import numpy as np
 from fit.selfcal import fit_selfcal
 from fit.selfcal_checks import horizon_clearance
 from fit.selfcal_data import camera_values, scene, scene_batch as batch_of
+from fit.selfcal_height import HEIGHT_MEAN_SD_M
 from rhythmjax.model.params import Camera, Config
 
 
@@ -67,7 +71,8 @@ def start_config(cam: Camera) -> Config:
 
 
 def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool = False,
-        frame_union: bool = False, stride_model: str = "table1") -> dict:
+        frame_union: bool = False, stride_model: str = "table1",
+        height_mean_sd: float = HEIGHT_MEAN_SD_M) -> dict:
     rows = {c: [] for c in cue_sets}
     for seed in range(seed0, seed0 + n_scenes):
         rng = np.random.default_rng(seed)
@@ -79,7 +84,7 @@ def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool 
         for cues in cue_sets:
             t0 = time.perf_counter()
             r = fit_selfcal(cfg, b, cues=cues, outliers=outliers, frame_union=frame_union,
-                            stride_model=stride_model)
+                            stride_model=stride_model, height_mean_sd=height_mean_sd)
             dt = time.perf_counter() - t0
             if r.camera is None:
                 rows[cues].append(None)
@@ -164,7 +169,10 @@ if __name__ == "__main__":
     sets_arg = sys.argv[sys.argv.index("--sets") + 1] if "--sets" in sys.argv else None
     model = (sys.argv[sys.argv.index("--stride-model") + 1] if "--stride-model" in sys.argv
              else "table1")
-    args = [a for a in sys.argv[1:] if not a.startswith("--") and a not in (sets_arg, model)]
+    hsd = (sys.argv[sys.argv.index("--height-mean-sd") + 1] if "--height-mean-sd" in sys.argv
+           else None)
+    args = [a for a in sys.argv[1:] if not a.startswith("--")
+            and a not in (sets_arg, model, hsd)]
     n = int(args[0]) if args else 20
     s0 = int(args[1]) if len(args) > 1 else 0
     mix = "--mix" in sys.argv
@@ -173,7 +181,10 @@ if __name__ == "__main__":
         sets = tuple(tuple(c.split("+")) for c in sets_arg.split(","))
     on = "--outliers" in sys.argv
     fu = "--frame-union" in sys.argv
-    table(run(n, s0, mix, sets, on, fu, model), f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 "
+    title = f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 "
+    sd = HEIGHT_MEAN_SD_M if hsd is None else float(hsd)
+    table(run(n, s0, mix, sets, on, fu, model, sd), title +
           "walkers" + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on
                                                                   else "")
-          + (", frame union undone" if fu else "") + f", stride model {model}")
+          + (", frame union undone" if fu else "") + f", stride model {model}"
+          + (f", crowd height +- {sd:g} m" if sd > 0 else ", crowd height held"))

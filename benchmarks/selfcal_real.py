@@ -21,7 +21,8 @@ the classical approach), gait+height and gait+speed+width+height. Rows:
 
     python benchmarks/selfcal_real.py [--data ../shared/data] [--work /tmp/selfcal_real]
         [-o docs/data/selfcal_real.csv] [--only pets,dev,casia] [--outliers] [--observed-only]
-        [--frame-union] [--stride-model walk-ratio] [--sets gait+speed+width+height,...]
+        [--frame-union] [--stride-model walk-ratio] [--height-mean-sd M]
+        [--sets gait+speed+width+height,...]
 
 `--outliers` turns on the fit's foot-point outlier rule (`fit.selfcal_outliers`, off by default)
 to compare; give it its own `--work` for the re-tracked PETS rows (tracked with the fitted camera).
@@ -30,7 +31,8 @@ to compare; give it its own `--work` for the re-tracked PETS rows (tracked with 
 point, width and top row). `--frame-union` undoes the frame-difference union in the foot
 points, widths and top rows (`fit.selfcal_union`, the command's `--frame-union`, off by default).
 `--stride-model walk-ratio` gives the gait cue a stride that follows the pace
-(`fit.selfcal_gait.expected_stride`, the command's `--stride-model`).
+(`fit.selfcal_gait.expected_stride`, the command's `--stride-model`). `--height-mean-sd M` is the
+spread of the walkers' mean height about 1.70 m (the command's `--height-mean-sd`; 0 holds it).
 
 Tracks are made under `--work` (WORK/SOURCE/CLIP/tracks.parquet) unless already there, so a
 rerun only fits; the videos are read where they lie and nothing of them is copied into the
@@ -66,6 +68,7 @@ OBSERVED = [False]  # the observed-rows rule of the fits (`--observed-only` sets
 SETS = [CUE_SETS]  # the cue sets fitted (`--sets A+B,C` chooses)
 UNION = [False]  # the frame-union correction of the fits (`--frame-union` sets it on)
 STRIDE = ["table1"]  # the gait cue's stride model (`--stride-model`)
+HEIGHT_MEAN_SD = [0.05]  # the crowd's mean height's prior spread (m; `--height-mean-sd`)
 
 
 def say(msg: str) -> None:
@@ -147,7 +150,7 @@ def fit_rows(source: str, how: str, paths: list[Path], size, fps, truth,
     cfg, batch = pooled_batch(paths, size, fps, window_s)
     for cues in SETS[0]:
         r = fit_selfcal(cfg, batch, cues=cues, outliers=OUTLIERS[0], frame_union=UNION[0],
-                        stride_model=STRIDE[0])
+                        stride_model=STRIDE[0], height_mean_sd=HEIGHT_MEAN_SD[0])
         fits[cues] = r
         v, se = (r.values, r.se) if r.camera is not None else ({}, {})
         get = lambda d, k: f"{d[k]:.5g}" if k in d and math.isfinite(d[k]) else ""
@@ -241,12 +244,15 @@ def main(argv=None) -> int:
     a.add_argument("--observed-only", action="store_true")
     a.add_argument("--frame-union", action="store_true")
     a.add_argument("--stride-model", default="table1", choices=("table1", "walk-ratio"))
+    a.add_argument("--height-mean-sd", type=float, default=0.05,
+                   help="the command's --height-mean-sd (default 0.05; 0 holds the mean)")
     a.add_argument("--sets", help="cue sets to fit, e.g. gait+speed+width+height (default all)")
     args = a.parse_args(argv)
     OUTLIERS[0] = args.outliers
     OBSERVED[0] = args.observed_only
     UNION[0] = args.frame_union
     STRIDE[0] = args.stride_model
+    HEIGHT_MEAN_SD[0] = args.height_mean_sd
     if args.sets:
         SETS[0] = tuple(tuple(c.split("+")) for c in args.sets.split(","))
     data, work = Path(args.data), Path(args.work)

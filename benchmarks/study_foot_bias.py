@@ -348,11 +348,11 @@ def decompose(args) -> int:
 
 def cues_at_tsai(cfg, batch) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(stride m, relative speed change, median height m) per used walker of `batch` through
-    the pinhole of (3) nearest to PETS's Tsai camera (`fit.selfcal.raw_cues`)."""
+    the pinhole of (3) nearest to PETS's Tsai camera (`fit.selfcal_cost.raw_cues`)."""
     import jax
     import study_selfcal_distortion as sd
 
-    from fit.selfcal import raw_cues
+    from fit.selfcal_cost import raw_cues
     from fit.selfcal_data import make_data, select
 
     used, pace = select(cfg, batch)

@@ -28,7 +28,10 @@ cues, each a residual per track in units of its spread (`CUES`):
   vertical segment on the foot point's ground point whose top projects to the track's top row
   v_top (the tracks format's optional column); per track the median H against people's heights
   N(width.height, `HEIGHT_STD_M`^2), and the change of log H over the track / its spread.
-  Alone, the classical foot-head calibration: it fixes h, theta and a f.
+  Alone, the classical foot-head calibration: it fixes h, theta and a f. The crowd's mean
+  height is estimated too, about width.height with the spread `height_mean_sd` (0.05 m by
+  default; 0 holds it at width.height: `fit.selfcal_height.crowd_height`), and the heights are
+  compared with it.
 
 The spreads of the three shape residuals (speed, width, height change) are measurement noise, not
 a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
@@ -60,11 +63,17 @@ import numpy as np
 import optimistix as optx
 
 from fit.camera import NAMES, UNITS, CameraParams, se_limits
-from fit.selfcal_checks import HORIZON_MARGIN_PX, geometry_reasons
+from fit.selfcal_checks import geometry_reasons
+from fit.selfcal_cost import (
+    N_BLOCKS,
+    crowd_mean_height,
+    cue_weights,
+    raw_cues,
+    residuals,
+    standardised,
+)
 from fit.selfcal_data import (
     MIN_ROWS,
-    SPEED_SAMPLES,
-    Data,
     camera_of,
     camera_values,
     make_data,
@@ -73,118 +82,22 @@ from fit.selfcal_data import (
     select,
 )
 from fit.selfcal_gait import STRIDE_MODELS, expected_stride
-from fit.selfcal_height import HEIGHT_STD_M, MIN_TOP_ROWS, height_cues, top_walkers
+from fit.selfcal_height import HEIGHT_MEAN_SD_M, MIN_TOP_ROWS, top_walkers
 from fit.selfcal_outliers import without_outliers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
 from fit.selfcal_union import undo_union
-from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
 from rhythmjax.model.params import Camera, Config
-from rhythmjax.model.rhythm import ground_speed
 
 
 CUES = ("gait", "speed", "width", "height")
 DEFAULT_CUES = CUES  # the height cue is dropped (a note) where the tracks have no top rows
-CAUCHY_C = 2.385  # Cauchy's constant at 95 % efficiency, in spreads
-SHAPE_START = 0.1  # start spread of the shape residuals (relative change over a track)
 SHAPE_FLOOR = 0.02  # their spread is never below this (set a priori; seeds 0-5 checked)
-N_BLOCKS = 6  # residual blocks per track (`standardised`)
 MIN_WALKERS = 5  # fewer tracks with a clear gait peak: refused
 MIN_ROW_SPREAD = 0.02  # walkers' median foot rows (10-90 %) span less of the image: refused
 # (a quarter of the smallest on the development seeds 0-5, 0.083; added after CASIA-B's walks)
 FITTABLE = ("af", "h", "theta", "roll", "uc", "vc")  # what `fit_selfcal` can fit
 THETA_GRID = (3.0, 6.0, 10.0, 15.0, 20.0, 26.0, 33.0, 40.0, 50.0, 60.0)
 AF_GRID = (0.3, 0.42, 0.6, 0.8, 1.05, 1.35, 1.8, 2.4)  # x the image width
-
-
-class Weights(eqx.Module):
-    """Per cue: a multiplier (0 = off) and the spreads of the shape residuals."""
-
-    gait: jax.Array
-    speed: jax.Array
-    width: jax.Array
-    width_scale: jax.Array
-    sd_speed: jax.Array
-    sd_wshape: jax.Array
-    height: jax.Array
-    sd_hshape: jax.Array
-    stride_power: jax.Array  # the gait cue's stride model (`selfcal_gait`): 0 Table 1's
-
-
-def _cauchy(r):
-    """r -> sign(r) sqrt(2 rho(r)), rho Cauchy's with c = CAUCHY_C; smooth at 0."""
-    x2 = (r / CAUCHY_C) ** 2
-    small = x2 < 1e-12
-    x2s = jnp.where(small, 1.0, x2)
-    return r * jnp.sqrt(jnp.where(small, 1.0, jnp.log1p(x2s) / x2s))
-
-
-def _linear_fit(t, y, w, degree):
-    """Weighted least-squares polynomial coefficients (constant first) of y against t, per
-    track (vmapped outside); y (T, k)."""
-    A = jnp.stack([t**p for p in range(degree + 1)], -1)
-    M = (A * w[:, None]).T @ A + 1e-9 * jnp.eye(degree + 1)
-    return jnp.linalg.solve(M, (A * w[:, None]).T @ y)
-
-
-def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
-    """The cues' raw values per track (B): stride T (m), relative speed change, mean ground
-    width (m), change of log width over the track, median height (m), change of log height,
-    whether the track has heights, and the horizon hinge (px)."""
-    u, v = data.z[..., 0], data.z[..., 1]
-    gx, gy, ok = ground_from_image(camera, u, v)
-    use = data.obs & ok
-    xy = jnp.stack([gx, gy], -1)
-    k = -(-data.t.shape[1] // SPEED_SAMPLES)  # every k-th frame: <= SPEED_SAMPLES samples
-    speed = jax.vmap(ground_speed)(data.t[:, ::k], jnp.where(use[..., None], xy, 0.0)[:, ::k],
-                                   use[:, ::k])
-    dur = jnp.maximum(jnp.max(jnp.where(use, data.t, -jnp.inf), 1)
-                      - jnp.min(jnp.where(use, data.t, jnp.inf), 1), 1e-3)
-    tn = data.t / dur[:, None]
-    w = use.astype(xy.dtype)
-    c = jax.vmap(lambda t, p, w: _linear_fit(t, p, w, 2))(tn, jnp.where(use[..., None], xy, 0),
-                                                          w)
-    vel, acc = c[:, 1], 2.0 * c[:, 2]
-    dspeed = jnp.sum(acc * vel, -1) / jnp.maximum(jnp.sum(vel**2, -1), 1e-12)
-    wok = use & jnp.isfinite(data.width) & (data.width > 0)
-    wid, okw = ground_width(camera, jnp.where(wok, data.width, 1.0), u, v)
-    wok = wok & okw & (wid > 0)
-    ww = wok.astype(xy.dtype)
-    nw = jnp.maximum(jnp.sum(ww, 1), 1.0)
-    wmean = jnp.sum(jnp.where(wok, wid, 0.0), 1) / nw
-    logw = jnp.log(jnp.where(wok, wid, 1.0))
-    cw = jax.vmap(lambda t, y, w: _linear_fit(t, y[:, None], w, 1))(tn, logw, ww)
-    vh = horizon_v(camera) + jnp.tan(camera.roll) * (u - camera.uc)
-    hinge = jnp.max(jnp.where(data.obs, vh + HORIZON_MARGIN_PX - v, -jnp.inf), 1)
-    height, dlogh, hok = height_cues(camera, u, v, data.v_top, use, tn)
-    return {"stride": speed / data.pace, "dspeed": dspeed, "width": wmean,
-            "dlogw": cw[:, 1, 0], "height": height, "dlogh": dlogh, "hok": hok,
-            "hinge": jnp.maximum(hinge, 0.0) / HORIZON_MARGIN_PX}
-
-
-def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Array:
-    """The residual vector (before the robust loss): per track, each cue in its spreads
-    (weight 0 = the cue is off), then the horizon hinges."""
-    r = raw_cues(camera, data, cfg)
-    wk, wm = cfg.walking, cfg.width
-    wh = wt.height * r["hok"].astype(wt.height.dtype)
-    t_mean, t_sd = expected_stride(data.pace, wk, wt.stride_power)
-    valid = data.valid.astype(wt.gait.dtype)[None, :].repeat(N_BLOCKS, 0).ravel()
-    return valid * jnp.concatenate([
-        wt.gait * (r["stride"] - t_mean) / t_sd,
-        wt.speed * r["dspeed"] / wt.sd_speed,
-        wt.width_scale * (r["width"] - wm.mean) / wm.std,
-        wt.width * r["dlogw"] / wt.sd_wshape,
-        wh * (r["height"] - wm.height) / HEIGHT_STD_M,
-        wh * r["dlogh"] / wt.sd_hshape])
-
-
-def residuals(dynamic: CameraParams, args) -> jax.Array:
-    """The robust residual vector of the camera (optimistix's least squares)."""
-    static, like, f, data, cfg, wt = args
-    cam = eqx.combine(dynamic, static).camera(like, f)
-    hinge = raw_cues(cam, data, cfg)["hinge"]
-    return jnp.concatenate([_cauchy(standardised(cam, data, cfg, wt)),
-                            10.0 * jnp.where(data.valid, hinge, 0.0)])
 
 
 @eqx.filter_jit
@@ -213,21 +126,8 @@ def param_spec(fitted) -> CameraParams:
     return CameraParams(*(k in fitted for k in NAMES))
 
 
-def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=None,
-                sd_hshape=SHAPE_START, stride_model: str = "table1") -> Weights:
-    """`Weights` of a cue set; the width's scale term is on with the width cue when
-    `width_scale` is True, or (None) only without gait (module doc); the gait cue's stride
-    model by name (`STRIDE_MODELS`)."""
-    on = lambda c: jnp.float64(1.0 if c in cues else 0.0)
-    ws = "gait" not in cues if width_scale is None else width_scale
-    scale = jnp.float64(1.0 if "width" in cues and ws else 0.0)
-    return Weights(on("gait"), on("speed"), on("width"), scale, jnp.float64(sd_speed),
-                   jnp.float64(sd_wshape), on("height"), jnp.float64(sd_hshape),
-                   jnp.float64(STRIDE_MODELS[stride_model]))
-
-
 def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_scale=None,
-            stride_model: str = "table1"):
+            stride_model: str = "table1", height_mean_sd: float = 0.0):
     """The best `n_best` grid points (tilt x a f) with h from the median stride (each over
     its pace's share of the expected stride, `expected_stride`), or height, or width."""
     f = float(cam0.f)
@@ -261,7 +161,8 @@ def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_sca
     dyns = [eqx.partition(make_params(g), spec)[0] for g in grid + [values0]]
     static = eqx.partition(make_params(values0), spec)[1]
     stack = jax.tree.map(lambda *xs: jnp.stack(xs), *dyns)
-    wt = cue_weights(cues, width_scale=width_scale, stride_model=stride_model)
+    wt = cue_weights(cues, width_scale=width_scale, stride_model=stride_model,
+                     height_mean_sd=height_mean_sd)
     cost = np.asarray(_grid_cost(stack, static, (cam0, jnp.float64(f), data, cfg, wt)))
     order = [i for i in np.argsort(cost) if np.isfinite(cost[i])][:n_best]
     return [(grid + [values0])[i] for i in order]
@@ -280,7 +181,8 @@ def _refused(cam0, cues, fitted, n_tracks, n_used, ids, reason) -> SelfcalFit:
 def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                 fit=("af", "h", "theta"), max_steps: int = 200, n_starts: int = 3,
                 width_scale: bool | None = None, outliers: bool = False,
-                frame_union: bool = False, stride_model: str = "table1") -> SelfcalFit:
+                frame_union: bool = False, stride_model: str = "table1",
+                height_mean_sd: float = HEIGHT_MEAN_SD_M) -> SelfcalFit:
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
     track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
@@ -292,7 +194,11 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     foot points of `fit.selfcal_outliers`' rule are left out first (a note gives how many);
     with `frame_union`, before that, the frame-difference union is undone in the foot points,
     widths and top rows (`fit.selfcal_union`, at the config's fps). `stride_model` is the gait
-    cue's (`STRIDE_MODELS`, `expected_stride`): "table1" or "walk-ratio"."""
+    cue's (`STRIDE_MODELS`, `expected_stride`): "table1" or "walk-ratio". `height_mean_sd` (m)
+    lets the crowd's mean height differ from the config's by about that much
+    (`fit.selfcal_height.crowd_height`; a note gives its estimate); 0 holds it."""
+    if not (height_mean_sd >= 0 and math.isfinite(height_mean_sd)):
+        raise ValueError(f"height_mean_sd {height_mean_sd}: a spread in m, >= 0")
     if stride_model not in STRIDE_MODELS:
         raise ValueError(f"stride model {stride_model!r}: choose from "
                          f"{', '.join(STRIDE_MODELS)}")
@@ -331,7 +237,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     with jax.enable_x64(True):
         data = make_data(batch, used, pace)
         starts = _starts(cam0, values0, data, cfg, cues, spec, n_starts, width_scale,
-                         stride_model)
+                         stride_model, height_mean_sd)
 
         def run(start, wt):
             dyn, static = eqx.partition(make_params(start), spec)
@@ -341,7 +247,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
             cost = float(np.sum(r**2)) if np.all(np.isfinite(r)) else math.inf
             return cost, val, static, args, res, int(steps)
 
-        wt = cue_weights(cues, width_scale=width_scale, stride_model=stride_model)
+        wt = cue_weights(cues, width_scale=width_scale, stride_model=stride_model,
+                         height_mean_sd=height_mean_sd)
         best = min((run(s, wt) for s in starts), key=lambda t: t[0])
         # the shape residuals' spreads from the data (1.4826 MAD), then the final fit
         raw = raw_cues(eqx.combine(best[1], best[2]).camera(cam0, f), data, cfg)
@@ -351,7 +258,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         hok = np.asarray(raw["hok"])[:n_used]
         sd_h = max(mad(np.asarray(raw["dlogh"])[:n_used][hok]) if hok.any() else 0.0,
                    SHAPE_FLOOR)
-        wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h, stride_model)
+        wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h, stride_model, height_mean_sd)
         best = run(_values(best[1], best[2]), wt)
         cost, val, static, args, res, steps = best
         J, G, r = jacobians(residuals, val, static, args, fitted)
@@ -360,7 +267,11 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                               "height" in cues)
         cov, se, cond, weak = report(J, G, r, fitted, n_eff)
         values = _values(val, static)
-        std = np.asarray(standardised(eqx.combine(val, static).camera(cam0, f), data, cfg, wt))
+        cam_fit = eqx.combine(val, static).camera(cam0, f)
+        std = np.asarray(standardised(cam_fit, data, cfg, wt))
+        if height_mean_sd > 0 and "height" in cues:
+            notes.append(f"the walkers' mean height {crowd_mean_height(cam_fit, data, cfg, wt):.3f}"
+                         f" m (prior {float(cfg.width.height):.2f} +- {height_mean_sd:g} m)")
     blk = std.reshape(N_BLOCKS, -1)[:, :n_used]
     parts = {"gait": blk[0], "speed": blk[1], "width": np.r_[blk[2], blk[3]],
              "height": np.r_[blk[4][hok], blk[5][hok]]}

@@ -33,6 +33,10 @@ from rhythmjax.model.params import Camera
 
 
 HEIGHT_STD_M = 0.07  # people's heights ~ N(1.7, 0.07^2) m (issue 19); the mean is the config's
+HEIGHT_MEAN_SD_M = 0.05  # `--height-mean-sd`'s default (m): how far a crowd's mean
+# height (its sex ratio, its country's stature, shoes, where the tracker's top row sits on the
+# head) may lie from the config's mean, set a priori: adult statures by country, both sexes
+# together, spread over about 1.60-1.77 m (not chosen on any tracks)
 MIN_TOP_ROWS = 10  # a track needs this many rows with a top row for the height cue
 TRIM_LOG = 0.15  # rows whose log height is further than this from the track's median: out of
 # the slope (a top row 15 % off: the head clipped or another object's motion joined)
@@ -66,6 +70,27 @@ def masked_median(x, mask):
     lo = xs[jnp.maximum((n - 1) // 2, 0)]
     hi = xs[jnp.maximum(n // 2, 0)]
     return 0.5 * (lo + hi)
+
+
+def crowd_height(height, usable, prior_mean, sd_mean):
+    """(mean height m, its prior residual) of the crowd whose walkers' median heights are
+    `height` (B,) where `usable`: the crowd's mean is unknown, N(prior_mean, sd_mean^2) a
+    priori, and each walker's height N(mean, HEIGHT_STD_M^2) about it, so with n walkers of
+    median height m (the median over walkers: robust to a bicycle's or dog's track)
+
+        mean = (n m / s^2 + prior_mean / sd_mean^2) / (n / s^2 + 1 / sd_mean^2),   s = HEIGHT_STD_M
+
+    (the Gaussian posterior mean, the mean profiled out of the least squares) and the prior
+    residual (mean - prior_mean) / sd_mean. `sd_mean` 0: the mean is the prior's (residual 0),
+    as without this rule; also with no usable walker. Differentiable in `height`."""
+    n = jnp.sum(usable).astype(height.dtype)
+    free = (sd_mean > 0) & (n > 0)
+    m = masked_median(height, usable)
+    prec = 1.0 / jnp.where(free, sd_mean, 1.0) ** 2
+    a = n / HEIGHT_STD_M**2
+    mean = jnp.where(free, (a * jnp.where(free, m, 0.0) + prec * prior_mean) / (a + prec),
+                     prior_mean)
+    return mean, jnp.where(free, (mean - prior_mean) / jnp.where(free, sd_mean, 1.0), 0.0)
 
 
 def _slope(t, y, w):

@@ -76,9 +76,13 @@ def report(J: np.ndarray, G: np.ndarray, r: np.ndarray, fitted: tuple[str, ...],
     """(cov, se, cond, weak direction) in natural units from the Jacobian J of the residuals
     r over the unconstrained parameters and G = d natural / d unconstrained (fitted rows):
     cov = s^2 (J_nat^T J_nat)^-1, s^2 = |r|^2 / (n_eff - p), on column-normalised J_nat. A
-    parameter with no effect on the residuals gets an infinite SE."""
-    J_nat = J @ np.linalg.inv(G)
+    parameter with no effect on the residuals gets an infinite SE; so does every parameter
+    where J or r is not finite (a degenerate camera: the fit is then flagged, not crashed)."""
     p = len(fitted)
+    if not (np.all(np.isfinite(J)) and np.all(np.isfinite(r)) and np.all(np.isfinite(G))):
+        return (np.full((p, p), np.inf), {k: math.inf for k in fitted}, math.inf,
+                "residuals not finite")
+    J_nat = J @ np.linalg.inv(G)
     s2 = float(np.sum(r**2)) / max(n_eff - p, 1)
     norm = np.linalg.norm(J_nat, axis=0)
     dead = ~(norm > 1e-12 * max(float(np.max(norm)), 1e-300))

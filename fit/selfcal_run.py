@@ -26,8 +26,23 @@ CUE_HELP = ("comma-separated cues (default gait,speed,width,height): gait (strid
             "the tracks have no top rows)")
 
 
+def spread_m(text: str) -> float:
+    """argparse type of a spread in metres: a finite number >= 0."""
+    import argparse
+    import math
+
+    try:
+        x = float(text)
+    except ValueError:
+        x = math.nan
+    if not (math.isfinite(x) and x >= 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: a spread in m, a number >= 0")
+    return x
+
+
 def add_parser(sub, size_type, at_least) -> None:
     """The `selfcal` subcommand's arguments (`size_type`, `at_least`: fit.cli's parsers)."""
+    from fit.selfcal_height import HEIGHT_MEAN_SD_M
     from rhythmjax.track.options import TrackerOptions
 
     s = sub.add_parser("selfcal", help="fit h, tilt and focal length from people walking "
@@ -60,6 +75,11 @@ def add_parser(sub, size_type, at_least) -> None:
                    "whatever the pace (the walking model's), or walk-ratio, in proportion to "
                    "the pace (slow steppers take shorter steps; fit.selfcal_gait); "
                    "default table1 (docs/selfcal.md)")
+    s.add_argument("--height-mean-sd", type=spread_m, default=HEIGHT_MEAN_SD_M, metavar="M",
+                   help="the walkers' mean height is estimated with the camera, about the "
+                   "config's (1.70 m) by about M m (fit.selfcal_height.crowd_height); default "
+                   f"{HEIGHT_MEAN_SD_M:g}, the spread of adult statures between countries; 0 "
+                   "holds it at the config's (docs/selfcal.md)")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
@@ -125,6 +145,7 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
     import numpy as np
 
     from fit.selfcal import fit_selfcal
+    from fit.selfcal_height import HEIGHT_MEAN_SD_M
     from fit.selfcal_rows import observed_rows
     from rhythmjax.io import BadInput, to_batch
 
@@ -149,7 +170,8 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
         ("uc", "vc") if args.fit_center else ())
     r = fit_selfcal(cfg, batch, cues=cues, fit=fit, max_steps=args.max_steps,
                     outliers=args.outliers, frame_union=getattr(args, "frame_union", False),
-                    stride_model=getattr(args, "stride_model", "table1"))
+                    stride_model=getattr(args, "stride_model", "table1"),
+                    height_mean_sd=getattr(args, "height_mean_sd", HEIGHT_MEAN_SD_M))
     r.notes = more + r.notes
     if notes is not None:
         notes += more

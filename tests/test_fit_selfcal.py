@@ -18,19 +18,18 @@ import numpy as np
 import pytest
 
 from fit.cli import main as fit_main
-from fit.selfcal import (
+from fit.selfcal import fit_selfcal, param_spec
+from fit.selfcal_cost import cue_weights, raw_cues, residuals
+from fit.selfcal_data import (
     Data,
     camera_of,
-    cue_weights,
-    fit_selfcal,
+    camera_values,
+    gait_peaks,
     make_data,
     make_params,
-    param_spec,
-    raw_cues,
-    residuals,
+    scene_batch,
     select,
 )
-from fit.selfcal_data import camera_values, gait_peaks, scene_batch
 from fit.selfcal_height import height_from_top
 from fit.walking import batch_of, make_labelled
 from rhythmjax.io import write_table

@@ -1,0 +1,154 @@
+"""The cost of self-calibration (`fit.selfcal`, issue 19): each cue's raw value per track
+(`raw_cues`), their standardised residuals (`standardised`), the robust residual vector the
+least squares minimises (`residuals`) and the cue weights (`cue_weights`). The cues and their
+models are described in `fit.selfcal`'s module doc; heights are compared with the crowd's mean
+height (`fit.selfcal_height.crowd_height`: the config's, or estimated about it).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from fit.camera import CameraParams
+from fit.selfcal_checks import HORIZON_MARGIN_PX
+from fit.selfcal_data import SPEED_SAMPLES, Data
+from fit.selfcal_gait import STRIDE_MODELS, expected_stride
+from fit.selfcal_height import HEIGHT_STD_M, crowd_height, height_cues
+from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
+from rhythmjax.model.params import Camera, Config
+from rhythmjax.model.rhythm import ground_speed
+
+
+CAUCHY_C = 2.385  # Cauchy's constant at 95 % efficiency, in spreads
+SHAPE_START = 0.1  # start spread of the shape residuals (relative change over a track)
+N_BLOCKS = 6  # residual blocks per track (`standardised`)
+
+
+class Weights(eqx.Module):
+    """Per cue: a multiplier (0 = off) and the spreads of the shape residuals."""
+
+    gait: jax.Array
+    speed: jax.Array
+    width: jax.Array
+    width_scale: jax.Array
+    sd_speed: jax.Array
+    sd_wshape: jax.Array
+    height: jax.Array
+    sd_hshape: jax.Array
+    stride_power: jax.Array  # the gait cue's stride model (`selfcal_gait`): 0 Table 1's
+    sd_hmean: jax.Array  # the crowd's mean height's prior spread (m; 0: the config's, held)
+
+
+def cauchy(r):
+    """r -> sign(r) sqrt(2 rho(r)), rho Cauchy's with c = CAUCHY_C; smooth at 0."""
+    x2 = (r / CAUCHY_C) ** 2
+    small = x2 < 1e-12
+    x2s = jnp.where(small, 1.0, x2)
+    return r * jnp.sqrt(jnp.where(small, 1.0, jnp.log1p(x2s) / x2s))
+
+
+def _linear_fit(t, y, w, degree):
+    """Weighted least-squares polynomial coefficients (constant first) of y against t, per
+    track (vmapped outside); y (T, k)."""
+    A = jnp.stack([t**p for p in range(degree + 1)], -1)
+    M = (A * w[:, None]).T @ A + 1e-9 * jnp.eye(degree + 1)
+    return jnp.linalg.solve(M, (A * w[:, None]).T @ y)
+
+
+def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
+    """The cues' raw values per track (B): stride T (m), relative speed change, mean ground
+    width (m), change of log width over the track, median height (m), change of log height,
+    whether the track has heights, and the horizon hinge (px)."""
+    u, v = data.z[..., 0], data.z[..., 1]
+    gx, gy, ok = ground_from_image(camera, u, v)
+    use = data.obs & ok
+    xy = jnp.stack([gx, gy], -1)
+    k = -(-data.t.shape[1] // SPEED_SAMPLES)  # every k-th frame: <= SPEED_SAMPLES samples
+    speed = jax.vmap(ground_speed)(data.t[:, ::k], jnp.where(use[..., None], xy, 0.0)[:, ::k],
+                                   use[:, ::k])
+    dur = jnp.maximum(jnp.max(jnp.where(use, data.t, -jnp.inf), 1)
+                      - jnp.min(jnp.where(use, data.t, jnp.inf), 1), 1e-3)
+    tn = data.t / dur[:, None]
+    w = use.astype(xy.dtype)
+    c = jax.vmap(lambda t, p, w: _linear_fit(t, p, w, 2))(tn, jnp.where(use[..., None], xy, 0),
+                                                          w)
+    vel, acc = c[:, 1], 2.0 * c[:, 2]
+    dspeed = jnp.sum(acc * vel, -1) / jnp.maximum(jnp.sum(vel**2, -1), 1e-12)
+    wok = use & jnp.isfinite(data.width) & (data.width > 0)
+    wid, okw = ground_width(camera, jnp.where(wok, data.width, 1.0), u, v)
+    wok = wok & okw & (wid > 0)
+    ww = wok.astype(xy.dtype)
+    nw = jnp.maximum(jnp.sum(ww, 1), 1.0)
+    wmean = jnp.sum(jnp.where(wok, wid, 0.0), 1) / nw
+    logw = jnp.log(jnp.where(wok, wid, 1.0))
+    cw = jax.vmap(lambda t, y, w: _linear_fit(t, y[:, None], w, 1))(tn, logw, ww)
+    vh = horizon_v(camera) + jnp.tan(camera.roll) * (u - camera.uc)
+    hinge = jnp.max(jnp.where(data.obs, vh + HORIZON_MARGIN_PX - v, -jnp.inf), 1)
+    height, dlogh, hok = height_cues(camera, u, v, data.v_top, use, tn)
+    return {"stride": speed / data.pace, "dspeed": dspeed, "width": wmean,
+            "dlogw": cw[:, 1, 0], "height": height, "dlogh": dlogh, "hok": hok,
+            "hinge": jnp.maximum(hinge, 0.0) / HORIZON_MARGIN_PX}
+
+
+def _blocks(r: dict, data: Data, cfg: Config, wt: Weights) -> tuple[jax.Array, jax.Array]:
+    """The residual blocks of `standardised` from `raw_cues`' values, and the crowd's mean
+    height's prior residual (`crowd_height`; 0 where its mean is held). Where the mean is
+    estimated, heights are compared with it relatively, (H / mean - 1) x 1.70 / 0.07, so that
+    their spread does not shrink with the camera's scale; held, (H - 1.70) / 0.07."""
+    wk, wm = cfg.walking, cfg.width
+    hok = r["hok"] & data.valid & (wt.height > 0)
+    wh = wt.height * r["hok"].astype(wt.height.dtype)
+    mean_h, prior_h = crowd_height(r["height"], hok, wm.height, wt.sd_hmean)
+    t_mean, t_sd = expected_stride(data.pace, wk, wt.stride_power)
+    valid = data.valid.astype(wt.gait.dtype)[None, :].repeat(N_BLOCKS, 0).ravel()
+    # a cue that is off gives 0, even where a degenerate camera makes its value NaN
+    weighted = lambda w, x: jnp.where(w > 0, w * x, 0.0)
+    return valid * jnp.concatenate([
+        weighted(wt.gait, (r["stride"] - t_mean) / t_sd),
+        weighted(wt.speed, r["dspeed"] / wt.sd_speed),
+        weighted(wt.width_scale, (r["width"] - wm.mean) / wm.std),
+        weighted(wt.width, r["dlogw"] / wt.sd_wshape),
+        weighted(wh, jnp.where(wt.sd_hmean > 0, (r["height"] / mean_h - 1.0) * wm.height,
+                               r["height"] - wm.height) / HEIGHT_STD_M),
+        weighted(wh, r["dlogh"] / wt.sd_hshape)]), prior_h
+
+
+def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Array:
+    """The residual vector (before the robust loss): per track, each cue in its spreads
+    (weight 0 = the cue is off); heights about the crowd's mean (`crowd_height`)."""
+    return _blocks(raw_cues(camera, data, cfg), data, cfg, wt)[0]
+
+
+def crowd_mean_height(camera: Camera, data: Data, cfg: Config, wt: Weights) -> float:
+    """The crowd's mean height (m) under `camera` (`crowd_height`; the config's where held)."""
+    r = raw_cues(camera, data, cfg)
+    hok = r["hok"] & data.valid & (wt.height > 0)
+    return float(crowd_height(r["height"], hok, cfg.width.height, wt.sd_hmean)[0])
+
+
+def residuals(dynamic: CameraParams, args) -> jax.Array:
+    """The robust residual vector of the camera (optimistix's least squares): the cues'
+    (`standardised`) through the robust loss, the horizon hinges, the crowd height's prior."""
+    static, like, f, data, cfg, wt = args
+    cam = eqx.combine(dynamic, static).camera(like, f)
+    r = raw_cues(cam, data, cfg)
+    std, prior_h = _blocks(r, data, cfg, wt)
+    return jnp.concatenate([cauchy(std), 10.0 * jnp.where(data.valid, r["hinge"], 0.0),
+                            prior_h[None]])
+
+
+
+def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=None,
+                sd_hshape=SHAPE_START, stride_model: str = "table1",
+                height_mean_sd: float = 0.0) -> Weights:
+    """`Weights` of a cue set; the width's scale term is on with the width cue when
+    `width_scale` is True, or (None) only without gait (module doc); the gait cue's stride
+    model by name (`STRIDE_MODELS`); the crowd's mean height's prior spread (m, 0: held)."""
+    on = lambda c: jnp.float64(1.0 if c in cues else 0.0)
+    ws = "gait" not in cues if width_scale is None else width_scale
+    scale = jnp.float64(1.0 if "width" in cues and ws else 0.0)
+    return Weights(on("gait"), on("speed"), on("width"), scale, jnp.float64(sd_speed),
+                   jnp.float64(sd_wshape), on("height"), jnp.float64(sd_hshape),
+                   jnp.float64(STRIDE_MODELS[stride_model]), jnp.float64(height_mean_sd))
