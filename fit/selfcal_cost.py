@@ -92,15 +92,20 @@ def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
             "hinge": jnp.maximum(hinge, 0.0) / HORIZON_MARGIN_PX}
 
 
+def _crowd(r: dict, data: Data, cfg: Config, wt: Weights) -> tuple[jax.Array, jax.Array]:
+    """`crowd_height` of the tracks that carry heights, when the height cue is on."""
+    hok = r["hok"] & data.valid & (wt.height > 0)
+    return crowd_height(r["height"], hok, cfg.width.height, wt.sd_hmean)
+
+
 def _blocks(r: dict, data: Data, cfg: Config, wt: Weights) -> tuple[jax.Array, jax.Array]:
     """The residual blocks of `standardised` from `raw_cues`' values, and the crowd's mean
     height's prior residual (`crowd_height`; 0 where its mean is held). Where the mean is
     estimated, heights are compared with it relatively, (H / mean - 1) x 1.70 / 0.07, so that
     their spread does not shrink with the camera's scale; held, (H - 1.70) / 0.07."""
     wk, wm = cfg.walking, cfg.width
-    hok = r["hok"] & data.valid & (wt.height > 0)
     wh = wt.height * r["hok"].astype(wt.height.dtype)
-    mean_h, prior_h = crowd_height(r["height"], hok, wm.height, wt.sd_hmean)
+    mean_h, prior_h = _crowd(r, data, cfg, wt)
     t_mean, t_sd = expected_stride(data.pace, wk, wt.stride_power)
     valid = data.valid.astype(wt.gait.dtype)[None, :].repeat(N_BLOCKS, 0).ravel()
     # a cue that is off gives 0, even where a degenerate camera makes its value NaN
@@ -123,9 +128,7 @@ def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Ar
 
 def crowd_mean_height(camera: Camera, data: Data, cfg: Config, wt: Weights) -> float:
     """The crowd's mean height (m) under `camera` (`crowd_height`; the config's where held)."""
-    r = raw_cues(camera, data, cfg)
-    hok = r["hok"] & data.valid & (wt.height > 0)
-    return float(crowd_height(r["height"], hok, cfg.width.height, wt.sd_hmean)[0])
+    return float(_crowd(raw_cues(camera, data, cfg), data, cfg, wt)[0])
 
 
 def residuals(dynamic: CameraParams, args) -> jax.Array:
