@@ -68,7 +68,8 @@ OBSERVED = [False]  # the observed-rows rule of the fits (`--observed-only` sets
 SETS = [CUE_SETS]  # the cue sets fitted (`--sets A+B,C` chooses)
 UNION = [False]  # the frame-union correction of the fits (`--frame-union` sets it on)
 STRIDE = ["table1"]  # the gait cue's stride model (`--stride-model`)
-HEIGHT_MEAN_SD = [0.05]  # the crowd's mean height's prior spread (m; `--height-mean-sd`)
+HEIGHT_MEAN_SD = [None]  # the crowd's mean height's prior spread (m; `--height-mean-sd`;
+# None: fit_selfcal's default)
 
 
 def say(msg: str) -> None:
@@ -149,8 +150,9 @@ def fit_rows(source: str, how: str, paths: list[Path], size, fps, truth,
         return [{"source": source, "tracking camera": how, "refused": "no tracks"}], {}
     cfg, batch = pooled_batch(paths, size, fps, window_s)
     for cues in SETS[0]:
+        hsd = {} if HEIGHT_MEAN_SD[0] is None else {"height_mean_sd": HEIGHT_MEAN_SD[0]}
         r = fit_selfcal(cfg, batch, cues=cues, outliers=OUTLIERS[0], frame_union=UNION[0],
-                        stride_model=STRIDE[0], height_mean_sd=HEIGHT_MEAN_SD[0])
+                        stride_model=STRIDE[0], **hsd)
         fits[cues] = r
         v, se = (r.values, r.se) if r.camera is not None else ({}, {})
         get = lambda d, k: f"{d[k]:.5g}" if k in d and math.isfinite(d[k]) else ""
@@ -244,8 +246,8 @@ def main(argv=None) -> int:
     a.add_argument("--observed-only", action="store_true")
     a.add_argument("--frame-union", action="store_true")
     a.add_argument("--stride-model", default="table1", choices=("table1", "walk-ratio"))
-    a.add_argument("--height-mean-sd", type=float, default=0.05,
-                   help="the command's --height-mean-sd (default 0.05; 0 holds the mean)")
+    a.add_argument("--height-mean-sd", type=float,
+                   help="the command's --height-mean-sd (default the command's; 0 holds it)")
     a.add_argument("--sets", help="cue sets to fit, e.g. gait+speed+width+height (default all)")
     args = a.parse_args(argv)
     OUTLIERS[0] = args.outliers

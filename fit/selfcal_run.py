@@ -76,10 +76,10 @@ def add_parser(sub, size_type, at_least) -> None:
                    "the pace (slow steppers take shorter steps; fit.selfcal_gait); "
                    "default table1 (docs/selfcal.md)")
     s.add_argument("--height-mean-sd", type=spread_m, default=HEIGHT_MEAN_SD_M, metavar="M",
-                   help="the walkers' mean height is estimated with the camera, about the "
-                   "config's (1.70 m) by about M m (fit.selfcal_height.crowd_height); default "
-                   f"{HEIGHT_MEAN_SD_M:g}, the spread of adult statures between countries; 0 "
-                   "holds it at the config's (docs/selfcal.md)")
+                   help="spread (m) of the walkers' mean height about the config's (1.70 "
+                   "m): the mean is estimated with the camera (fit.selfcal_height."
+                   f"crowd_height); default {HEIGHT_MEAN_SD_M:g}, the spread of adult statures "
+                   "between countries; 0 holds it at the config's (docs/selfcal.md)")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
