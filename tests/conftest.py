@@ -44,3 +44,19 @@ def release_compiled_programs():
     jax.clear_caches()
     if os.environ.get("RHYTHMJAX_TEST_MAPS"):
         print(f"\n[memory maps after the module: {_memory_maps()}]")
+
+
+@pytest.fixture
+def selfcal_calls(monkeypatch):
+    """The keyword arguments of every `fit.selfcal.fit_selfcal` call (the command's), in order:
+    the real function runs behind a recorder."""
+    import fit.selfcal as sc
+
+    calls, real = [], sc.fit_selfcal
+
+    def recorded(*a, **kw):
+        calls.append(kw)
+        return real(*a, **kw)
+
+    monkeypatch.setattr(sc, "fit_selfcal", recorded)
+    return calls

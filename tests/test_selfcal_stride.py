@@ -108,26 +108,16 @@ def test_walk_ratio_recovers_the_scale_of_strollers(strollers):
     assert abs(ratio.values["h"] / truth["h"] - 1) < abs(table1.values["h"] / truth["h"] - 1)
 
 
-def test_cli_passes_the_stride_model(tmp_path, strollers, monkeypatch, capsys):
+def test_cli_passes_the_stride_model(tmp_path, strollers, selfcal_calls, capsys):
     """`--stride-model walk-ratio` reaches fit_selfcal; without it, Table 1's (three tracks:
     refused after the fit was asked)."""
-    import fit.selfcal as sc
-
     cols = strollers[0]
     keep = np.isin(cols["track_id"], np.unique(cols["track_id"])[:3])
     path = tmp_path / "tracks.parquet"
     names = ["track_id", "frame", "t", "u", "v", "width_px", "intensity"]
     write_table(path, {k: np.asarray(cols[k])[keep] for k in names}, names)
-    seen = []
-    real = sc.fit_selfcal
-
-    def spy(*a, **kw):
-        seen.append(kw.get("stride_model"))
-        return real(*a, **kw)
-
-    monkeypatch.setattr(sc, "fit_selfcal", spy)
     for extra, want in (((), "table1"), (("--stride-model", "walk-ratio"), "walk-ratio")):
         rc = fit_main(["selfcal", str(path), "--image-size", "1280x720", "--fps", "15",
                        "-o", str(tmp_path / "cam.json"), *extra])
-        assert rc == 1 and seen[-1] == want
+        assert rc == 1 and selfcal_calls[-1].get("stride_model") == want
     capsys.readouterr()
