@@ -243,3 +243,24 @@ def test_a_failed_fit_says_what_failed_without_contradiction(success, result, re
     text = failure(r)
     assert text == said
     assert not (success is False and "successful" in text)
+
+
+def test_dropped_interrupts_are_not_printed(monkeypatch):
+    """An interrupt raised where Python drops exceptions (a garbage-collector callback) is
+    pending for the outputs and not printed as "Exception ignored"; any other unraisable
+    exception still reaches the previous hook."""
+    import types
+
+    from rhythmjax.io import atomic
+
+    seen, handlers = [], {}
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: seen.append(u.exc_value))
+    monkeypatch.setattr(signal, "signal", lambda s, h: handlers.setdefault(s, h))
+    atomic.raise_on_sigterm()
+    with pytest.raises(atomic.Terminated) as mine:
+        handlers[signal.SIGTERM](signal.SIGTERM, None)
+    other = ValueError("other")
+    sys.unraisablehook(types.SimpleNamespace(exc_value=mine.value))
+    sys.unraisablehook(types.SimpleNamespace(exc_value=other))
+    assert seen == [other]
+    atomic.raise_on_sigterm()  # forgets the pending interrupt

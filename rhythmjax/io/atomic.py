@@ -9,6 +9,7 @@ import errno
 import os
 import secrets
 import signal
+import sys
 import threading
 from collections.abc import Iterable, Iterator
 from typing import IO, Any
@@ -142,6 +143,18 @@ class Terminated(KeyboardInterrupt):
 _pending: list[KeyboardInterrupt] = []
 
 
+def _quiet_unraisable(unraisable) -> None:
+    """`sys.unraisablehook` that leaves out the interrupts of `raise_on_sigterm` Python dropped
+    (they are pending and re-raised by `OutputSet`: printing them broke the one-line message
+    a command gives when interrupted); anything else goes to the previous hook."""
+    if any(unraisable.exc_value is e for e in _pending):
+        return
+    _quiet_unraisable.default(unraisable)
+
+
+_quiet_unraisable.default = sys.unraisablehook
+
+
 def raise_on_sigterm() -> None:
     """Make SIGTERM raise `Terminated`, and Ctrl-C (where Python's default handler is in place)
     `KeyboardInterrupt`, each remembered until an `OutputSet` sees it, so that one raised where
@@ -155,6 +168,9 @@ def raise_on_sigterm() -> None:
 
     if threading.current_thread() is threading.main_thread():
         _pending.clear()
+        if sys.unraisablehook is not _quiet_unraisable:
+            _quiet_unraisable.default = sys.unraisablehook
+            sys.unraisablehook = _quiet_unraisable
         signal.signal(signal.SIGTERM, handler)
         if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
             signal.signal(signal.SIGINT, handler)
