@@ -9,6 +9,7 @@ two walkers merged, nothing). The count error of a scene is (walkers with k coun
 k - 1 each) - (walkers with none) + (counted tracks owned by no walker).
 
     python benchmarks/diag_count.py [--seed S] [--scenes 10] [--only 0,3] [--set KEY=JSON ...]
+                                    [--clothing any]
 
 --set overrides a `count.CountOptions` field, dotted (e.g. `--set new.lifted_height=2.0`,
 repeatable; `track.options.with_changes`).
@@ -93,6 +94,7 @@ def main(argv=None) -> int:
     p.add_argument("--only", default="")
     p.add_argument("--set", action="append", default=[], metavar="KEY=JSON",
                    help="a CountOptions field, e.g. new.lifted_height=2.0 (repeatable)")
+    p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),
                        {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
@@ -100,7 +102,8 @@ def main(argv=None) -> int:
     cfg = config_from_dict(SYNTHETIC_CONFIG)
     tot = {"true": 0, "counted": 0, "missed": 0, "over": 0, "extra": 0}
     reasons: dict = {}
-    for i, (s, spec) in enumerate(scene_specs(a.scenes, seed=a.seed, camera=cfg.camera)):
+    for i, (s, spec) in enumerate(scene_specs(a.scenes, seed=a.seed, camera=cfg.camera,
+                                                       clothing=a.clothing)):
         if only and i not in only:
             continue
         scene = render_scene(s, spec)

@@ -99,7 +99,8 @@ def _sort_on(det, n_frames: int, truth, offset: int) -> dict:
 # (a) synthetic scenes
 
 
-def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None):
+def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None,
+                clothing: str = "contrasted"):
     from rhythmjax.sim.scene import random_spec
 
     rng = np.random.default_rng(seed)
@@ -113,7 +114,8 @@ def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None):
                 out.append((s, random_spec(s, n_walkers=nw, n_bicycles=nb, n_dogs=0,
                                            n_frames=n_frames, camera=camera, occlusion=True,
                                            min_life=100, max_life=150, bicycle_speed=(3.0, 3.2),
-                                           range_m=(3.1, 19.9), crossing_fraction=0.95)))
+                                           range_m=(3.1, 19.9), crossing_fraction=0.95,
+                                           clothing=clothing)))
                 break
             except RuntimeError:
                 continue

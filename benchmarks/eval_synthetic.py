@@ -31,8 +31,10 @@ N_FRAMES = 180
 RECOMMENDED = SYNTHETIC_CONFIG  # the demo's config (and its tracker options, SYNTHETIC_OPTIONS)
 
 
-def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, camera=None):
-    """The fixed evaluation scenes: (scene_seed, SceneSpec) pairs."""
+def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, camera=None,
+                clothing: str = "contrasted"):
+    """The fixed evaluation scenes: (scene_seed, SceneSpec) pairs (`clothing`: `random_spec`'s,
+    "any" for clothing grey levels that may match the ground's)."""
     from rhythmjax.sim.scene import random_spec
 
     out = []
@@ -40,7 +42,7 @@ def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, 
         s = seed + 1000 * i
         out.append((s, random_spec(s, n_walkers=4 if i < 5 else 3, n_bicycles=1,
                                    n_dogs=1 if i % 2 == 0 else 0, n_frames=n_frames,
-                                   camera=camera, **SCENE_OPTIONS)))
+                                   camera=camera, clothing=clothing, **SCENE_OPTIONS)))
     return out
 
 
@@ -107,6 +109,8 @@ def main(argv=None) -> int:
     p.add_argument("--defaults", action="store_true", help="use params.py's defaults")
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--seed", type=int, default=SEED)
+    p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"),
+                   help="clothing grey levels of the scenes' objects (random_spec)")
     a = p.parse_args(argv)
     if a.config:
         with open(a.config) as fh:
@@ -114,7 +118,7 @@ def main(argv=None) -> int:
     else:
         cfg = Config() if a.defaults else config_from_dict(RECOMMENDED)
     t0 = time.perf_counter()
-    out = evaluate(cfg, scene_specs(a.seed, a.scenes, camera=cfg.camera))
+    out = evaluate(cfg, scene_specs(a.seed, a.scenes, camera=cfg.camera, clothing=a.clothing))
     out["seconds"] = time.perf_counter() - t0
     out["config"] = config_to_dict(cfg)
     out["seed"] = a.seed

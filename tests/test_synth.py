@@ -218,3 +218,25 @@ def test_random_spec_shortens_a_life_no_path_can_hold():
     assert synth.random_spec(8777, **kw) == spec  # still deterministic
     with pytest.raises(RuntimeError, match="could not place a bicycle"):
         synth.random_spec(1, n_walkers=0, n_bicycles=1, n_dogs=0, range_m=(3.1, 3.2))
+
+
+def test_clothing_of_any_grey():
+    """`random_spec(clothing=...)`: "contrasted" (the default) draws the same scene as before
+    (every clothing grey 20-80 or 165-235); "any" draws each grey uniform in 20-235, so about
+    49 / 215 = 23 % within 25 grey levels of the ground's 120 (96-144 of the integers 20-234;
+    a binomial band of 4 sigma over the 600 greys below); another name is refused."""
+    base = synth.random_spec(5, n_walkers=3, n_bicycles=1, n_dogs=1)
+    assert synth.random_spec(5, n_walkers=3, n_bicycles=1, n_dogs=1, clothing="contrasted") == base
+    greys = lambda spec: np.array([g for a in spec.actors  # noqa: E731
+                                   for g in (a.grey_torso, a.grey_legs)])
+    g = greys(base)
+    assert np.all((g <= 80) | (g >= 165))
+    many = np.concatenate([greys(synth.random_spec(s, n_walkers=6, n_bicycles=2, n_dogs=2,
+                                                   clothing="any", occlusion=True))
+                           for s in range(30)])
+    assert many.size == 600 and many.min() >= 20 and many.max() <= 235
+    near = np.mean(np.abs(many - 120) < 25)
+    p = 49 / 215
+    assert abs(near - p) < 4 * math.sqrt(p * (1 - p) / many.size)
+    with pytest.raises(ValueError, match="clothing must be one of"):
+        synth.random_spec(5, clothing="bright")

@@ -87,6 +87,9 @@ class NewPedestrianOptions:
     lifted_height: float = 0.55  # ... or, lifted higher, spanning this fraction of its H
     # (clipped at the image top) at its own foot point: a farther walker merged with a nearer one
     in_range: bool = True  # ... standing in the config's detection range (ground y, m)
+    head_feet: float = 0.0  # > 0: a run taller than this many H of a walker standing on its
+    # bottom (legs lost in the mask) starts its walker with the feet where its top row is a
+    # head (`count.head_feet`; 1.25 = `head_feet.TALL_HEIGHTS` when on)
 
 
 @dataclass(frozen=True)

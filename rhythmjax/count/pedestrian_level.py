@@ -20,16 +20,17 @@ Per frame (`PedestrianLevel.update`):
    enough and reaching the blob's bottom (feet, not arms) or, lifted above it, `new.lifted_height`
    of its patch tall (a farther walker merged with a nearer object), with the foot point's ground
    point in the detection range (`new.in_range`), start pedestrians, one per `new.walker_widths` W
-   of the run (`refinement.new_pedestrians`); confirmed after `life.confirm_hits` measured frames
-   (dropped at `life.tentative_misses` misses). One ends: after predicting for predict_timeout_s;
-   ("3d") when its ground velocity changes by more than `life.max_dv_mps` within `life.dv_window_s`
-   s (no walker or cyclist turns or brakes that fast: it lost its walker and ends without those
-   frames, `track.toolkit.velocity_jump`); when its foot point stayed put for `life.still_s` s
-   (`still.is_still`: a ghost or a stopped object, copied into the background under its patch); two
-   within `life.duplicate_widths` W with the same image velocity for `life.duplicate_frames` frames
-   are one: the younger ends. Relations for the next frame: the blobs the placed patch overlaps.
-   The background starts from `background` (the first seconds' median, `still.peek_background`),
-   else from the first frame.
+   of the run (`refinement.new_pedestrians`; with `new.head_feet`, a run too tall for a walker
+   standing on its bottom starts with the feet its top row implies, `head_feet`); confirmed after
+   `life.confirm_hits` measured frames (dropped at `life.tentative_misses` misses). One ends: after
+   predicting for predict_timeout_s; ("3d") when its ground velocity changes by more than
+   `life.max_dv_mps` within `life.dv_window_s` s (no walker or cyclist turns or brakes that fast: it
+   lost its walker and ends without those frames, `track.toolkit.velocity_jump`); when its foot
+   point stayed put for `life.still_s` s (`still.is_still`: a ghost or a stopped object, copied into
+   the background under its patch); two within `life.duplicate_widths` W with the same image
+   velocity for `life.duplicate_frames` frames are one: the younger ends. Relations for the next
+   frame: the blobs the placed patch overlaps. The background starts from `background` (the first
+   seconds' median, `still.peek_background`), else from the first frame.
 Every frame each pedestrian samples I(k) in window B at its foot point
 (`detect.window_b_intensity` on the frame difference, W = its patch width; with
 `verdicts.window_candidates` also in window B moved by each offset of `io.files.

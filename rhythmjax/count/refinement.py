@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from .head_feet import head_foot_row, too_tall
 from .patches import ground_point
 from .pedestrian import Pedestrian, finite_uv
 
@@ -21,10 +22,13 @@ def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
     """Runs of blob columns no patch covers (`new.walker_widths` W around each foot point),
     wide and full enough for a pedestrian, reaching the blob's bottom or lifted and tall
     enough (`new.*`): one new pedestrian per walker width of the run, side by side (groups),
-    its foot point in the detection range (`in_range`). They are added to `level.peds` and
-    returned; when the free slots run out the frame is listed in `level.full_frames` and those
-    started so far are returned without being added (as the level always did)."""
+    its foot point in the detection range (`in_range`); with `new.head_feet`, a run too tall
+    for a walker standing on its bottom stands where its top row is a walker's head
+    (`head_feet`: its legs lost in the mask). They are added to `level.peds` and returned; when
+    the free slots run out the frame is listed in `level.full_frames` and those started so far
+    are returned without being added (as the level always did)."""
     opt = level.opt
+    head = opt.new.head_feet
     cover = []
     for p in level.peds:
         b = level.patch_at(p.z if finite_uv(p.z) else p.next_uv)
@@ -49,12 +53,18 @@ def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
         for c0, c1 in zip(edges[::2], edges[1::2]):
             sub = crop[:, c0:c1]
             rows = np.flatnonzero(sub.any(axis=1))
-            vb = y0 + int(rows[-1])
-            w, h = (float(q) for q in level.shape.size(x0 + 0.5 * (c0 + c1 - 1), vb))
+            vb = float(y0 + int(rows[-1]))
+            span = rows[-1] - rows[0] + 1
+            uc = x0 + 0.5 * (c0 + c1 - 1)
+            from_head = head > 0 and too_tall(level.shape, uc, vb, float(span), head)
+            if from_head:  # legs lost in the mask: the feet from the head (`head_feet`)
+                vf = head_foot_row(level.shape, uc, float(y0 + rows[0]), labels.shape[0])
+                from_head = vf is not None and vf > vb
+                vb = vf if from_head else vb
+            w, h = (float(q) for q in level.shape.size(uc, vb))
             if not (math.isfinite(w) and w > 0):
                 continue
             n = max(1, int(round((c1 - c0) / (opt.new.walker_widths * w))))
-            span = rows[-1] - rows[0] + 1
             lifted = vb < y1 - 1 - opt.new.max_lift * hb  # above the blob's bottom: an arm,
             # or a farther walker merged with a nearer object (it stands taller than an arm)
             if ((c1 - c0) < opt.new.min_widths * w or sub.sum() < opt.new.min_fill * w * h * n
@@ -68,6 +78,9 @@ def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
                     level.full_frames.append(level.n_frames)
                     return new  # (as before the split: these are not added to level.peds)
                 z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1])) if r.size else None
+                if z is not None and from_head:
+                    vf = head_foot_row(level.shape, z[0], float(y0 + r[0]), labels.shape[0])
+                    z = None if vf is None else (z[0], vf)
                 if z is not None and in_range(level, z):
                     p = level.new_pedestrian(free_slots.pop(0))
                     p.z, p.z_width = z, float(a1 - a0)  # its share of the run

@@ -174,15 +174,26 @@ def contact_offset(kind: str, t: np.ndarray, a: dict) -> np.ndarray:
 EXTENT = {"pedestrian": (0.5, 1.8), "bicycle": (1.0, 1.9), "dog": (0.6, 0.7)}  # half-width, height
 
 
-def _grey_pair(rng) -> tuple[int, int]:
-    """Two clothing grey levels, each clearly darker or lighter than the ground (~120)."""
+CLOTHING = ("contrasted", "any")  # `sample_params`' clothing grey levels
+
+
+def _grey_pair(rng, clothing: str = "contrasted") -> tuple[int, int]:
+    """Two clothing grey levels (torso, legs). "contrasted": each clearly darker (20-80) or
+    lighter (165-235) than the ground (~120); "any": each uniform in 20-235, so about one in five
+    lies within 20 grey levels of the ground (below the counting mask's threshold)."""
+    if clothing == "any":
+        return tuple(int(rng.uniform(20, 235)) for _ in range(2))
+    if clothing != "contrasted":
+        raise ValueError(f"clothing must be one of {CLOTHING}, got {clothing!r}")
     return tuple(int(rng.uniform(20, 80) if rng.random() < 0.6 else rng.uniform(165, 235))
                  for _ in range(2))
 
 
-def sample_params(kind: str, rng, bicycle_speed, bag_fraction) -> dict:
-    """Random ActorSpec keyword arguments of one actor of `kind` (see `synth.random_spec`)."""
-    torso, legs = _grey_pair(rng)
+def sample_params(kind: str, rng, bicycle_speed, bag_fraction,
+                  clothing: str = "contrasted") -> dict:
+    """Random ActorSpec keyword arguments of one actor of `kind` (see `synth.random_spec`);
+    `clothing` as `_grey_pair`'s."""
+    torso, legs = _grey_pair(rng, clothing)
     kw = {"grey_torso": torso, "grey_legs": legs, "phase": float(rng.uniform(0, 1)),
           "grey_head": int(rng.uniform(60, 110))}
     if kind == "pedestrian":

@@ -359,7 +359,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                 min_life: int = 80, max_life: int = 120, range_m: tuple[float, float] = (3.5, 19.5),
                 bicycle_speed: tuple[float, float] = (3.0, 6.0), bag_fraction: float = 0.2,
                 noise_std: float = 2.0, jitter_px: float = 0.0, margin_px: float = 8.0,
-                crossing_fraction: float = 0.85) -> SceneSpec:
+                crossing_fraction: float = 0.85, clothing: str = "contrasted") -> SceneSpec:
     """A random scene: walkers with the paper's pace N(2.05, 0.183) Hz and step length
     N(0.72, 0.09) m, bicycles at `bicycle_speed` m/s pedalling at 0.9-1.5 rev/s, dogs trotting
     at 3-5 Hz with 0.2-0.35 m steps. Each lives min_life..max_life frames (fewer for a bicycle
@@ -367,7 +367,11 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     the range's depth at its speed), starts at a random frame, and moves on a straight path
     whose foot point stays in the image and within `range_m` (ground distance, m) for its whole
     life. Without `occlusion`, paths are re-drawn (up to 300 times) until the objects' image
-    boxes never overlap; with it, overlaps are left as drawn. Deterministic given `seed`."""
+    boxes never overlap; with it, overlaps are left as drawn. `clothing`: "contrasted" (every
+    clothing grey at least 40 grey levels off the ground's 120) or "any" (uniform 20-235, some
+    close to the ground; `sim.actors.CLOTHING`). Deterministic given `seed`."""
+    if clothing not in sa.CLOTHING:
+        raise ValueError(f"clothing must be one of {sa.CLOTHING}, got {clothing!r}")
     camera = camera or Camera()
     check_room(camera, n_walkers, n_bicycles, n_dogs, n_frames, min_life, range_m)
     rng = _rng(seed)
@@ -377,7 +381,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     actors = []
     k = np.arange(n_frames)
     for kind in kinds:
-        kw = sa.sample_params(kind, rng, bicycle_speed, bag_fraction)
+        kw = sa.sample_params(kind, rng, bicycle_speed, bag_fraction, clothing)
         speed = kw["pace_hz"] * kw["step_length_m"]
         life = int(rng.integers(min_life, max_life + 1))
         life = min(life, n_frames, max(16, int(crossing_fraction * (range_m[1] - range_m[0])
