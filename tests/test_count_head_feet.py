@@ -6,11 +6,14 @@ scene."""
 
 from __future__ import annotations
 
+import json
 import math
 
+import cv2
 import numpy as np
 import pytest
 
+from rhythmjax.cli.main import main
 from rhythmjax.count import count_frames
 from rhythmjax.count.head_feet import MIN_SLOPE, TALL_HEIGHTS, head_foot_row, too_tall
 from rhythmjax.count.options import CountOptions, VerdictOptions, with_changes
@@ -91,6 +94,13 @@ LOW_SMALL = {"camera": {"f_m": 0.008, "h_m": 1.0, "theta_deg": 10.0, "a_px_per_m
              "thresholds": {"range_min_m": 2.0, "range_max_m": 20.0}}
 
 
+def trousers_scene(shoes: int):
+    """The walker of the test below: 8 m ahead, trousers of the ground's grey (120), torso 40."""
+    cfg = config_from_dict(LOW_SMALL)
+    a = walker(-3.0, 8.0, 0.0, start_frame=3, grey_legs=120, grey_torso=40, grey_feet=shoes)
+    return cfg, render_scene(1, SceneSpec(n_frames=60, actors=(a,), camera=cfg.camera))
+
+
 def test_a_walker_with_trousers_of_the_ground_grey_is_counted():
     """A rendered walker 8 m ahead of a 1 m camera (focal 200 px), trousers of the ground's
     grey (120), dark shoes (30): the mask holds its head and torso, and its shoes apart, below
@@ -100,13 +110,10 @@ def test_a_walker_with_trousers_of_the_ground_grey_is_counted():
     foot row within 1 px of the true one and its ground distance within 3 % of 8 m (measured
     -0.2 px and 8.00 m). Shoes of the ground's grey too leave nothing to follow: no track
     either way."""
-    cfg = config_from_dict(LOW_SMALL)
     quiet = CountOptions(verdicts=VerdictOptions(classify=False, online=False))
     on_opt = with_changes(quiet, {"new.head_feet": TALL_HEIGHTS})
     for shoes in (30, 118):
-        a = walker(-3.0, 8.0, 0.0, start_frame=3, grey_legs=120, grey_torso=40,
-                   grey_feet=shoes)
-        scene = render_scene(1, SceneSpec(n_frames=60, actors=(a,), camera=cfg.camera))
+        cfg, scene = trousers_scene(shoes)
         items = [(k, k / scene.fps, f) for k, f in enumerate(scene.frames)]
         assert count_frames(cfg, iter(items), options=quiet).counts["tracks"] == 0
         on = count_frames(cfg, iter(items), options=on_opt)
@@ -120,3 +127,22 @@ def test_a_walker_with_trousers_of_the_ground_grey_is_counted():
         foot = m["bb_top"] + m["bb_height"]
         assert np.median(np.abs(foot - scene.truth[0].v[frames])) <= 1.0
         assert np.median(m["y"]) == pytest.approx(8.0, rel=0.03)
+
+
+def test_the_count_command_takes_feet_from_head(tmp_path, capsys):
+    """`rhythmjax count --feet-from-head` counts that walker; without it, nothing."""
+    _, scene = trousers_scene(30)
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for k, f in enumerate(scene.frames):
+        assert cv2.imwrite(str(frames / f"f{k:03d}.png"), f)
+    cfg = tmp_path / "low.json"
+    cfg.write_text(json.dumps(LOW_SMALL))
+    walkers = []
+    for flag in ([], ["--feet-from-head"]):
+        capsys.readouterr()
+        rc = main(["count", str(frames), "-c", str(cfg), "-o", str(tmp_path / f"o{len(flag)}"),
+                   "--fps", "15", "--json", "--no-report", *flag])
+        assert rc == 0
+        walkers.append(json.loads(capsys.readouterr().out)["counts"]["walkers"])
+    assert walkers == [0, 1]

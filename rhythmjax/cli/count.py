@@ -8,7 +8,8 @@ import os
 import sys
 
 from ..count.counting import count_frames
-from ..count.options import CountOptions, VerdictOptions
+from ..count.head_feet import TALL_HEIGHTS
+from ..count.options import CountOptions, NewPedestrianOptions, VerdictOptions
 from ..io import atomic_write, dumps_json, write_table
 from ..io.mot import VELOCITY_COLUMNS, write_mot
 from ..model.params import ConfigError, config_to_dict
@@ -83,7 +84,9 @@ def cmd_count(args) -> int:
         raise ConfigError("--max-pedestrians", f"must be >= 1, got {args.max_pedestrians}")
     opt = CountOptions(dynamics=args.dynamics, max_pedestrians=args.max_pedestrians,
                        verdicts=VerdictOptions(min_track_frames=args.min_frames,
-                                               window_candidates=args.window_candidates))
+                                               window_candidates=args.window_candidates),
+                       new=NewPedestrianOptions(head_feet=TALL_HEIGHTS if args.feet_from_head
+                                                else 0.0))
     out = lambda name: os.path.join(args.output, name)
     names = COUNT_OUTPUTS + (() if args.no_report else (REPORT_NAME,))
     with output_set(args.output, names, overlay=args.overlay, inputs=[args.video, args.config],
@@ -172,5 +175,10 @@ def register(sub, formatter=None) -> None:
     p.add_argument("--no-report", action="store_true", help="skip report.html (the counts, "
                    "verdict table, spectra, overlay and config on one page)")
     add_window_candidates(p, VerdictOptions().window_candidates)
+    p.add_argument("--feet-from-head", action="store_true", help="start a walker whose "
+                   "trousers the foreground mask loses (a blob much taller than a walker "
+                   "standing on its bottom) with the feet where its top row is a 1.7 m "
+                   "walker's head: for low cameras and clothing of the ground's grey; off by "
+                   "default (docs/rules.md, 'the feet from the head')")
     add_common(p)
     p.set_defaults(func=cmd_count)
