@@ -1,6 +1,7 @@
 """The foot-point gates of `count.foot_gate` (options a and b) on and off, through eval_all's
-count sources: own counting scenes of `--seeds` (eval_count's scene specs), `dev_count` (report
-only) and `pets_count`. One `--variant NAME` at a time (2 shared cores):
+count sources: own counting scenes of `--sources count:SEED` (eval_count's scene specs),
+`dev_count` (report only) and `pets_count`; `benchmarks/eval_count_options.py` with each
+variant's settings. One `--variant NAME` at a time (2 shared cores):
 
     off    the defaults
     a      placement.in_range
@@ -18,10 +19,7 @@ only) and `pets_count`. One `--variant NAME` at a time (2 shared cores):
 from __future__ import annotations
 
 import argparse
-import functools
 import json
-import sys
-import time
 
 
 VARIANTS = {
@@ -39,64 +37,17 @@ VARIANTS = {
 }
 
 
-def count_seed(seed: int, log) -> dict:
-    """eval_all.run_count on one seed's 10 counting scenes."""
-    import eval_all as ea
-    import eval_count as ec
-    from eval_all_score import count_row
-
-    from rhythmjax.model.params import config_from_dict
-    from rhythmjax.sim.presets import SYNTHETIC_CONFIG
-    from rhythmjax.sim.scene import render_scene
-
-    cfg = config_from_dict(SYNTHETIC_CONFIG)
-    clips = []
-    for scene_seed, spec in ec.scene_specs(10, seed=seed, camera=cfg.camera):
-        scene = render_scene(scene_seed, spec)
-        truth, kinds = ec.truth_boxes(scene)
-        frames = [(k, k / scene.fps, f) for k, f in enumerate(scene.frames)]
-        clips.append(ea.count_clip(cfg, frames, truth, kinds, -1))
-        log(f"count {seed}/{scene_seed}: {clips[-1]}")
-    return {"count": count_row(clips), "clips": clips}
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--variant", default="off", choices=sorted(VARIANTS))
     p.add_argument("--sources", default="count:42024")
     p.add_argument("-o", "--output")
     a = p.parse_args(argv)
+    import eval_count_options
 
-    import eval_all as ea
-
-    import rhythmjax.count as rc
-    from rhythmjax.count.options import CountOptions, with_changes
-
-    opt = with_changes(CountOptions(), VARIANTS[a.variant])
-    rc.count_frames = functools.partial(rc.count_frames, options=opt)
-    log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
-    out = {"variant": a.variant, "options": VARIANTS[a.variant]}
-    for src in a.sources.split(","):
-        t0 = time.perf_counter()
-        if src.startswith("count:"):
-            seed = int(src.split(":")[1])
-            r = count_seed(seed, log)
-        elif src == "dev_count":
-            r = ea.run_dev_count([], False, log)
-        elif src == "pets_count":
-            r = ea.run_pets_count([], False, log)
-        else:
-            raise SystemExit(f"unknown source {src}")
-        out[src] = r
-        c = r["count"]
-        print(f"{a.variant:4s} {src:12s} counted {c['counted']}/{c['true']} err "
-              f"{100 * c['count_err_sum']:.1f} % others {c['others_counted']} "
-              f"mota {c['mota']:.3f} idf1 {c['idf1']:.3f} ({time.perf_counter() - t0:.0f} s)",
-              flush=True)
-    if a.output:
-        with open(a.output, "w") as f:
-            json.dump(out, f, indent=1, default=float)
-    return 0
+    sets = [x for k, v in VARIANTS[a.variant].items() for x in ("--set", f"{k}={json.dumps(v)}")]
+    return eval_count_options.main(["--sources", a.sources, "--name", a.variant, *sets,
+                                    *(["-o", a.output] if a.output else [])])
 
 
 if __name__ == "__main__":
