@@ -5,8 +5,8 @@ them, clothing as `--clothing`), `dev_count` (the dev crowd clips; report only) 
 non-walkers counted, MOTA, IDF1 (eval_all's columns); `-o` keeps every clip.
 
     python benchmarks/eval_count_options.py --sources count:42024,count:31337 \\
-        [--scenes 10] [--clothing any] [--set placement.head_feet=1.25 ...] [--name NAME] \\
-        [-o OUT.json]
+        [--scenes 10] [--clothing any] [--focal-px 500] [--set new.head_feet=1.25 ...] \\
+        [--name NAME] [-o OUT.json]
 
 `--set GROUP.FIELD=JSON` (repeatable) changes a CountOptions field (`track.options.
 with_changes`); nothing here chooses anything: it measures.
@@ -15,6 +15,7 @@ with_changes`); nothing here chooses anything: it measures.
 from __future__ import annotations
 
 import argparse
+import copy
 import functools
 import json
 import os
@@ -25,8 +26,9 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
-def count_seed(seed: int, clothing: str, log, scenes: int = 10) -> dict:
-    """eval_all.run_count on one seed's counting scenes (`clothing`: `random_spec`'s)."""
+def count_seed(seed: int, clothing: str, log, scenes: int = 10, focal_px: float = 0.0) -> dict:
+    """eval_all.run_count on one seed's counting scenes (`clothing`: `random_spec`'s;
+    `focal_px` > 0: the camera's a f = b f in px instead of the paper's 800)."""
     import eval_all as ea
     import eval_count as ec
     from eval_all_score import count_row
@@ -35,7 +37,10 @@ def count_seed(seed: int, clothing: str, log, scenes: int = 10) -> dict:
     from rhythmjax.sim.presets import SYNTHETIC_CONFIG
     from rhythmjax.sim.scene import render_scene
 
-    cfg = config_from_dict(SYNTHETIC_CONFIG)
+    d = copy.deepcopy(SYNTHETIC_CONFIG)
+    if focal_px > 0:
+        d["camera"] = {"a_px_per_m": focal_px / 0.008, "b_px_per_m": focal_px / 0.008}
+    cfg = config_from_dict(d)
     clips = []
     for scene_seed, spec in ec.scene_specs(scenes, seed=seed, camera=cfg.camera, clothing=clothing):
         scene = render_scene(scene_seed, spec)
@@ -52,6 +57,8 @@ def main(argv=None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="GROUP.FIELD=JSON")
     p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
     p.add_argument("--scenes", type=int, default=10, help="own scenes per seed")
+    p.add_argument("--focal-px", type=float, default=0.0, help="own scenes' camera a f = b f "
+                   "(px; default the paper's 800: heads cut nearer than 15 m; 500: from 3.3 m)")
     p.add_argument("--name", default="", help="a label for the printed lines")
     p.add_argument("-o", "--output")
     a = p.parse_args(argv)
@@ -65,12 +72,12 @@ def main(argv=None) -> int:
     rc.count_frames = functools.partial(rc.count_frames,
                                         options=with_changes(CountOptions(), changes))
     log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
-    out = {"changes": changes, "clothing": a.clothing}
+    out = {"changes": changes, "clothing": a.clothing, "focal_px": a.focal_px}
     name = a.name or (",".join(a.set) or "defaults")
     for src in a.sources.split(","):
         t0 = time.perf_counter()
         if src.startswith("count:"):
-            r = count_seed(int(src.split(":")[1]), a.clothing, log, a.scenes)
+            r = count_seed(int(src.split(":")[1]), a.clothing, log, a.scenes, a.focal_px)
         elif src == "dev_count":
             r = ea.run_dev_count([], False, log)
         elif src == "pets_count":
