@@ -104,8 +104,9 @@ def trousers_scene(shoes: int):
 def test_a_walker_with_trousers_of_the_ground_grey_is_counted():
     """A rendered walker 8 m ahead of a 1 m camera (focal 200 px), trousers of the ground's
     grey (120), dark shoes (30): the mask holds its head and torso, and its shoes apart, below
-    the hips, in blobs too small to start a walker. Off (the paper's foot row: the hips', 2.3 px
-    below the horizon, 30 m away): no track. On: one walker counted, started where its head
+    the hips, in blobs too small to start a walker. Off (the paper's foot row: the hips', 0.85-
+    0.9 m up, 3.9-2.6 px below the horizon, whose ground point lies 53-80 m away, beyond the
+    20 m range): no track. On: one walker counted, started where its head
     puts its feet, then placed on its shoes by the paper's rule to the last frame; its patch's
     foot row within 1 px of the true one and its ground distance within 3 % of 8 m (measured
     -0.2 px and 8.00 m). Shoes of the ground's grey too leave nothing to follow: no track
