@@ -49,11 +49,12 @@ def head_foot_row(shape: ShapeModel, u: float, v_top: float, n_rows: int,
     the border has no head row)."""
     if not float(v_top) >= 0.5:
         return None
-    rows = np.arange(int(n_rows), dtype=np.float64)
-    _, h = shape.size(np.full(rows.size, float(u)), rows)
-    top = rows - np.asarray(h, np.float64)
+    rows = np.arange(int(n_rows))
+    # the patch heights of every row: the shape's cached row table where the size depends on
+    # the row only (no roll), else computed at (u, row)
+    _, h, fin = shape.foot_sizes(np.full(rows.size, float(u)), rows, int(n_rows))
+    top = rows - h
     d = top - float(v_top)
-    fin = np.isfinite(d)
     below = d <= 0.0
     cross = np.flatnonzero(fin[:-1] & fin[1:] & (below[:-1] != below[1:]))
     if cross.size != 1:
@@ -62,7 +63,7 @@ def head_foot_row(shape: ShapeModel, u: float, v_top: float, n_rows: int,
     slope = float(top[i + 1] - top[i])
     if not abs(slope) >= min_slope:
         return None
-    v = float(rows[i] + (float(v_top) - top[i]) / slope)
+    v = float(i + (float(v_top) - top[i]) / slope)
     return v if v > v_top else None
 
 

@@ -78,8 +78,9 @@ def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
                     level.full_frames.append(level.n_frames)
                     return new  # (as before the split: these are not added to level.peds)
                 z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1])) if r.size else None
-                if z is not None and from_head:
-                    vf = head_foot_row(level.shape, z[0], float(y0 + r[0]), labels.shape[0])
+                if z is not None and from_head:  # one walker on the run: its row above
+                    vf = vb if n == 1 else head_foot_row(level.shape, z[0], float(y0 + r[0]),
+                                                         labels.shape[0])
                     z = None if vf is None else (z[0], vf)
                 if z is not None and in_range(level, z):
                     p = level.new_pedestrian(free_slots.pop(0))
