@@ -9,7 +9,7 @@ two walkers merged, nothing). The count error of a scene is (walkers with k coun
 k - 1 each) - (walkers with none) + (counted tracks owned by no walker).
 
     python benchmarks/diag_count.py [--seed S] [--scenes 10] [--only 0,3] [--set KEY=JSON ...]
-                                    [--clothing any]
+                                    [--clothing any] [--focal-px 500]
 
 --set overrides a `count.CountOptions` field, dotted (e.g. `--set new.lifted_height=2.0`,
 repeatable; `track.options.with_changes`).
@@ -18,6 +18,7 @@ repeatable; `track.options.with_changes`).
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import os
 import sys
@@ -95,11 +96,16 @@ def main(argv=None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="KEY=JSON",
                    help="a CountOptions field, e.g. new.lifted_height=2.0 (repeatable)")
     p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
+    p.add_argument("--focal-px", type=float, default=0.0,
+                   help="the camera's a f = b f (px; default the paper's 800)")
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),
                        {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
     only = {int(x) for x in a.only.split(",") if x}
-    cfg = config_from_dict(SYNTHETIC_CONFIG)
+    d = copy.deepcopy(SYNTHETIC_CONFIG)
+    if a.focal_px > 0:  # as eval_count_options.count_seed
+        d["camera"] = {"a_px_per_m": a.focal_px / 0.008, "b_px_per_m": a.focal_px / 0.008}
+    cfg = config_from_dict(d)
     tot = {"true": 0, "counted": 0, "missed": 0, "over": 0, "extra": 0}
     reasons: dict = {}
     for i, (s, spec) in enumerate(scene_specs(a.scenes, seed=a.seed, camera=cfg.camera,
