@@ -13,8 +13,10 @@ the change in non-walkers counted ("others"), summed. One row per pair of files 
 sources' clips together), and with several pairs a row of all their clips pooled.
 
     python benchmarks/paired_count.py A.json B.json [A2.json B2.json ...] [--resamples 10000]
+                                      [--json OUT.json]
 
 Pairs are given as consecutive files (before, after); their sources must match clip for clip.
+A row is named by its "before" file.
 Nothing is chosen here: it measures.
 """
 
