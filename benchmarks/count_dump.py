@@ -3,10 +3,13 @@ needs to be re-applied offline: the CountResult's mot, tracks and verdicts table
 and the MOT truth with each truth id's kind (a pickle). A diagnostic for
 `benchmarks/diag_count_unjudged.py`; the sources and configs are `eval_all.py`'s.
 
-    python benchmarks/count_dump.py SOURCE OUT.pkl [--seed S] [--scenes 10] [--set KEY=JSON ...]
+    python benchmarks/count_dump.py SOURCE OUT.pkl [--seed S[,S...]] [--scenes 10] \\
+        [--clothing any] [--focal-px 500] [--set KEY=JSON ...]
 
 SOURCE: pets | count (own counting scenes of `eval_count.scene_specs`, seed --seed) |
-dev_count (report only). --set overrides a `count.CountOptions` field (dotted).
+dev_count (report only). --clothing and --focal-px change the own scenes as in
+`eval_count_options.py` (clothing of any grey; the camera's a f = b f in px). --set overrides
+a `count.CountOptions` field (dotted).
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
-def clips_of(source: str, seed: int, scenes: int):
+def clips_of(source: str, seed: int, scenes: int, clothing: str = "contrasted",
+             focal_px: float = 0.0):
     """(name, cfg, frames, truth, kinds, offset, true walkers) per clip of `source`."""
     import eval_all as ea
     import eval_count as ec
@@ -39,12 +43,17 @@ def clips_of(source: str, seed: int, scenes: int):
         kinds = {int(i): "pedestrian" for i in np.unique(truth["id"])}
         yield "pets", cfg, frames, truth, kinds, -1, len(kinds)
     elif source == "count":
+        import copy
+
         from rhythmjax.model.params import config_from_dict
         from rhythmjax.sim.presets import SYNTHETIC_CONFIG
         from rhythmjax.sim.scene import render_scene
 
-        cfg = config_from_dict(SYNTHETIC_CONFIG)
-        for s, spec in ec.scene_specs(scenes, seed=seed, camera=cfg.camera):
+        d = copy.deepcopy(SYNTHETIC_CONFIG)
+        if focal_px > 0:
+            d["camera"] = {"a_px_per_m": focal_px / 0.008, "b_px_per_m": focal_px / 0.008}
+        cfg = config_from_dict(d)
+        for s, spec in ec.scene_specs(scenes, seed=seed, camera=cfg.camera, clothing=clothing):
             scene = render_scene(s, spec)
             truth, kinds = ec.truth_boxes(scene)
             seen = set(truth["id"].tolist())
@@ -72,18 +81,23 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser()
     p.add_argument("source")
     p.add_argument("out")
-    p.add_argument("--seed", type=int, default=42024)
+    p.add_argument("--seed", default="42024", help="one seed or a comma list")
     p.add_argument("--scenes", type=int, default=10)
+    p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
+    p.add_argument("--focal-px", type=float, default=0.0)
     p.add_argument("--set", action="append", default=[])
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),
                        {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
     rows = []
-    for name, cfg, frames, truth, kinds, off, true in clips_of(a.source, a.seed, a.scenes):
+    clips = (c for seed in a.seed.split(",")
+             for c in clips_of(a.source, int(seed), a.scenes, a.clothing, a.focal_px))
+    for name, cfg, frames, truth, kinds, off, true in clips:
         res = count_frames(cfg, iter(frames), n_frames=len(frames), options=opt)
         rows.append({"clip": name, "mot": res.mot, "tracks": res.tracks,
                      "verdicts": res.verdicts, "counts": res.counts, "truth": truth,
                      "kinds": kinds, "offset": off, "true": true, "fps": cfg.camera.fps,
+                     "image_size": (int(cfg.camera.image_width), int(cfg.camera.image_height)),
                      "summary": res.summary})
         print(name, res.counts["walkers"], "of", true, flush=True)
     with open(a.out, "wb") as f:
