@@ -21,6 +21,7 @@ labelled tracks: the walkers that own a track), the floor of any counting rule o
 
     python benchmarks/study_count_model.py --train A.pkl B.pkl ... --test C.pkl D.pkl ... \\
         [--l2 0.01] [--estimator threshold|sum] [--json OUT.json]
+    python benchmarks/study_count_model.py --unowned RUN.pkl ...   # why walkers own no track
 """
 
 from __future__ import annotations
@@ -226,14 +227,71 @@ def line(name: str, r: dict) -> str:
             f"{r['oracle']['counted']:4d} {r['oracle']['error_pct']:5.1f} %")
 
 
+def unowned_report(path: str) -> list[str]:
+    """Why walkers own no track, in one saved run: per walker without a track of its own, how
+    often some track's box is on it (`diag_count_unjudged.frame_owners`: IoU >= 0.3) and whose
+    that track is (another walker's, or nobody's: no majority owner), with `diag_count.
+    free_fraction` for those never boxed; then the tracks whose box is on such a walker for
+    >= 5 frames (each once), by how often their best-matching truth object changes
+    (alternating: >= 2)."""
+    from diag_count import free_fraction
+    from diag_count_unjudged import frame_owners
+
+    with open(path, "rb") as f:
+        rows = pickle.load(f)
+    kinds_of: dict[str, int] = {}
+    switches: dict[str, int] = {}
+    seen: set = set()  # (clip, track) counted once
+    for r in rows:
+        tr = r["truth"]
+        own = owner_of_tracks(tr, r["mot"], r["offset"])
+        fo = frame_owners(tr, r["mot"], r["offset"])
+        owned = set(own.values())
+        lost = [int(t) for t in np.unique(tr["id"])
+                if r["kinds"].get(int(t)) == "pedestrian" and int(t) not in owned]
+        for t in lost:
+            n_vis = int((tr["id"] == t).sum())
+            on = {h: sum(o == t for o in d.values()) for h, d in fo.items()}
+            by = [h for h, n in on.items() if n]
+            frames_on = len({f for h in by for f, o in fo[h].items() if o == t})
+            if not by:
+                key = "never in a track's box (apart in >= half its frames: %s)" % (
+                    "yes" if free_fraction(tr, t) >= 0.5 else "no")
+            else:
+                whose = "another walker's" if all(own.get(h) is not None for h in by) \
+                    else "nobody's (or mixed)"
+                share = ">=" if frames_on >= 0.25 * n_vis else "<"
+                key = f"in a track's box in {share} 1/4 of its frames, the track {whose}"
+            kinds_of[key] = kinds_of.get(key, 0) + 1
+            for h, n in on.items():
+                if n >= 5 and (r["clip"], h) not in seen:
+                    seen.add((r["clip"], h))
+                    seq = [fo[h][f] for f in sorted(fo[h])]
+                    k = sum(a != b for a, b in zip(seq, seq[1:]))
+                    key = "alternating (>= 2 changes)" if k >= 2 else f"{k} change(s)"
+                    switches[key] = switches.get(key, 0) + 1
+    out = [f"{os.path.basename(path)}: {sum(kinds_of.values())} walkers own no track"]
+    out += [f"  {n:4d} {k}" for k, n in sorted(kinds_of.items(), key=lambda q: -q[1])]
+    out += ["  tracks on them: " + ", ".join(f"{n} {k}" for k, n in sorted(switches.items()))]
+    return out
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--train", nargs="+", required=True)
+    p.add_argument("--train", nargs="+", default=[])
     p.add_argument("--test", nargs="+", default=[])
     p.add_argument("--l2", type=float, default=0.01)
     p.add_argument("--estimator", default="threshold", choices=("threshold", "sum"))
+    p.add_argument("--unowned", nargs="+", default=[], metavar="RUN.pkl",
+                   help="only report why walkers own no track in these runs")
     p.add_argument("--json")
     a = p.parse_args(argv)
+    if a.unowned:
+        for path in a.unowned:
+            print("\n".join(unowned_report(path)))
+        return 0
+    if not a.train:
+        p.error("--train is required (or --unowned)")
     train = load(a.train)
     x = np.concatenate([c["x"] for c in train])
     y = np.concatenate([c["y"] for c in train])

@@ -68,3 +68,25 @@ def test_labels_longest_track_per_walker():
     lab, other = scm.track_labels(row, [1, 2, 3, 4])
     np.testing.assert_array_equal(lab, [1, 0, 0, 0])
     np.testing.assert_array_equal(other, [False, False, True, False])
+
+
+def test_unowned_report_alternating_track(tmp_path):
+    # walkers 1 and 2 side by side (boxes 20 px wide, 15 px apart); one track alternates between
+    # them frame by frame: it is owned by one (6 of 12 frames), the other owns no track
+    truth_rows = [_box(f, 1, 100.0) for f in range(1, 13)] + \
+        [_box(f, 2, 115.0) for f in range(1, 13)]
+    hyp_rows = [_box(f, 1, 100.0 if f % 2 else 115.0) for f in range(1, 13)]
+    cols = ("frame", "id", "bb_left", "bb_top", "bb_width", "bb_height")
+    truth = {c: np.asarray([r[k] for r in truth_rows], float) for k, c in enumerate(cols)}
+    mot = {c: np.asarray([r[k] for r in hyp_rows], float) for k, c in enumerate(cols)}
+    for d in (truth, mot):
+        d["id"], d["frame"] = d["id"].astype(int), d["frame"].astype(int)
+    row = {"clip": "c", "truth": truth, "mot": mot, "offset": 0,
+           "kinds": {1: "pedestrian", 2: "pedestrian"}}
+    path = tmp_path / "run.pkl"
+    path.write_bytes(__import__("pickle").dumps([row]))
+    out = scm.unowned_report(str(path))
+    assert out[0] == "run.pkl: 1 walkers own no track"
+    assert out[1].split() == ["1", "in", "a", "track's", "box", "in", ">=", "1/4", "of", "its",
+                              "frames,", "the", "track", "another", "walker's"]
+    assert out[2] == "  tracks on them: 1 alternating (>= 2 changes)"
