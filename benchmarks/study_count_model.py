@@ -132,6 +132,30 @@ def track_labels(row: dict, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
     return lab, other
 
 
+def distinct_walkers(row: dict, ids: list[int], min_frames: int = 5) -> int:
+    """The most tracks of `ids` that stand for distinct true walkers: a maximum matching of
+    tracks to walkers, a track matchable to every walker its box is on (IoU >= 0.3,
+    `diag_count_unjudged.frame_owners`) in at least `min_frames` frames. A track that switched
+    from one walker to another can stand for either. No rule that counts tracks on distinct
+    walkers can count more."""
+    from diag_count_unjudged import frame_owners
+
+    from rhythmjax.evaluation.sort_baseline import assign
+
+    fo = frame_owners(row["truth"], row["mot"], row["offset"])
+    walkers = sorted({int(t) for t in np.unique(row["truth"]["id"])
+                      if row["kinds"].get(int(t)) == "pedestrian"})
+    if not ids or not walkers:
+        return 0
+    cost = np.zeros((len(ids), len(walkers)))
+    for a, i in enumerate(ids):
+        on = list(fo.get(i, {}).values())
+        for b, t in enumerate(walkers):
+            cost[a, b] = -1.0 if on.count(t) >= min_frames else 0.0
+    r, c = assign(cost)
+    return int(-cost[r, c].sum())
+
+
 def load(paths) -> list[dict]:
     """Per clip of every run: name, run, features, ids, labels, non-walker flags, the defaults'
     counted flags, true walkers."""
@@ -143,6 +167,7 @@ def load(paths) -> list[dict]:
                 y, other = track_labels(row, ids)
                 clips.append({"run": os.path.basename(path), "clip": row["clip"], "x": x,
                               "y": y, "other": other, "true": int(row["true"]),
+                              "matchable": distinct_walkers(row, ids),
                               "default": np.asarray(row["verdicts"]["counted"], bool)})
     return clips
 
@@ -195,6 +220,7 @@ def summarise(clips: list[dict], model, resamples: int = 10000,
     n_mod = np.asarray([(p >= 0.5).sum() if estimator == "threshold" else np.round(p.sum())
                         for p in probs], np.float64)
     n_orc = np.asarray([c["y"].sum() for c in clips], np.float64)
+    n_mat = np.asarray([c["matchable"] for c in clips], np.float64)
     e_def, e_mod, e_orc = np.abs(n_def - true), np.abs(n_mod - true), np.abs(n_orc - true)
     rng = np.random.default_rng(0)
     k = rng.integers(0, len(clips), size=(resamples, len(clips)))
@@ -212,6 +238,8 @@ def summarise(clips: list[dict], model, resamples: int = 10000,
                       "others": oth_mod, "balanced_accuracy": bal((s >= 0.5).astype(float)),
                       "auc": auc(s, y)},
             "oracle": {"counted": int(n_orc.sum()), "error_pct": 100 * e_orc.sum() / true.sum()},
+            "distinct": {"counted": int(n_mat.sum()),
+                         "error_pct": 100 * np.abs(n_mat - true).sum() / true.sum()},
             "change": 100 * float(e_mod.sum() - e_def.sum()) / true.sum(),
             "interval": [100 * float(np.quantile(delta, 0.025)),
                          100 * float(np.quantile(delta, 0.975))]}
@@ -223,8 +251,25 @@ def line(name: str, r: dict) -> str:
             f"oth {d['others']:3d} bal {d['balanced_accuracy']:.3f} | model {m['counted']:4d} "
             f"{m['error_pct']:5.1f} % oth {m['others']:3d} bal {m['balanced_accuracy']:.3f} "
             f"auc {m['auc']:.3f} | change {r['change']:+.1f} "
-            f"[{r['interval'][0]:+.1f}, {r['interval'][1]:+.1f}] | oracle "
-            f"{r['oracle']['counted']:4d} {r['oracle']['error_pct']:5.1f} %")
+            f"[{r['interval'][0]:+.1f}, {r['interval'][1]:+.1f}] | owned "
+            f"{r['oracle']['counted']:4d} {r['oracle']['error_pct']:5.1f} % | distinct "
+            f"{r['distinct']['counted']:4d} {r['distinct']['error_pct']:5.1f} %")
+
+
+def long_runs(seq: list, min_len: int = 5) -> list:
+    """The values of the runs of at least `min_len` equal consecutive items of `seq`, a run
+    equal to the previous kept run merged into it (a track's walkers, blips of fewer frames
+    left out)."""
+    out: list = []
+    k = 0
+    while k < len(seq):
+        j = k
+        while j < len(seq) and seq[j] == seq[k]:
+            j += 1
+        if j - k >= min_len and (not out or out[-1] != seq[k]):
+            out.append(seq[k])
+        k = j
+    return out
 
 
 def unowned_report(path: str) -> list[str]:
@@ -232,8 +277,8 @@ def unowned_report(path: str) -> list[str]:
     often some track's box is on it (`diag_count_unjudged.frame_owners`: IoU >= 0.3) and whose
     that track is (another walker's, or nobody's: no majority owner), with `diag_count.
     free_fraction` for those never boxed; then the tracks whose box is on such a walker for
-    >= 5 frames (each once), by how often their best-matching truth object changes
-    (alternating: >= 2)."""
+    >= 5 frames (each once), by how often they switch walkers (`long_runs`: runs of >= 5
+    frames on one truth object)."""
     from diag_count import free_fraction
     from diag_count_unjudged import frame_owners
 
@@ -266,9 +311,9 @@ def unowned_report(path: str) -> list[str]:
             for h, n in on.items():
                 if n >= 5 and (r["clip"], h) not in seen:
                     seen.add((r["clip"], h))
-                    seq = [fo[h][f] for f in sorted(fo[h])]
-                    k = sum(a != b for a, b in zip(seq, seq[1:]))
-                    key = "alternating (>= 2 changes)" if k >= 2 else f"{k} change(s)"
+                    k = len(long_runs([fo[h][f] for f in sorted(fo[h])])) - 1
+                    key = "back and forth (>= 2 switches)" if k >= 2 else \
+                        ("one switch" if k == 1 else "no switch")
                     switches[key] = switches.get(key, 0) + 1
     out = [f"{os.path.basename(path)}: {sum(kinds_of.values())} walkers own no track"]
     out += [f"  {n:4d} {k}" for k, n in sorted(kinds_of.items(), key=lambda q: -q[1])]

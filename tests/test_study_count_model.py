@@ -70,12 +70,18 @@ def test_labels_longest_track_per_walker():
     np.testing.assert_array_equal(other, [False, False, True, False])
 
 
-def test_unowned_report_alternating_track(tmp_path):
-    # walkers 1 and 2 side by side (boxes 20 px wide, 15 px apart); one track alternates between
-    # them frame by frame: it is owned by one (6 of 12 frames), the other owns no track
+def test_long_runs():
+    assert scm.long_runs([1] * 5 + [2] * 2 + [1] * 6 + [3] * 5) == [1, 3]  # blip of 2 dropped
+    assert scm.long_runs([1, 2] * 6) == []
+    assert scm.long_runs([4] * 4, min_len=4) == [4]
+
+
+def test_unowned_report_switching_track(tmp_path):
+    # walkers 1 and 2 side by side (boxes 20 px wide, 15 px apart); one track on walker 1 for 5
+    # frames, then on walker 2 for 7: it is walker 2's, walker 1 owns no track
     truth_rows = [_box(f, 1, 100.0) for f in range(1, 13)] + \
         [_box(f, 2, 115.0) for f in range(1, 13)]
-    hyp_rows = [_box(f, 1, 100.0 if f % 2 else 115.0) for f in range(1, 13)]
+    hyp_rows = [_box(f, 1, 100.0 if f <= 5 else 115.0) for f in range(1, 13)]
     cols = ("frame", "id", "bb_left", "bb_top", "bb_width", "bb_height")
     truth = {c: np.asarray([r[k] for r in truth_rows], float) for k, c in enumerate(cols)}
     mot = {c: np.asarray([r[k] for r in hyp_rows], float) for k, c in enumerate(cols)}
@@ -89,4 +95,14 @@ def test_unowned_report_alternating_track(tmp_path):
     assert out[0] == "run.pkl: 1 walkers own no track"
     assert out[1].split() == ["1", "in", "a", "track's", "box", "in", ">=", "1/4", "of", "its",
                               "frames,", "the", "track", "another", "walker's"]
-    assert out[2] == "  tracks on them: 1 alternating (>= 2 changes)"
+    assert out[2] == "  tracks on them: 1 one switch"
+    # the switching track can stand for either walker: one distinct walker of two
+    assert scm.distinct_walkers(row, [1]) == 1
+    # a second track on walker 2 in frames 1-5: both tracks are walker 2's by majority, yet
+    # they stand for two distinct walkers (track 1 for walker 1)
+    extra = [_box(f, 2, 115.0) for f in range(1, 6)]
+    for k, c in enumerate(cols):
+        mot[c] = np.r_[mot[c], np.asarray([r[k] for r in extra], mot[c].dtype)]
+    lab, _ = scm.track_labels({**row, "tracks": {"track_id": mot["id"]}}, [1, 2])
+    assert lab.sum() == 1
+    assert scm.distinct_walkers(row, [1, 2]) == 2
