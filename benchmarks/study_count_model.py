@@ -5,22 +5,27 @@ counting runs saved by `benchmarks/count_dump.py`, applied to others.
 Per track of a saved clip, the features `track_features` (the verdict and its reason, the
 measured time, the speed against the walking model's top speed, the width, how much of it a
 longer track covers within 1 m on the ground, whether it continues or precedes a longer track,
-whether it starts or ends with the clip or at the image's border) and the label
-`track_labels`: 1 for the track with the most rows among those on one true walker
-(`eval_count.owner_of_tracks`), 0 for every other track (a second track on a walker, a
-non-walker, nothing). The model p = sigmoid(w . x + c) on standardised features is fitted by
-optimistix (BFGS, an L2 penalty `--l2` on w) on the --train runs. A clip's count is the number
-of its tracks with p >= 0.5 (`--estimator threshold`) or the sum of p rounded (`--estimator
-sum`: the expected number of distinct walkers the tracks hold).
+whether it starts or ends with the clip or at the image's border; `--cap-samples`: the
+measured time capped at one rhythm window) and the label, `--labels owned` (`track_labels`: 1
+for the track with the most rows among those a true walker owns, `eval_count.owner_of_tracks`;
+0 for every other track: a second track on a walker, a non-walker, nothing) or `--labels
+distinct` (`distinct_labels`: 1 for the tracks of a maximum-weight matching of tracks to the
+walkers they are on, so a track that switched walkers can stand for either). The model
+p = sigmoid(w . x + c) on standardised features is fitted by optimistix (BFGS, an L2 penalty
+`--l2` on w) on the --train runs. A clip's count is the number of its tracks with p >= 0.5
+(`--estimator threshold`) or the sum of p rounded (`--estimator sum`).
 
 Per run and pooled: walkers counted / true and per-clip |errors| summed, for the run's own
 `counted` (the defaults' COUNT_RULE) and for the model, the paired change with its 95 %
 bootstrap interval over clips, non-walkers counted, the balanced accuracy of both rules and the
-model's ROC AUC on the labels; and the oracle, the count of a perfect per-track rule (the
-labelled tracks: the walkers that own a track), the floor of any counting rule on these tracks.
+model's ROC AUC on the labels; and two bounds: "labelled", the count of a perfect rule for the
+labels (the walkers that own a track with `owned`), and "distinct", the most tracks that stand
+for distinct walkers (`distinct_walkers`), beyond which no rule that keeps or drops tracks can
+count without counting a walker twice.
 
     python benchmarks/study_count_model.py --train A.pkl B.pkl ... --test C.pkl D.pkl ... \\
-        [--l2 0.01] [--estimator threshold|sum] [--json OUT.json]
+        [--l2 0.01] [--estimator threshold|sum] [--labels owned|distinct] \\
+        [--cap-samples 64] [--json OUT.json]
     python benchmarks/study_count_model.py --unowned RUN.pkl ...   # why walkers own no track
 """
 
@@ -132,6 +137,31 @@ def track_labels(row: dict, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
     return lab, other
 
 
+def distinct_labels(row: dict, ids: list[int], min_frames: int = 5) -> np.ndarray:
+    """Per track of `ids`, 1 when it is in a maximum-weight matching of tracks to true walkers
+    (weight: the frames its box is on the walker, IoU >= 0.3; pairs of >= `min_frames` frames
+    only), else 0: the tracks that stand for distinct walkers (`distinct_walkers` of them)."""
+    from diag_count_unjudged import frame_owners
+
+    from rhythmjax.evaluation.sort_baseline import assign
+
+    fo = frame_owners(row["truth"], row["mot"], row["offset"])
+    walkers = sorted({int(t) for t in np.unique(row["truth"]["id"])
+                      if row["kinds"].get(int(t)) == "pedestrian"})
+    lab = np.zeros(len(ids))
+    if not ids or not walkers:
+        return lab
+    cost = np.zeros((len(ids), len(walkers)))
+    for a, i in enumerate(ids):
+        on = list(fo.get(i, {}).values())
+        for b, t in enumerate(walkers):
+            n = on.count(t)
+            cost[a, b] = -float(n) if n >= min_frames else 0.0
+    r, c = assign(cost)
+    lab[r[cost[r, c] < 0]] = 1.0
+    return lab
+
+
 def distinct_walkers(row: dict, ids: list[int], min_frames: int = 5) -> int:
     """The most tracks of `ids` that stand for distinct true walkers: a maximum matching of
     tracks to walkers, a track matchable to every walker its box is on (IoU >= 0.3,
@@ -156,15 +186,22 @@ def distinct_walkers(row: dict, ids: list[int], min_frames: int = 5) -> int:
     return int(-cost[r, c].sum())
 
 
-def load(paths) -> list[dict]:
-    """Per clip of every run: name, run, features, ids, labels, non-walker flags, the defaults'
-    counted flags, true walkers."""
+def load(paths, labels: str = "owned", cap_samples: int = 0) -> list[dict]:
+    """Per clip of every run: name, run, features, ids, labels (`labels` "owned":
+    `track_labels`; "distinct": `distinct_labels`), non-walker flags, the defaults' counted
+    flags, true walkers, the distinct bound. `cap_samples` > 0: the measured time capped at
+    that many samples (one rhythm window, N / fps s)."""
     clips = []
     for path in paths:
         with open(path, "rb") as f:
             for row in pickle.load(f):
                 x, ids = track_features(row)
+                if cap_samples > 0:
+                    k = FEATURES.index("log_seconds")
+                    x[:, k] = np.minimum(x[:, k], np.log(cap_samples / float(row["fps"])))
                 y, other = track_labels(row, ids)
+                if labels == "distinct":
+                    y = distinct_labels(row, ids)
                 clips.append({"run": os.path.basename(path), "clip": row["clip"], "x": x,
                               "y": y, "other": other, "true": int(row["true"]),
                               "matchable": distinct_walkers(row, ids),
@@ -237,7 +274,7 @@ def summarise(clips: list[dict], model, resamples: int = 10000,
             "model": {"counted": int(n_mod.sum()), "error_pct": 100 * e_mod.sum() / true.sum(),
                       "others": oth_mod, "balanced_accuracy": bal((s >= 0.5).astype(float)),
                       "auc": auc(s, y)},
-            "oracle": {"counted": int(n_orc.sum()), "error_pct": 100 * e_orc.sum() / true.sum()},
+            "labelled": {"counted": int(n_orc.sum()), "error_pct": 100 * e_orc.sum() / true.sum()},
             "distinct": {"counted": int(n_mat.sum()),
                          "error_pct": 100 * np.abs(n_mat - true).sum() / true.sum()},
             "change": 100 * float(e_mod.sum() - e_def.sum()) / true.sum(),
@@ -251,8 +288,8 @@ def line(name: str, r: dict) -> str:
             f"oth {d['others']:3d} bal {d['balanced_accuracy']:.3f} | model {m['counted']:4d} "
             f"{m['error_pct']:5.1f} % oth {m['others']:3d} bal {m['balanced_accuracy']:.3f} "
             f"auc {m['auc']:.3f} | change {r['change']:+.1f} "
-            f"[{r['interval'][0]:+.1f}, {r['interval'][1]:+.1f}] | owned "
-            f"{r['oracle']['counted']:4d} {r['oracle']['error_pct']:5.1f} % | distinct "
+            f"[{r['interval'][0]:+.1f}, {r['interval'][1]:+.1f}] | labelled "
+            f"{r['labelled']['counted']:4d} {r['labelled']['error_pct']:5.1f} % | distinct "
             f"{r['distinct']['counted']:4d} {r['distinct']['error_pct']:5.1f} %")
 
 
@@ -327,6 +364,9 @@ def main(argv=None) -> int:
     p.add_argument("--test", nargs="+", default=[])
     p.add_argument("--l2", type=float, default=0.01)
     p.add_argument("--estimator", default="threshold", choices=("threshold", "sum"))
+    p.add_argument("--labels", default="owned", choices=("owned", "distinct"))
+    p.add_argument("--cap-samples", type=int, default=0,
+                   help="cap the measured time at this many samples (64: one window)")
     p.add_argument("--unowned", nargs="+", default=[], metavar="RUN.pkl",
                    help="only report why walkers own no track in these runs")
     p.add_argument("--json")
@@ -337,7 +377,7 @@ def main(argv=None) -> int:
         return 0
     if not a.train:
         p.error("--train is required (or --unowned)")
-    train = load(a.train)
+    train = load(a.train, a.labels, a.cap_samples)
     x = np.concatenate([c["x"] for c in train])
     y = np.concatenate([c["y"] for c in train])
     model = fit_logistic(x, y, a.l2)
@@ -348,7 +388,7 @@ def main(argv=None) -> int:
     for tag, paths in (("train", a.train), ("test", a.test)):
         pooled = []
         for path in paths:
-            clips = train if tag == "train" else load([path])
+            clips = train if tag == "train" else load([path], a.labels, a.cap_samples)
             clips = [c for c in clips if c["run"] == os.path.basename(path)]
             pooled += clips
             out["rows"][path] = r = summarise(clips, model, estimator=a.estimator)

@@ -106,3 +106,5 @@ def test_unowned_report_switching_track(tmp_path):
     lab, _ = scm.track_labels({**row, "tracks": {"track_id": mot["id"]}}, [1, 2])
     assert lab.sum() == 1
     assert scm.distinct_walkers(row, [1, 2]) == 2
+    np.testing.assert_array_equal(scm.distinct_labels(row, [1, 2]), [1, 1])
+    np.testing.assert_array_equal(scm.distinct_labels(row, [2]), [1])
