@@ -17,8 +17,8 @@ p = sigmoid(w . x + c) on standardised features is fitted by optimistix (BFGS, a
 
 Per run and pooled: walkers counted / true and per-clip |errors| summed, for the run's own
 `counted` (the defaults' COUNT_RULE) and for the model, the paired change with its 95 %
-bootstrap interval over clips, non-walkers counted, the balanced accuracy of both rules and the
-model's ROC AUC on the labels; and two bounds: "labelled", the count of a perfect rule for the
+bootstrap interval over clips (`paired_count.paired_change`), non-walkers counted, the
+balanced accuracy of both rules and the model's ROC AUC on the labels; and two bounds: "labelled", the count of a perfect rule for the
 labels (the walkers that own a track with `owned`), and "distinct", the most tracks that stand
 for distinct walkers (`distinct_walkers`), beyond which no rule that keeps or drops tracks can
 count without counting a walker twice.
@@ -43,6 +43,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from eval_count import owner_of_tracks  # noqa: E402
+from paired_count import paired_change  # noqa: E402
 
 
 FEATURES = ("pedestrian", "no_peak", "non_pedestrian_other", "log_seconds", "measured_fraction",
@@ -259,15 +260,15 @@ def summarise(clips: list[dict], model, resamples: int = 10000,
     n_orc = np.asarray([c["y"].sum() for c in clips], np.float64)
     n_mat = np.asarray([c["matchable"] for c in clips], np.float64)
     e_def, e_mod, e_orc = np.abs(n_def - true), np.abs(n_mod - true), np.abs(n_orc - true)
-    rng = np.random.default_rng(0)
-    k = rng.integers(0, len(clips), size=(resamples, len(clips)))
-    delta = (e_mod[k].sum(1) - e_def[k].sum(1)) / true[k].sum(1)
+    oth_def = sum(int((c["default"] & c["other"]).sum()) for c in clips)
+    oth_mod = sum(int(((p >= 0.5) & c["other"]).sum()) for c, p in zip(clips, probs))
+    paired = paired_change({"true": true, "err_a": e_def, "err_b": e_mod,
+                            "oth_a": np.asarray([oth_def]), "oth_b": np.asarray([oth_mod])},
+                           resamples)
     y = np.concatenate([c["y"] for c in clips])
     s = np.concatenate(probs)
     d = np.concatenate([c["default"] for c in clips]).astype(float)
     bal = lambda pred: 0.5 * (np.mean(pred[y == 1]) + np.mean(1 - pred[y == 0]))  # noqa: E731
-    oth_def = sum(int((c["default"] & c["other"]).sum()) for c in clips)
-    oth_mod = sum(int(((p >= 0.5) & c["other"]).sum()) for c, p in zip(clips, probs))
     return {"clips": len(clips), "true": int(true.sum()),
             "default": {"counted": int(n_def.sum()), "error_pct": 100 * e_def.sum() / true.sum(),
                         "others": oth_def, "balanced_accuracy": bal(d)},
@@ -277,9 +278,8 @@ def summarise(clips: list[dict], model, resamples: int = 10000,
             "labelled": {"counted": int(n_orc.sum()), "error_pct": 100 * e_orc.sum() / true.sum()},
             "distinct": {"counted": int(n_mat.sum()),
                          "error_pct": 100 * np.abs(n_mat - true).sum() / true.sum()},
-            "change": 100 * float(e_mod.sum() - e_def.sum()) / true.sum(),
-            "interval": [100 * float(np.quantile(delta, 0.025)),
-                         100 * float(np.quantile(delta, 0.975))]}
+            "change": 100 * paired["delta"],
+            "interval": [100 * paired["lo"], 100 * paired["hi"]]}
 
 
 def line(name: str, r: dict) -> str:
