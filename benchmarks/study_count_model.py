@@ -15,13 +15,13 @@ p = sigmoid(w . x + c) on standardised features is fitted by optimistix (BFGS, a
 `--l2` on w) on the --train runs. A clip's count is the number of its tracks with p >= 0.5
 (`--estimator threshold`) or the sum of p rounded (`--estimator sum`).
 
-Per run and pooled: walkers counted / true and per-clip |errors| summed, for the run's own
-`counted` (the defaults' COUNT_RULE) and for the model, the paired change with its 95 %
-bootstrap interval over clips (`paired_count.paired_change`), non-walkers counted, the
-balanced accuracy of both rules and the model's ROC AUC on the labels; and two bounds: "labelled", the count of a perfect rule for the
-labels (the walkers that own a track with `owned`), and "distinct", the most tracks that stand
-for distinct walkers (`distinct_walkers`), beyond which no rule that keeps or drops tracks can
-count without counting a walker twice.
+Per run and pooled: walkers counted / true and per-clip |errors| summed, for the run's own `counted`
+(the defaults' COUNT_RULE) and for the model, the paired change with its 95 % bootstrap interval
+over clips (`paired_count.paired_change`), non-walkers counted, the balanced accuracy of both rules
+and the model's ROC AUC on the labels; and two bounds: "labelled", the count of a perfect rule for
+the labels (the walkers that own a track with `owned`), and "distinct", the most tracks that stand
+for distinct walkers (`distinct_walkers`), beyond which no rule that keeps or drops tracks can count
+without counting a walker twice.
 
     python benchmarks/study_count_model.py --train A.pkl B.pkl ... --test C.pkl D.pkl ... \\
         [--l2 0.01] [--estimator threshold|sum] [--labels owned|distinct] \\
