@@ -15,13 +15,14 @@ Sources (`--only`): `synthetic` (benchmarks/eval_synthetic.py's scenes: evaluati
 and a fresh seed, FRESH_SEED), `count` (benchmarks/eval_count.py's counting scenes, its seed and
 FRESH_SEED), `synthetic_any` and `count_any` (the same scenes with clothing of any grey, some
 close to the ground's: `sim.scene.random_spec`'s clothing "any"), `dev` (the 15 single/multi
-clips of ../shared/data/dev through the tracker, as `rhythmjax run -c CAMERA.json`),
-`dev_count` (the 3 crowd clips through `count_frames`, as `rhythmjax count -c CAMERA.json`),
-`pets` (the tracker, eval_real_video's scoring), `pets_count`, `pets_boxes` (`rhythmjax rhythm
---boxes` on the annotated boxes, when that verb exists), `ucsd`, `casia`. Dev clips: the config
-is the camera section of the truth JSON only (README of the folder; principal point 255.5), everything else the defaults; a track belongs to the object whose
-truth foot point it follows (`sim.evaluate.match_tracks`), an object's verdict is its longest
-judged track's. Own scenes: eval_synthetic's verdicts by track (the same rule).
+clips of ../shared/data/dev through the tracker, as `rhythmjax run -c CAMERA.json`), `dev_count`
+(the 3 crowd clips through `count_frames`, as `rhythmjax count -c CAMERA.json`), `pets` (the
+tracker, eval_real_video's scoring), `pets_count`, `pets_boxes` (`rhythmjax rhythm --boxes` on
+the annotated boxes, when that verb exists), `ucsd`, `casia`. Dev clips: the config is the
+camera section of the truth JSON only (README of the folder; principal point 255.5), everything
+else the defaults; a track belongs to the object whose truth foot point it follows
+(`sim.evaluate.match_tracks`), an object's verdict is its longest judged track's. Own scenes:
+eval_synthetic's verdicts by track (the same rule).
 
 `--set SECTION.KEY=VALUE` (repeatable) overrides a config key for every source, e.g.
 `--set thresholds.harmonic_max_ratio=0` (the paper's rule; the default 0.25 is the half-pace
