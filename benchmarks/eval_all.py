@@ -86,7 +86,10 @@ def run_synthetic(sets, quick, log, clothing: str = "contrasted") -> dict:
 
 
 def count_clip(cfg, frames, truth, kinds, offset) -> dict:
-    """`count_frames` on one clip scored against MOT truth (`kinds`: truth id -> kind)."""
+    """`count_frames` on one clip scored against MOT truth (`kinds`: truth id -> kind), with
+    `distinct`: the most of its tracks that stand for distinct true walkers
+    (`count_bounds.distinct_walkers`, the floor of any keep/drop counting rule)."""
+    import count_bounds as cb
     import eval_count as ec
 
     from rhythmjax.count import count_frames
@@ -100,7 +103,10 @@ def count_clip(cfg, frames, truth, kinds, offset) -> dict:
     own = ec.owner_of_tracks(truth, res.mot, offset)
     return {"counted": len(walk), "true": len(twalk), "mota": s.mota, "idf1": s.idf1,
             "id_switches": s.id_switches, "counts": res.counts,
-            "others_counted": sum(1 for h in walk if own.get(h) and kinds[own[h]] != "pedestrian")}
+            "others_counted": sum(1 for h in walk if own.get(h) and kinds[own[h]] != "pedestrian"),
+            "distinct": cb.distinct_walkers(
+                {"truth": truth, "mot": res.mot, "offset": offset, "kinds": kinds},
+                [int(i) for i in res.verdicts["track_id"]])}
 
 
 def run_count(sets, quick, log, clothing: str = "contrasted") -> dict:

@@ -80,13 +80,18 @@ def verdict_row(rows: list[dict]) -> dict:
 
 
 def count_row(clips: list[dict]) -> dict:
-    """Count columns from per-clip dicts (counted, true, optional others_counted, mota, idf1):
-    the per-clip errors summed, sum |counted - true| / sum true; MOTA / IDF1 as the mean over
-    clips (each clip weighted equally)."""
+    """Count columns from per-clip dicts (counted, true, optional others_counted, mota, idf1,
+    distinct): the per-clip errors summed, sum |counted - true| / sum true; MOTA / IDF1 as the
+    mean over clips (each clip weighted equally); when every clip has `distinct` (the most
+    tracks standing for distinct walkers, `count_bounds`), its sum and its per-clip errors
+    summed, the floor a counting rule on these tracks could reach."""
     true = sum(c["true"] for c in clips)
     out = {"counted": sum(c["counted"] for c in clips), "true": true,
            "count_err_sum": _div(sum(abs(c["counted"] - c["true"]) for c in clips), true),
            "others_counted": sum(c.get("others_counted", 0) for c in clips)}
+    if clips and all("distinct" in c for c in clips):
+        out["distinct"] = sum(c["distinct"] for c in clips)
+        out["distinct_err_sum"] = _div(sum(abs(c["distinct"] - c["true"]) for c in clips), true)
     for k in ("mota", "idf1"):
         v = [c[k] for c in clips if math.isfinite(c.get(k, math.nan))]
         out[k] = float(np.mean(v)) if v else math.nan

@@ -2,7 +2,9 @@
 sources: own counting scenes of a seed (`count:SEED`, eval_count's scene specs, `--scenes` of
 them, clothing as `--clothing`), `dev_count` (the dev crowd clips; report only) and
 `pets_count`. Prints one line per source: walkers counted / true, per-clip errors summed,
-non-walkers counted, MOTA, IDF1 (eval_all's columns); `-o` keeps every clip.
+non-walkers counted, MOTA, IDF1 (eval_all's columns) and the distinct bound (the most tracks
+standing for distinct walkers and its per-clip errors summed, `count_bounds`); `-o` keeps every
+clip.
 
     python benchmarks/eval_count_options.py --sources count:42024,count:31337 \\
         [--scenes 10] [--clothing any] [--focal-px 500] [--set new.head_feet=1.25 ...] \\
@@ -18,6 +20,7 @@ import argparse
 import copy
 import functools
 import json
+import math
 import os
 import sys
 import time
@@ -88,7 +91,8 @@ def main(argv=None) -> int:
         c = r["count"]
         print(f"{name} {src} ({a.clothing if src.startswith('count:') else '-'}): counted "
               f"{c['counted']}/{c['true']} err {100 * c['count_err_sum']:.1f} % others "
-              f"{c['others_counted']} mota {c['mota']:.3f} idf1 {c['idf1']:.3f} "
+              f"{c['others_counted']} mota {c['mota']:.3f} idf1 {c['idf1']:.3f} distinct "
+              f"{c.get('distinct', '-')} err {100 * c.get('distinct_err_sum', math.nan):.1f} % "
               f"({time.perf_counter() - t0:.0f} s)", flush=True)
     if a.output:
         with open(a.output, "w") as f:

@@ -42,6 +42,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+from count_bounds import distinct_labels, distinct_walkers  # noqa: E402
 from eval_count import owner_of_tracks  # noqa: E402
 from paired_count import paired_change  # noqa: E402
 
@@ -136,55 +137,6 @@ def track_labels(row: dict, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
     other = np.asarray([own.get(i) is not None and row["kinds"].get(own.get(i)) != "pedestrian"
                         for i in ids], bool)
     return lab, other
-
-
-def distinct_labels(row: dict, ids: list[int], min_frames: int = 5) -> np.ndarray:
-    """Per track of `ids`, 1 when it is in a maximum-weight matching of tracks to true walkers
-    (weight: the frames its box is on the walker, IoU >= 0.3; pairs of >= `min_frames` frames
-    only), else 0: the tracks that stand for distinct walkers (`distinct_walkers` of them)."""
-    from diag_count_unjudged import frame_owners
-
-    from rhythmjax.evaluation.sort_baseline import assign
-
-    fo = frame_owners(row["truth"], row["mot"], row["offset"])
-    walkers = sorted({int(t) for t in np.unique(row["truth"]["id"])
-                      if row["kinds"].get(int(t)) == "pedestrian"})
-    lab = np.zeros(len(ids))
-    if not ids or not walkers:
-        return lab
-    cost = np.zeros((len(ids), len(walkers)))
-    for a, i in enumerate(ids):
-        on = list(fo.get(i, {}).values())
-        for b, t in enumerate(walkers):
-            n = on.count(t)
-            cost[a, b] = -float(n) if n >= min_frames else 0.0
-    r, c = assign(cost)
-    lab[r[cost[r, c] < 0]] = 1.0
-    return lab
-
-
-def distinct_walkers(row: dict, ids: list[int], min_frames: int = 5) -> int:
-    """The most tracks of `ids` that stand for distinct true walkers: a maximum matching of
-    tracks to walkers, a track matchable to every walker its box is on (IoU >= 0.3,
-    `diag_count_unjudged.frame_owners`) in at least `min_frames` frames. A track that switched
-    from one walker to another can stand for either. No rule that counts tracks on distinct
-    walkers can count more."""
-    from diag_count_unjudged import frame_owners
-
-    from rhythmjax.evaluation.sort_baseline import assign
-
-    fo = frame_owners(row["truth"], row["mot"], row["offset"])
-    walkers = sorted({int(t) for t in np.unique(row["truth"]["id"])
-                      if row["kinds"].get(int(t)) == "pedestrian"})
-    if not ids or not walkers:
-        return 0
-    cost = np.zeros((len(ids), len(walkers)))
-    for a, i in enumerate(ids):
-        on = list(fo.get(i, {}).values())
-        for b, t in enumerate(walkers):
-            cost[a, b] = -1.0 if on.count(t) >= min_frames else 0.0
-    r, c = assign(cost)
-    return int(-cost[r, c].sum())
 
 
 def load(paths, labels: str = "owned", cap_samples: int = 0) -> list[dict]:

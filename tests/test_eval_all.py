@@ -79,6 +79,12 @@ def test_count_row_sums_per_clip_errors():
     assert c["mota"] == pytest.approx(0.3, abs=1e-12)
     assert c["idf1"] == pytest.approx(0.5, abs=1e-12)  # the clip without IDF1 left out
     assert "17/18 (16.7 %)" in es.table_line("c", None, c)
+    assert "distinct" not in c  # not every clip has the bound
+    for clip, d in zip(clips, (4, 5, 7)):
+        clip["distinct"] = d
+    c = es.count_row(clips)
+    assert c["distinct"] == 16
+    assert c["distinct_err_sum"] == pytest.approx(2 / 18, abs=1e-12)  # 0 + |-1| + |-1|
 
 
 def test_read_gt(tmp_path):

@@ -1,6 +1,6 @@
-"""benchmarks/study_count_model.py: the logistic fit against a float64 Newton (IRLS) loop in
-NumPy, the ROC AUC against hand-worked cases, and the labels (the longest track on each true
-walker) on a hand-built clip."""
+"""benchmarks/study_count_model.py and count_bounds.py: the logistic fit against a float64
+Newton (IRLS) loop in NumPy, the ROC AUC against hand-worked cases, the labels (the longest
+track on each true walker; the distinct matching) and the distinct bound on hand-built clips."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import numpy as np
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 sys.path.insert(0, str(BENCH))
+import count_bounds as cb  # noqa: E402
 import study_count_model as scm  # noqa: E402
 
 
@@ -97,7 +98,7 @@ def test_unowned_report_switching_track(tmp_path):
                               "frames,", "the", "track", "another", "walker's"]
     assert out[2] == "  tracks on them: 1 one switch"
     # the switching track can stand for either walker: one distinct walker of two
-    assert scm.distinct_walkers(row, [1]) == 1
+    assert cb.distinct_walkers(row, [1]) == 1
     # a second track on walker 2 in frames 1-5: both tracks are walker 2's by majority, yet
     # they stand for two distinct walkers (track 1 for walker 1)
     extra = [_box(f, 2, 115.0) for f in range(1, 6)]
@@ -105,6 +106,6 @@ def test_unowned_report_switching_track(tmp_path):
         mot[c] = np.r_[mot[c], np.asarray([r[k] for r in extra], mot[c].dtype)]
     lab, _ = scm.track_labels({**row, "tracks": {"track_id": mot["id"]}}, [1, 2])
     assert lab.sum() == 1
-    assert scm.distinct_walkers(row, [1, 2]) == 2
-    np.testing.assert_array_equal(scm.distinct_labels(row, [1, 2]), [1, 1])
-    np.testing.assert_array_equal(scm.distinct_labels(row, [2]), [1])
+    assert cb.distinct_walkers(row, [1, 2]) == 2
+    np.testing.assert_array_equal(cb.distinct_labels(row, [1, 2]), [1, 1])
+    np.testing.assert_array_equal(cb.distinct_labels(row, [2]), [1])
