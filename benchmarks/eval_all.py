@@ -88,7 +88,8 @@ def run_synthetic(sets, quick, log, clothing: str = "contrasted") -> dict:
 def count_clip(cfg, frames, truth, kinds, offset) -> dict:
     """`count_frames` on one clip scored against MOT truth (`kinds`: truth id -> kind), with
     `distinct`: the most of its tracks that stand for distinct true walkers
-    (`count_bounds.distinct_walkers`, the floor of any keep/drop counting rule)."""
+    (`count_bounds.distinct_walkers`: the floor of a keep/drop counting rule that counts no
+    walker twice)."""
     import count_bounds as cb
     import eval_count as ec
 

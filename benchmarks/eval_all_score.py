@@ -84,7 +84,7 @@ def count_row(clips: list[dict]) -> dict:
     distinct): the per-clip errors summed, sum |counted - true| / sum true; MOTA / IDF1 as the
     mean over clips (each clip weighted equally); when every clip has `distinct` (the most
     tracks standing for distinct walkers, `count_bounds`), its sum and its per-clip errors
-    summed, the floor a counting rule on these tracks could reach."""
+    summed, the floor a counting rule that counts no walker twice could reach on these tracks."""
     true = sum(c["true"] for c in clips)
     out = {"counted": sum(c["counted"] for c in clips), "true": true,
            "count_err_sum": _div(sum(abs(c["counted"] - c["true"]) for c in clips), true),
