@@ -51,8 +51,16 @@ FEATURES = ("pedestrian", "no_peak", "non_pedestrian_other", "log_seconds", "mea
             "speed_ratio", "speed_missing", "too_fast", "width_ratio", "width_missing",
             "covered_1m", "continues", "precedes", "starts_with_clip", "ends_with_clip",
             "starts_at_border", "ends_at_border")
-TOP_SPEED_MPS = 2.57  # `count.walking_top_speed` with Table 1
-WIDTH_M = 0.5         # Table 1's width.mean (m)
+
+
+def table1_scales() -> tuple[float, float]:
+    """(the walking model's top speed m/s, `count.walking_top_speed`; the mean body width m)
+    of Table 1's config: the features' scales, the same for every source."""
+    from rhythmjax.count import walking_top_speed
+    from rhythmjax.model.params import Config
+
+    cfg = Config()
+    return walking_top_speed(cfg), float(cfg.width.mean)
 
 
 def track_features(row: dict) -> tuple[np.ndarray, list[int]]:
@@ -60,6 +68,7 @@ def track_features(row: dict) -> tuple[np.ndarray, list[int]]:
     from rhythmjax.count.explain import measured_points
 
     v, tr = row["verdicts"], row["tracks"]
+    top_speed, width_m = table1_scales()
     ids = [int(i) for i in v["track_id"]]
     pts = measured_points(tr, ids)
     fps = float(row["fps"])
@@ -87,7 +96,7 @@ def track_features(row: dict) -> tuple[np.ndarray, list[int]]:
             for (f_end, p_end, f_start, p_start), slot in (
                     ((fj[-1], pj[-1], fr[0], p[0]), "c"), ((fr[-1], p[-1], fj[0], pj[0]), "p")):
                 g = (f_start - f_end) / fps
-                if 0 < g <= 3.0 and np.hypot(*(p_start - p_end)) <= 1.0 + TOP_SPEED_MPS * g:
+                if 0 < g <= 3.0 and np.hypot(*(p_start - p_end)) <= 1.0 + top_speed * g:
                     if slot == "c":
                         cont = 1.0
                     else:
@@ -107,10 +116,10 @@ def track_features(row: dict) -> tuple[np.ndarray, list[int]]:
             float(verdict == "non-pedestrian" and reason != "no-peak"),
             float(np.log(max(n_meas, 1) / fps)),
             n_meas / max(1, int(rows_i.sum())),
-            min(speed / TOP_SPEED_MPS, 3.0) if np.isfinite(speed) else 0.0,
+            min(speed / top_speed, 3.0) if np.isfinite(speed) else 0.0,
             float(not np.isfinite(speed)),
             float(bool(v["too_fast"][k])),
-            min(width / WIDTH_M, 3.0) if np.isfinite(width) else 0.0,
+            min(width / width_m, 3.0) if np.isfinite(width) else 0.0,
             float(not np.isfinite(width)),
             covered, cont, prec,
             float(first_f <= fps),
