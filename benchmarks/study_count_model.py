@@ -13,7 +13,9 @@ distinct` (`distinct_labels`: 1 for the tracks of a maximum-weight matching of t
 walkers they are on, so a track that switched walkers can stand for either). The model
 p = sigmoid(w . x + c) on standardised features is fitted by optimistix (BFGS, an L2 penalty
 `--l2` on w) on the --train runs. A clip's count is the number of its tracks with p >= 0.5
-(`--estimator threshold`) or the sum of p rounded (`--estimator sum`).
+(`--estimator threshold`) or the sum of p rounded (`--estimator sum`). `--judged-verdict`:
+the tracks the classifier judged keep the paper's verdict (Pedestrian counted, Non-pedestrian
+not), and the model is fitted on, and decides, only the tracks too short to judge.
 
 Per run and pooled: walkers counted / true and per-clip |errors| summed, for the run's own `counted`
 (the defaults' COUNT_RULE) and for the model, the paired change with its 95 % bootstrap interval
@@ -25,7 +27,7 @@ without counting a walker twice.
 
     python benchmarks/study_count_model.py --train A.pkl B.pkl ... --test C.pkl D.pkl ... \\
         [--l2 0.01] [--estimator threshold|sum] [--labels owned|distinct] \\
-        [--cap-samples 64] [--json OUT.json]
+        [--cap-samples 64] [--judged-verdict] [--json OUT.json]
     python benchmarks/study_count_model.py --unowned RUN.pkl ...   # why walkers own no track
 """
 
@@ -193,11 +195,21 @@ def fit_logistic(x: np.ndarray, y: np.ndarray, l2: float) -> tuple:
         return mu, sd, np.asarray(sol.value)
 
 
-def predict(model, x: np.ndarray) -> np.ndarray:
-    """p = sigmoid(w . (x - mean) / scale + c) per row of `x`."""
+def unjudged(x: np.ndarray) -> np.ndarray:
+    """(B,) bool: the tracks the classifier did not judge (no verdict feature set)."""
+    k = [FEATURES.index(n) for n in ("pedestrian", "no_peak", "non_pedestrian_other")]
+    return ~x[:, k].astype(bool).any(axis=1)
+
+
+def predict(model, x: np.ndarray, judged_verdict: bool = False) -> np.ndarray:
+    """p = sigmoid(w . (x - mean) / scale + c) per row of `x`. `judged_verdict`: a judged
+    track's p is its verdict (1 Pedestrian, 0 Non-pedestrian); the model decides the rest."""
     mu, sd, w = model
     z = ((x - mu) / sd) @ w[:-1] + w[-1]
-    return 1.0 / (1.0 + np.exp(-z))
+    p = 1.0 / (1.0 + np.exp(-z))
+    if judged_verdict:
+        p = np.where(unjudged(x), p, x[:, FEATURES.index("pedestrian")])
+    return p
 
 
 def auc(score: np.ndarray, y: np.ndarray) -> float:
@@ -210,12 +222,12 @@ def auc(score: np.ndarray, y: np.ndarray) -> float:
 
 
 def summarise(clips: list[dict], model, resamples: int = 10000,
-              estimator: str = "threshold") -> dict:
+              estimator: str = "threshold", judged_verdict: bool = False) -> dict:
     """Counted / true, per-clip |errors| summed (%), non-walkers counted, for the defaults and
     the model, the paired change with its 95 % bootstrap interval, balanced accuracy and AUC."""
     true = np.asarray([c["true"] for c in clips], np.float64)
     n_def = np.asarray([c["default"].sum() for c in clips], np.float64)
-    probs = [predict(model, c["x"]) for c in clips]
+    probs = [predict(model, c["x"], judged_verdict) for c in clips]
     n_mod = np.asarray([(p >= 0.5).sum() if estimator == "threshold" else np.round(p.sum())
                         for p in probs], np.float64)
     n_orc = np.asarray([c["y"].sum() for c in clips], np.float64)
@@ -328,6 +340,9 @@ def main(argv=None) -> int:
     p.add_argument("--labels", default="owned", choices=("owned", "distinct"))
     p.add_argument("--cap-samples", type=int, default=0,
                    help="cap the measured time at this many samples (64: one window)")
+    p.add_argument("--judged-verdict", action="store_true",
+                   help="judged tracks keep the verdict; the model is fitted on, and decides, "
+                        "the unjudged tracks only")
     p.add_argument("--unowned", nargs="+", default=[], metavar="RUN.pkl",
                    help="only report why walkers own no track in these runs")
     p.add_argument("--json")
@@ -341,6 +356,8 @@ def main(argv=None) -> int:
     train = load(a.train, a.labels, a.cap_samples)
     x = np.concatenate([c["x"] for c in train])
     y = np.concatenate([c["y"] for c in train])
+    if a.judged_verdict:
+        x, y = x[unjudged(x)], y[unjudged(x)]
     model = fit_logistic(x, y, a.l2)
     print("weights (standardised):", ", ".join(
         f"{n} {w:+.2f}" for n, w in zip(FEATURES + ("intercept",), model[2])))
@@ -352,10 +369,12 @@ def main(argv=None) -> int:
             clips = train if tag == "train" else load([path], a.labels, a.cap_samples)
             clips = [c for c in clips if c["run"] == os.path.basename(path)]
             pooled += clips
-            out["rows"][path] = r = summarise(clips, model, estimator=a.estimator)
+            out["rows"][path] = r = summarise(clips, model, estimator=a.estimator,
+                                                  judged_verdict=a.judged_verdict)
             print(line(f"{tag} {os.path.basename(path)}", r))
         if len(paths) > 1:
-            out["rows"][f"{tag} pooled"] = r = summarise(pooled, model, estimator=a.estimator)
+            out["rows"][f"{tag} pooled"] = r = summarise(pooled, model, estimator=a.estimator,
+                                                           judged_verdict=a.judged_verdict)
             print(line(f"{tag} pooled", r))
     if a.json:
         with open(a.json, "w") as f:

@@ -90,17 +90,41 @@ def rules_main(value: float, argv: list[str]) -> int:
     return er.main(argv)
 
 
+def gaps_rules_main(argv: list[str]) -> int:
+    """eval_rules.py's main with the rule `gaps` (ON: `rhythm.GAPS` "segments", Burg over the
+    known runs of a window; OFF: "interpolate", the default), set in this process."""
+    import eval_rules as er
+    import eval_rules_table as ert
+
+    import rhythmjax.model.rhythm as rh
+
+    ert.RULES["gaps"] = (
+        "constant", "GAPS", "segments", "interpolate", ert.TRACKER_SOURCES,
+        "own training seeds 5555, 6666 (replay, benchmarks/study_max_missing.py --gaps)")
+    ert.DEFAULT_ON["gaps"] = ()
+    if argv[:3] == ["run", "gaps", "on"]:
+        rh.GAPS = "segments"
+    return er.main(argv)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv[:1] == ["rules"]:
         return rules_main(float(argv[1]), argv[2:])
+    if argv[:1] == ["rules-gaps"]:
+        return gaps_rules_main(argv[1:])
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("seeds", nargs="+", help="own scene seeds, or 'dev' (the dev clips, each "
                    "with its own config, as eval_all tracks them; report only)")
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--fractions", type=float, nargs="+", default=[0.25, 0.3, 0.35, 0.4, 0.5])
     p.add_argument("-d", "--cache", default="/tmp/study_fp")
+    p.add_argument("--gaps", choices=("interpolate", "segments"), default="interpolate",
+                   help="how a window's missing samples enter the spectrum (`rhythm.GAPS`)")
     a = p.parse_args(argv)
+    import rhythmjax.model.rhythm as rh
+
+    rh.GAPS = a.gaps  # before the first window is traced
     cfg = config_from_dict(RECOMMENDED)
     print("| seed | max missing | walkers Ped./judged | walkers Ped./all | non-walkers Ped. "
           "(judged/all) | windows judged with > N/4 missing | changed against 0.25 |")

@@ -30,11 +30,8 @@ from rhythmjax.model.camera import ground_from_image
 from rhythmjax.model.params import Camera, Config
 from rhythmjax.model.rhythm import (
     MAX_MISSING_FRACTION,
-    N_FREQS,
-    N_PEAKS,
-    fill_gaps,
-    normalise_window,
     spectral_sum,
+    window_spectrum,
 )
 
 
@@ -54,8 +51,7 @@ def _window_peak(cfg: Config, x, dt):
     thr, wk = cfg.thresholds, cfg.walking
     known = jnp.isfinite(x)
     enough = jnp.sum(~known) <= MAX_MISSING_FRACTION * x.shape[0]
-    xn, nonconstant = normalise_window(fill_gaps(x, known))
-    spec = mem.spectrum(xn, dt, thr.m, n_freqs=N_FREQS, n_peaks=N_PEAKS)
+    spec, nonconstant = window_spectrum(x, dt, thr.m)
     ok = nonconstant & spec.ok & enough
 
     def white(pk):

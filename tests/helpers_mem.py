@@ -70,3 +70,51 @@ def simulate_ar(rng, a, n: int, burn: int = 200) -> np.ndarray:
     for t in range(p, len(x)):
         x[t] = e[t] - np.dot(a, x[t - p : t][::-1])
     return x[-n:]
+
+
+def segment_burg_reference(x, known, order: int, window: str = "none"):
+    """Burg AR(order) pooled over the runs of known samples (de Waele & Broersen 2000, "The
+    Burg algorithm for segments"): returns (a, sigma2, sigma2_fb, reflection), float64.
+
+    The mean is that of the known samples; each run keeps its own forward and backward errors;
+    k_m = -2 sum w f b / sum w (f^2 + b^2) over every run's stage-m products, each product
+    weighted by the whole window's taper at its position (`taper_reference(window, N - m)`);
+    k_m = 0 when no run is longer than m. sigma2 = mean of the known x^2 times prod (1 - k^2);
+    sigma2_fb: the final errors squared summed over the runs / (2 their number), 0 when no run
+    is longer than the order."""
+    x = np.asarray(x, np.float64)
+    known = np.asarray(known, bool)
+    n = len(x)
+    x = np.where(known, x - x[known].mean(), 0.0)
+    runs, start = [], None
+    for t in range(n + 1):
+        if t < n and known[t]:
+            start = t if start is None else start
+        elif start is not None:
+            runs.append((start, t))
+            start = None
+    fwd = {r: x[r[0]:r[1]].copy() for r in runs}  # fwd[r][i] = f_m[r0 + m + i]
+    bwd = {r: x[r[0]:r[1]].copy() for r in runs}
+    a, refl = np.zeros(0), []
+    e = np.sum(x[known] ** 2) / known.sum()
+    for m in range(1, order + 1):
+        taper = taper_reference(window, n - m)
+        num = den = 0.0
+        for r in runs:
+            if len(fwd[r]) < 2:
+                continue
+            pos = r[0] + m + np.arange(len(fwd[r]) - 1)  # global positions of the products
+            w = taper[pos - m]
+            num += np.sum(w * fwd[r][1:] * bwd[r][:-1])
+            den += np.sum(w * (fwd[r][1:] ** 2 + bwd[r][:-1] ** 2))
+        k = -2.0 * num / den if den > 0 else 0.0
+        for r in runs:
+            f_now, b_lag = fwd[r][1:], bwd[r][:-1]
+            fwd[r], bwd[r] = f_now + k * b_lag, b_lag + k * f_now
+        a = np.concatenate([a + k * a[::-1], [k]])
+        e *= 1.0 - k * k
+        refl.append(k)
+    count = sum(len(fwd[r]) for r in runs)
+    total = sum(np.sum(fwd[r] ** 2) + np.sum(bwd[r] ** 2) for r in runs)
+    sigma2_fb = total / (2.0 * count) if count else 0.0
+    return a, e, sigma2_fb, np.array(refl)

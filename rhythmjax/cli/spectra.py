@@ -20,9 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..io.files import CANDIDATE_COLUMNS, atomic_path
-from ..model import mem
 from ..model.params import Config
-from ..model.rhythm import N_FREQS, fill_gaps, normalise_window
+from ..model.rhythm import window_spectrum as classifier_spectrum
 from ..model.status import REASON_LABELS, VERDICT_LABELS
 from ..track.toolkit import window_signal
 
@@ -100,10 +99,10 @@ def table_windows(tracks: dict, verdicts: dict, n: int, fps: float) -> list[Wind
 
 @functools.partial(jax.jit, static_argnames=("order",))
 def window_spectrum(inten, dt, order: int):
-    """(frequencies, PSD) of one window of I(k) (NaN where unmeasured): gaps filled, normalised,
-    MEM of `order` (jitted: one compilation per window length)."""
-    x, _ = normalise_window(fill_gaps(inten, jnp.isfinite(inten)))
-    spec = mem.spectrum(x, dt, order, n_freqs=N_FREQS)
+    """(frequencies, PSD) of one window of I(k) (NaN where unmeasured) as the classifier
+    sees it (`rhythm.window_spectrum`: gaps handled, normalised, MEM of `order`; jitted: one
+    compilation per window length)."""
+    spec, _ = classifier_spectrum(inten, dt, order)
     return spec.freqs, spec.psd
 
 

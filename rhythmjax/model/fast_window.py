@@ -18,13 +18,10 @@ from .params import Config
 from .rhythm import (
     MAX_DT_JITTER,
     MAX_MISSING_FRACTION,
-    N_FREQS,
-    N_PEAKS,
     RhythmResult,
-    fill_gaps,
     match,
-    normalise_window,
     spectral_sum,
+    window_spectrum,
 )
 from .status import Reason, Verdict
 
@@ -60,16 +57,15 @@ def classify_window_fast(cfg: Config, intensity: Float[Array, " n"], t: Float[Ar
     dt_med = median_small(dts)
     dt_ok = jnp.all(jnp.abs(dts - dt_med) <= MAX_DT_JITTER * dt_med) & (dt_med > 0)
     signal_ok = (n_missing <= MAX_MISSING_FRACTION * n) & dt_ok
-    x, nonconstant = normalise_window(fill_gaps(intensity, known))
     step = jnp.where(dt_ok, dt_med, 1.0)
-    spec = mem.spectrum(x, step, thr.m, n_freqs=N_FREQS, n_peaks=N_PEAKS)
+    spec, nonconstant = window_spectrum(intensity, step, thr.m)
     keep = lambda pk: pk.mask & nonconstant & spec.ok
     white = lambda pk: mem.Peaks(pk.freq, jnp.where(keep(pk), pk.power / step, 0.0), keep(pk))
     peaks = white(spec.peaks)
     total = spectral_sum(white(mem.local_maxima(spec.psd, spec.freqs)), thr.p_thr)  # (13)
     verdict, reason, pace, stride, ratio = match(peaks, speed, cfg.walking, thr, total)
     bad = ~signal_ok
-    nan = jnp.asarray(jnp.nan, x.dtype)
+    nan = jnp.asarray(jnp.nan, spec.psd.dtype)
     return RhythmResult(
         verdict=jnp.where(bad, Verdict.UNCLASSIFIED, verdict).astype(jnp.int32),
         reason=jnp.where(bad, Reason.BAD_SIGNAL, reason).astype(jnp.int32),

@@ -79,7 +79,8 @@ def _weights(window: str, n: Array, m: Array, N: int) -> Array:
     return jnp.where(j >= 0, w, 0.0)
 
 
-def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW) -> BurgResult:
+def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW,
+         known: Bool[Array, " n"] | None = None) -> BurgResult:
     """Burg maximum-entropy AR estimate of static `order` M on the N samples of `x`.
 
     The mean is removed and the signal scaled by max|x - mean| inside (float32 amplitudes from
@@ -95,8 +96,14 @@ def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW) 
       tone at 1-3 Hz, N=64, M=15, 15 Hz, float32, mean peak error: none 0.015 Hz, hamming
       0.005 Hz, parabolic 0.003 Hz; see tests/test_mem.py for the walking-signal figures.
 
+    - `known`: optional mask of the samples that exist (the others may hold anything, NaN
+      included). Then the fit pools only the known runs (segment Burg, de Waele and Broersen
+      2000): the mean, the scale and E_0 are taken over the known samples, and a stage-m error
+      product at n enters k_m only when samples n-m..n are all known (the taper kept, zeroed
+      elsewhere); a stage with no such product gets k_m = 0. All known gives the plain fit.
+
     **Returns:** a `BurgResult`; `ok` False (constant, NaN/inf, or a `sigma2` that under- or
-    overflows the dtype) gives zeros, never NaN.
+    overflows the dtype; with `known`, fewer than M + 2 known samples) gives zeros, never NaN.
     """
     N = x.shape[0]
     if not 1 <= order <= N - 2:
@@ -105,21 +112,29 @@ def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW) 
         raise ValueError(f"window must be 'none', 'hamming' or 'parabolic', got {window!r}")
     dt_ = x.dtype
     fi = jnp.finfo(dt_)
-    finite = jnp.all(jnp.isfinite(x))
-    x0 = jnp.where(finite, x, 0.0)
+    have = jnp.ones(N, bool) if known is None else jnp.asarray(known, bool)
+    n_have = jnp.maximum(jnp.sum(have), 1).astype(dt_)
+    finite = jnp.all(jnp.isfinite(x) | ~have)
+    x0 = jnp.where(finite & have, x, 0.0)
     big = jnp.max(jnp.abs(x0))
-    ptp = jnp.max(x0) - jnp.min(x0)
+    ptp = jnp.max(jnp.where(have, x0, -big)) - jnp.min(jnp.where(have, x0, big))
     degenerate = ~finite | (ptp <= 4 * fi.eps * big) | (ptp < 64 * fi.tiny)
-    xc = x0 - jnp.mean(x0)
-    xc = xc - jnp.mean(xc)  # second pass: the mean of a large offset is rounded
+    degenerate = degenerate | (jnp.sum(have) < order + 2)
+    mean_have = lambda v: jnp.sum(jnp.where(have, v, 0.0)) / n_have  # noqa: E731
+    xc = jnp.where(have, x0 - mean_have(x0), 0.0)
+    xc = jnp.where(have, xc - mean_have(xc), 0.0)  # second pass: a large offset's mean rounds
     scale = jnp.where(degenerate, 1.0, jnp.max(jnp.abs(xc)))
     n = jnp.arange(N, dtype=dt_)
     dummy = jnp.mod(n * 0.6180339887, 1.0) - 0.5  # healthy stand-in (double-where for grads)
     xs = jnp.where(degenerate, dummy, xc / scale)
-    e0 = jnp.mean(xs**2)
+    e0 = mean_have(xs**2)
 
     m_all = jnp.arange(1, order + 1)
     w_all = jax.vmap(lambda m: _weights(window, n[1:], m, N))(m_all)  # (M, N-1)
+    idx = jnp.arange(N)
+    run = idx - jax.lax.cummax(jnp.where(have, -1, idx))  # known samples ending at n
+    if known is not None:  # products at n need samples n-m..n known
+        w_all = jnp.where(run[None, 1:] >= m_all[:, None] + 1, w_all, 0.0)
 
     def stage(carry, w):
         f, b, e = carry
@@ -128,6 +143,7 @@ def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW) 
         s = jnp.where(jnp.sum(w * fn * bp) > 0, -1.0, 1.0)
         den = jnp.maximum(jnp.sum(w * (fn**2 + bp**2)), fi.tiny)
         q = jnp.clip(jnp.sum(w * (fn + s * bp) ** 2) / den, fi.eps, 1.0)
+        q = jnp.where(jnp.any(w > 0), q, 1.0)  # no product at this order: k_m = 0
         f = jnp.concatenate([f[:1], (fn + s * bp) - s * q * bp])
         b = jnp.concatenate([b[:1], (bp + s * fn) - s * q * fn])
         e = jnp.maximum(e * q * (2.0 - q), fi.eps * e0)
@@ -137,8 +153,8 @@ def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW) 
     a = jnp.zeros(0, dt_)
     for m in range(order):  # Levinson step-up over the static orders
         a = jnp.concatenate([a + ks[m] * a[::-1], ks[m : m + 1]])
-    tail = n >= order
-    efb = jnp.sum(jnp.where(tail, f**2 + b**2, 0.0)) / (2.0 * (N - order))
+    tail = run >= order + 1  # n >= M when every sample is known
+    efb = jnp.sum(jnp.where(tail, f**2 + b**2, 0.0)) / (2.0 * jnp.maximum(jnp.sum(tail), 1))
     sigma2, sigma2_fb = e * scale * scale, efb * scale * scale
     ok = (~degenerate & jnp.all(jnp.isfinite(a)) & jnp.isfinite(sigma2) & (sigma2 >= fi.tiny)
           & jnp.isfinite(sigma2_fb))
@@ -254,13 +270,15 @@ def spectrum(
     n_freqs: int = 512,
     n_peaks: int = 8,
     window: Window = DEFAULT_WINDOW,
+    known: Bool[Array, " n"] | None = None,
 ) -> Spectrum:
     """MEM spectrum of one window: `burg`, `lattice_psd` on `frequency_grid`, then `find_peaks`.
 
-    `x` any units, `dt` the sample interval (s); batch with `jax.vmap`. `ok` False (see
-    `BurgResult`) gives a zero PSD and no peaks."""
+    `x` any units, `dt` the sample interval (s); batch with `jax.vmap`. `known`: the samples
+    that exist (`burg`'s segment fit over the known runs). `ok` False (see `BurgResult`) gives
+    a zero PSD and no peaks."""
     dt = jnp.asarray(dt, x.dtype)
-    fit = burg(x, order, window=window)
+    fit = burg(x, order, window=window, known=known)
     freqs = frequency_grid(dt, n_freqs)
     psd = lattice_psd(fit.reflection, fit.sigma2, freqs, dt)
     ok = fit.ok & jnp.all(jnp.isfinite(psd))

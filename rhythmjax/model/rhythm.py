@@ -45,6 +45,7 @@ from .status import Reason, Verdict
 N_PEAKS = 8  # candidate peaks for (14), (15) per spectrum (fixed size, masked); S sums all
 N_FREQS = 512  # frequency grid points from 0 to Nyquist
 MAX_MISSING_FRACTION = 0.25
+GAPS = "interpolate"  # a window's missing samples: "interpolate" (linear) or "segments"
 MAX_DT_JITTER = 0.10
 
 
@@ -63,10 +64,18 @@ class RhythmResult(eqx.Module):
     peak_mask: Bool[Array, "*b k"]
 
 
-def normalise_window(x: Float[Array, " n"]) -> tuple[Float[Array, " n"], Bool[Array, ""]]:
-    """Zero mean, unit standard deviation; `ok` False (and zeros) for a constant window."""
-    xc = x - jnp.mean(x)
-    sd = jnp.sqrt(jnp.mean(xc**2))
+def normalise_window(x: Float[Array, " n"], known: Bool[Array, " n"] | None = None
+                     ) -> tuple[Float[Array, " n"], Bool[Array, ""]]:
+    """Zero mean, unit standard deviation; `ok` False (and zeros) for a constant window.
+    `known`: the mean and deviation over those samples only, the others set to 0."""
+    if known is None:
+        xc = x - jnp.mean(x)
+        sd = jnp.sqrt(jnp.mean(xc**2))
+    else:
+        n_known = jnp.maximum(jnp.sum(known), 1)
+        x = jnp.where(known, x, 0.0)
+        xc = jnp.where(known, x - jnp.sum(x) / n_known, 0.0)
+        sd = jnp.sqrt(jnp.sum(xc**2) / n_known)
     scale = jnp.max(jnp.abs(xc))
     ok = jnp.isfinite(sd) & (sd > 1e-6 * jnp.maximum(scale, jnp.finfo(x.dtype).tiny) + 0.0)
     ok = ok & (scale > 0)
@@ -86,6 +95,21 @@ def fill_gaps(x: Float[Array, " n"], known: Bool[Array, " n"]) -> Float[Array, "
     w = jnp.where(nxt_c > prev_c, (idx - prev_c) / span, 0.0).astype(x.dtype)
     filled = xs[prev_c] + w * (xs[nxt_c] - xs[prev_c])
     return jnp.where(known, x, filled)
+
+
+def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order: int
+                    ) -> tuple[mem.Spectrum, Bool[Array, ""]]:
+    """(Sec. 4.1's MEM spectrum of the normalised window, False for a constant window): the
+    missing samples (NaN) interpolated linearly (`fill_gaps`) when `GAPS` is "interpolate",
+    left out of Burg's sums (`mem.burg`'s `known`, the fit pooled over the known runs) when it
+    is "segments". `step` the sample interval (s)."""
+    known = jnp.isfinite(intensity)
+    if GAPS == "segments":
+        x, nonconstant = normalise_window(intensity, known)
+        return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS,
+                            known=known), nonconstant
+    x, nonconstant = normalise_window(fill_gaps(intensity, known))
+    return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS), nonconstant
 
 
 def ground_speed(t: Float[Array, " n"], xy: Float[Array, "n 2"],
@@ -205,9 +229,7 @@ def classify_window(
     dt_med = jnp.median(dts)
     dt_ok = jnp.all(jnp.abs(dts - dt_med) <= MAX_DT_JITTER * dt_med) & (dt_med > 0)
     signal_ok = (n_missing <= MAX_MISSING_FRACTION * n) & dt_ok
-    x, nonconstant = normalise_window(fill_gaps(intensity, known))
-    spec = mem.spectrum(x, jnp.where(dt_ok, dt_med, 1.0), thr.m, n_freqs=N_FREQS,
-                        n_peaks=N_PEAKS)
+    spec, nonconstant = window_spectrum(intensity, jnp.where(dt_ok, dt_med, 1.0), thr.m)
     white = lambda pk: mem.Peaks(pk.freq, jnp.where(  # power x white level (module doc)
         pk.mask & nonconstant & spec.ok, pk.power / jnp.where(dt_ok, dt_med, 1.0), 0.0),
         pk.mask & nonconstant & spec.ok)
@@ -217,7 +239,7 @@ def classify_window(
     verdict, reason, pace, stride, ratio = match(peaks, speed, cfg.walking, thr, total)
     bad = usable & ~signal_ok
     unclassified = ~usable | bad
-    nan = jnp.asarray(jnp.nan, x.dtype)
+    nan = jnp.asarray(jnp.nan, spec.psd.dtype)
     return RhythmResult(
         verdict=jnp.where(unclassified, Verdict.UNCLASSIFIED, verdict).astype(jnp.int32),
         reason=jnp.where(bad, Reason.BAD_SIGNAL, reason).astype(jnp.int32),
