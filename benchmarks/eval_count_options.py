@@ -63,12 +63,17 @@ def main(argv=None) -> int:
     p.add_argument("--focal-px", type=float, default=0.0, help="own scenes' camera a f = b f "
                    "(px; default the paper's 800: heads cut nearer than 15 m; 500: from 3.3 m)")
     p.add_argument("--name", default="", help="a label for the printed lines")
+    p.add_argument("--gaps", choices=("interpolate", "segments"),
+                   help="a rhythm window's missing samples (`rhythm.GAPS`; default the library's)")
     p.add_argument("-o", "--output")
     a = p.parse_args(argv)
 
     import eval_all as ea
 
     import rhythmjax.count as rc
+    import rhythmjax.model.rhythm as rh
+
+    rh.GAPS = a.gaps or rh.GAPS  # before the first window is traced
     from rhythmjax.count.options import CountOptions, with_changes
 
     changes = {k: json.loads(v) for k, v in (s.split("=", 1) for s in a.set)}

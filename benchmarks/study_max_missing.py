@@ -18,6 +18,16 @@ non-walkers judged Pedestrian, and the objects whose verdict changed against 0.2
 Seeds 5555 and 6666 are the training seeds (a fraction may be chosen there); 20240603 and
 777001 are reported only.
 
+`--gaps segments|interpolate` sets how the windows' missing samples (at most the library's
+fraction) enter the spectrum (`rhythm.GAPS`; docs/rules.md, "Missing samples in a rhythm
+window"); `rules-gaps run gaps on|off ...` runs eval_rules with it (ON "segments", OFF
+"interpolate"), `rules-gaps table -d OUT` prints the table:
+
+    python benchmarks/study_max_missing.py 5555 6666 --fractions 0.25 --gaps interpolate
+    RHYTHMJAX_DATA=../shared/data/real \
+        python benchmarks/study_max_missing.py rules-gaps run gaps on \
+        --only pets,ucsd,casia,dev_count,pets_count -d OUT
+
 ``rules VALUE ARGS`` measures a fraction on the other sources without a config key:
 `benchmarks/eval_rules.py` (ARGS its own) with a rule `max_missing` (ON: VALUE, OFF: 0.25)
 that sets the module constant in this process (`rhythm`, `fast_window` and `track.toolkit`'s
@@ -102,8 +112,8 @@ def gaps_rules_main(argv: list[str]) -> int:
         "constant", "GAPS", "segments", "interpolate", ert.TRACKER_SOURCES,
         "own training seeds 5555, 6666 (replay, benchmarks/study_max_missing.py --gaps)")
     ert.DEFAULT_ON["gaps"] = ()
-    if argv[:3] == ["run", "gaps", "on"]:
-        rh.GAPS = "segments"
+    if argv[:2] == ["run", "gaps"]:
+        rh.GAPS = "segments" if argv[2:3] == ["on"] else "interpolate"
     return er.main(argv)
 
 
