@@ -50,6 +50,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
+from eval_all_score import verdict_row  # noqa: E402
 from eval_synthetic import RECOMMENDED  # noqa: E402
 from fp_replay import deciding, replay  # noqa: E402
 from study_tracks import dev_scenes, own_scenes  # noqa: E402
@@ -129,7 +130,8 @@ def main(argv=None) -> int:
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--fractions", type=float, nargs="+", default=[0.25, 0.3, 0.35, 0.4, 0.5])
     p.add_argument("-d", "--cache", default="/tmp/study_fp")
-    p.add_argument("--gaps", choices=("interpolate", "segments"), default="interpolate",
+    p.add_argument("--gaps", choices=("interpolate", "segments", "segments_taper"),
+                   default="interpolate",
                    help="how a window's missing samples enter the spectrum (`rhythm.GAPS`)")
     a = p.parse_args(argv)
     import rhythmjax.model.rhythm as rh
@@ -137,8 +139,9 @@ def main(argv=None) -> int:
     rh.GAPS = a.gaps  # before the first window is traced
     cfg = config_from_dict(RECOMMENDED)
     print("| seed | max missing | walkers Ped./judged | walkers Ped./all | non-walkers Ped. "
-          "(judged/all) | windows judged with > N/4 missing | changed against 0.25 |")
-    print("|---|---|---|---|---|---|---|")
+          "(judged/all) | pace MAE (Hz), step err. (cm) | windows judged with > N/4 missing | "
+          "changed against the first fraction |")
+    print("|---|---|---|---|---|---|---|---|")
     for seed in a.seeds:
         if seed == "dev":
             scenes = dev_scenes(Path(a.cache))
@@ -149,7 +152,7 @@ def main(argv=None) -> int:
         for f in a.fractions:
             tot = dict.fromkeys(("walkers", "walkers_judged", "walkers_pedestrian", "others",
                                  "others_judged", "others_pedestrian"), 0)
-            extra, verdicts = 0, {}
+            extra, verdicts, objects = 0, {}, []
             for name, c, tracks, objs, truth in scenes:
                 cols, e = replayed_verdicts(c, objs, f)
                 extra += e
@@ -158,14 +161,17 @@ def main(argv=None) -> int:
                           "others_judged"):
                     tot[k] += s[k]
                 tot["others_pedestrian"] += s["others_judged"] - s["others_non_pedestrian"]
+                objects += s["objects"]
                 for r in s["objects"]:
                     verdicts[f"{name}/{r['object']}"] = (r["kind"][:3], r["verdict"])
             base = base or verdicts
+            acc = verdict_row(objects)
             changed = [f"{k}({v[0]}: {base[k][1][:5]}->{v[1][:5]})"
                        for k, v in verdicts.items() if v != base[k]]
             print(f"| {seed} | {f} | {tot['walkers_pedestrian']}/{tot['walkers_judged']} | "
                   f"{tot['walkers_pedestrian']}/{tot['walkers']} | "
                   f"{tot['others_pedestrian']} ({tot['others_judged']}/{tot['others']}) | "
+                  f"{acc['pace_mae_hz']:.3f}, {acc['step_median_err_cm']:.1f} | "
                   f"{extra} | {', '.join(changed) or 'none'} |", flush=True)
     return 0
 

@@ -72,13 +72,14 @@ def simulate_ar(rng, a, n: int, burn: int = 200) -> np.ndarray:
     return x[-n:]
 
 
-def segment_burg_reference(x, known, order: int, window: str = "none"):
+def segment_burg_reference(x, known, order: int, window: str = "none", run_taper: bool = False):
     """Burg AR(order) pooled over the runs of known samples (de Waele & Broersen 2000, "The
     Burg algorithm for segments"): returns (a, sigma2, sigma2_fb, reflection), float64.
 
     The mean is that of the known samples; each run keeps its own forward and backward errors;
     k_m = -2 sum w f b / sum w (f^2 + b^2) over every run's stage-m products, each product
-    weighted by the whole window's taper at its position (`taper_reference(window, N - m)`);
+    weighted by the whole window's taper at its position (`taper_reference(window, N - m)`; with
+    `run_taper`, by its run's own: `taper_reference(window, run length - m)` at its index);
     k_m = 0 when no run is longer than m. sigma2 = mean of the known x^2 times prod (1 - k^2);
     sigma2_fb: the final errors squared summed over the runs / (2 their number), 0 when no run
     is longer than the order."""
@@ -104,7 +105,7 @@ def segment_burg_reference(x, known, order: int, window: str = "none"):
             if len(fwd[r]) < 2:
                 continue
             pos = r[0] + m + np.arange(len(fwd[r]) - 1)  # global positions of the products
-            w = taper[pos - m]
+            w = taper_reference(window, len(pos)) if run_taper else taper[pos - m]
             num += np.sum(w * fwd[r][1:] * bwd[r][:-1])
             den += np.sum(w * (fwd[r][1:] ** 2 + bwd[r][:-1] ** 2))
         k = -2.0 * num / den if den > 0 else 0.0

@@ -66,10 +66,11 @@ class Spectrum(NamedTuple):
     ok: Bool[Array, ""]
 
 
-def _weights(window: str, n: Array, m: Array, N: int) -> Array:
-    """Taper on the N-m error products of stage m (positions n = m..N-1), 0 elsewhere."""
+def _weights(window: str, n: Array, m: Array, N: int | Array, start: Array | int = 0) -> Array:
+    """Taper on the N-m error products of stage m (positions n = m..N-1), 0 elsewhere; with
+    `start` (per position), of the run of N samples beginning there."""
     L = (N - m).astype(n.dtype)
-    j = n - m.astype(n.dtype)
+    j = n - start - m.astype(n.dtype)
     if window == "none":
         w = jnp.ones_like(j)
     elif window == "hamming":  # Swingler (1979)
@@ -80,7 +81,7 @@ def _weights(window: str, n: Array, m: Array, N: int) -> Array:
 
 
 def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW,
-         known: Bool[Array, " n"] | None = None) -> BurgResult:
+         known: Bool[Array, " n"] | None = None, run_taper: bool = False) -> BurgResult:
     """Burg maximum-entropy AR estimate of static `order` M on the N samples of `x`.
 
     The mean is removed and the signal scaled by max|x - mean| inside (float32 amplitudes from
@@ -100,7 +101,9 @@ def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW,
       included). Then the fit pools only the known runs (segment Burg, de Waele and Broersen
       2000): the mean, the scale and E_0 are taken over the known samples, and a stage-m error
       product at n enters k_m only when samples n-m..n are all known (the taper kept, zeroed
-      elsewhere); a stage with no such product gets k_m = 0. All known gives the plain fit.
+      elsewhere; `run_taper`: each run's products tapered as a window of their own, the run's
+      ends as data ends); a stage with no such product gets k_m = 0. All known gives the plain
+      fit.
 
     **Returns:** a `BurgResult`; `ok` False (constant, NaN/inf, or a `sigma2` that under- or
     overflows the dtype; with `known`, fewer than M + 2 known samples) gives zeros, never NaN.
@@ -133,6 +136,11 @@ def burg(x: Float[Array, " n"], order: int, *, window: Window = DEFAULT_WINDOW,
     w_all = jax.vmap(lambda m: _weights(window, n[1:], m, N))(m_all)  # (M, N-1)
     idx = jnp.arange(N)
     run = idx - jax.lax.cummax(jnp.where(have, -1, idx))  # known samples ending at n
+    if known is not None and run_taper:  # each run its own taper
+        run_end = jax.lax.cummin(jnp.where(have, N, idx), reverse=True)  # first unknown >= n
+        start = (idx - run + 1).astype(dt_)
+        length = (run_end - idx + run - 1).astype(dt_)  # the whole run's length at n
+        w_all = jax.vmap(lambda m: _weights(window, n[1:], m, length[1:], start[1:]))(m_all)
     if known is not None:  # products at n need samples n-m..n known
         w_all = jnp.where(run[None, 1:] >= m_all[:, None] + 1, w_all, 0.0)
 
@@ -271,6 +279,7 @@ def spectrum(
     n_peaks: int = 8,
     window: Window = DEFAULT_WINDOW,
     known: Bool[Array, " n"] | None = None,
+    run_taper: bool = False,
 ) -> Spectrum:
     """MEM spectrum of one window: `burg`, `lattice_psd` on `frequency_grid`, then `find_peaks`.
 
@@ -278,7 +287,7 @@ def spectrum(
     that exist (`burg`'s segment fit over the known runs). `ok` False (see `BurgResult`) gives
     a zero PSD and no peaks."""
     dt = jnp.asarray(dt, x.dtype)
-    fit = burg(x, order, window=window, known=known)
+    fit = burg(x, order, window=window, known=known, run_taper=run_taper)
     freqs = frequency_grid(dt, n_freqs)
     psd = lattice_psd(fit.reflection, fit.sigma2, freqs, dt)
     ok = fit.ok & jnp.all(jnp.isfinite(psd))

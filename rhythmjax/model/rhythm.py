@@ -48,9 +48,9 @@ N_PEAKS = 8  # candidate peaks for (14), (15) per spectrum (fixed size, masked);
 N_FREQS = 512  # frequency grid points from 0 to Nyquist
 MAX_MISSING_FRACTION = 0.25
 # How a window's missing I(k) (at most MAX_MISSING_FRACTION) enter the spectrum: "interpolate"
-# (linear, `fill_gaps`; the default) or "segments" (Burg pooled over the known runs, `mem.burg`'s
-# `known`; built and measured in issue 16's tenth round, off: it judged a walker more on the
-# dev clips and PETS but raised the pace error, docs/rules.md).
+# (linear, `fill_gaps`; the default) or "segments" / "segments_taper" (Burg pooled over the known
+# runs, `mem.burg`'s `known` / and `run_taper`; built and measured in issue 16's tenth round,
+# off: a walker more on the dev clips and PETS, but a larger pace error, docs/rules.md).
 GAPS = "interpolate"
 MAX_DT_JITTER = 0.10
 
@@ -108,12 +108,13 @@ def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order
     """(Sec. 4.1's MEM spectrum of the normalised window, False for a constant window): the
     missing samples (NaN) interpolated linearly (`fill_gaps`) when `GAPS` is "interpolate",
     left out of Burg's sums (`mem.burg`'s `known`, the fit pooled over the known runs) when it
-    is "segments". `step` the sample interval (s)."""
+    is "segments" ("segments_taper": each run tapered as a window of its own, `run_taper`).
+    `step` the sample interval (s)."""
     known = jnp.isfinite(intensity)
-    if GAPS == "segments":
+    if GAPS in ("segments", "segments_taper"):
         x, nonconstant = normalise_window(intensity, known)
-        return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS,
-                            known=known), nonconstant
+        return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS, known=known,
+                            run_taper=GAPS == "segments_taper"), nonconstant
     x, nonconstant = normalise_window(fill_gaps(intensity, known))
     return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS), nonconstant
 
