@@ -131,3 +131,10 @@ def test_gaps_setting_changes_nothing_on_a_complete_window(monkeypatch):
         for f in ("verdict", "pace_hz", "peak_power"):
             np.testing.assert_allclose(np.asarray(getattr(results[0], f)),
                                        np.asarray(getattr(other, f)), rtol=1e-5)
+
+
+def test_unknown_gaps_setting_is_refused(monkeypatch):
+    monkeypatch.setattr(rhythm, "GAPS", "spline")
+    x, _ = _walking_window(np.array([], int))
+    with pytest.raises(ValueError, match="GAPS"):
+        rhythm.window_spectrum(x, jnp.float32(1 / 15), M)

@@ -110,6 +110,9 @@ def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order
     left out of Burg's sums (`mem.burg`'s `known`, the fit pooled over the known runs) when it
     is "segments" ("segments_taper": each run tapered as a window of its own, `run_taper`).
     `step` the sample interval (s)."""
+    if GAPS not in ("interpolate", "segments", "segments_taper"):
+        raise ValueError(f"rhythm.GAPS must be 'interpolate', 'segments' or 'segments_taper', "
+                         f"got {GAPS!r}")
     known = jnp.isfinite(intensity)
     if GAPS in ("segments", "segments_taper"):
         x, nonconstant = normalise_window(intensity, known)
