@@ -40,6 +40,25 @@ def test_logistic_fit_matches_newton():
         np.testing.assert_allclose(w, _newton(x, y, l2), rtol=1e-6, atol=1e-7)
 
 
+def test_judged_verdict_keeps_the_verdicts():
+    """--judged-verdict: a judged track's p is its verdict, an unjudged track's the model's."""
+    k = {n: i for i, n in enumerate(scm.FEATURES)}
+    x = np.zeros((4, len(scm.FEATURES)))
+    x[0, k["pedestrian"]] = 1.0  # judged Pedestrian
+    x[1, k["no_peak"]] = 1.0  # judged Non-pedestrian (no peak)
+    x[2, k["non_pedestrian_other"]] = 1.0  # judged Non-pedestrian (another reason)
+    x[:, k["log_seconds"]] = [1.0, 2.0, 0.5, -1.0]  # row 3: unjudged
+    np.testing.assert_array_equal(scm.unjudged(x), [False, False, False, True])
+    n = len(scm.FEATURES)
+    w = np.r_[np.zeros(n), 0.7]  # p = sigmoid(0.7) for every row
+    w[k["log_seconds"]] = 0.0
+    model = (np.zeros(n), np.ones(n), w)
+    plain = scm.predict(model, x)
+    kept = scm.predict(model, x, judged_verdict=True)
+    np.testing.assert_allclose(plain, 1 / (1 + np.exp(-0.7)), rtol=1e-12)
+    np.testing.assert_allclose(kept, [1.0, 0.0, 0.0, 1 / (1 + np.exp(-0.7))], rtol=1e-12)
+
+
 def test_auc_by_hand():
     # positives 0.35, 0.8 against negatives 0.1, 0.4: 3 of 4 pairs ordered
     assert scm.auc(np.array([0.1, 0.4, 0.35, 0.8]), np.array([0, 0, 1, 1])) == 0.75
