@@ -131,12 +131,12 @@ def main(argv=None) -> int:
     p.add_argument("--fractions", type=float, nargs="+", default=[0.25, 0.3, 0.35, 0.4, 0.5])
     p.add_argument("-d", "--cache", default="/tmp/study_fp")
     p.add_argument("--gaps", choices=("interpolate", "segments", "segments_taper"),
-                   default="interpolate",
-                   help="how a window's missing samples enter the spectrum (`rhythm.GAPS`)")
+                   help="how a window's missing samples enter the spectrum (`rhythm.GAPS`; "
+                        "default the library's)")
     a = p.parse_args(argv)
     import rhythmjax.model.rhythm as rh
 
-    rh.GAPS = a.gaps  # before the first window is traced
+    rh.GAPS = a.gaps or rh.GAPS  # before the first window is traced
     cfg = config_from_dict(RECOMMENDED)
     print("| seed | max missing | walkers Ped./judged | walkers Ped./all | non-walkers Ped. "
           "(judged/all) | pace MAE (Hz), step err. (cm) | windows judged with > N/4 missing | "

@@ -48,7 +48,6 @@ def _close(got, ref, tol):
                                               ("parabolic", True), ("hamming", True)])
 def test_segments_match_float64_reference(dtype, window, run_taper):
     for x, known in _gappy_cases():
-        assert 1 <= (~known).sum() <= 16
         a, s2, s2fb, refl = segment_burg_reference(x, known, M, window, run_taper)
         got = _fit(x, known, dtype, window, run_taper)
         assert got.ok
