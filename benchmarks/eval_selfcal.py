@@ -9,6 +9,7 @@ set is fitted (`fit.selfcal.fit_selfcal`, the CLI's function) and compared with 
 
     python benchmarks/eval_selfcal.py [n_scenes=20] [first_seed=0] [--mix] [--sets A+B,C]
         [--outliers] [--frame-union] [--stride-model walk-ratio] [--height-mean-sd M]
+        [--stride-mean-sd M]
     python benchmarks/eval_selfcal.py --tracks T.parquet [T2.parquet ...] --image-size WxH
         --fps F --truth H_M,TILT_DEG[,AF_PX]
 
@@ -36,7 +37,9 @@ pace (`fit.selfcal_gait.expected_stride`); the simulator draws pace and stride i
 1), so this measures what that model costs where it does not hold. `--height-mean-sd M` is the
 spread of the walkers' mean height about 1.70 m (the command's; default 0.05, 0 holds it; the
 simulator's walkers are N(1.70, 0.07^2) m, so it costs what estimating the mean costs where it
-is known). h is not determined by
+is known). `--stride-mean-sd M` lets the crowd's mean stride differ from the walking model's
+(the command's; default 0, held): the simulator's walkers keep Table 1's mean, so it costs what
+estimating that mean costs where it is known. h is not determined by
 ``speed`` alone (scale-free): its h column is left out. The simulator writes no tracker `state`
 column, so the observed-rows rule (`fit.selfcal_rows`, the command's `--observed-only`) has
 nothing to act on here.
@@ -72,7 +75,7 @@ def start_config(cam: Camera) -> Config:
 
 def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool = False,
         frame_union: bool = False, stride_model: str = "table1",
-        height_mean_sd: float = HEIGHT_MEAN_SD_M) -> dict:
+        height_mean_sd: float = HEIGHT_MEAN_SD_M, stride_mean_sd: float = 0.0) -> dict:
     rows = {c: [] for c in cue_sets}
     for seed in range(seed0, seed0 + n_scenes):
         rng = np.random.default_rng(seed)
@@ -84,7 +87,8 @@ def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool 
         for cues in cue_sets:
             t0 = time.perf_counter()
             r = fit_selfcal(cfg, b, cues=cues, outliers=outliers, frame_union=frame_union,
-                            stride_model=stride_model, height_mean_sd=height_mean_sd)
+                            stride_model=stride_model, height_mean_sd=height_mean_sd,
+                            stride_mean_sd=stride_mean_sd)
             dt = time.perf_counter() - t0
             if r.camera is None:
                 rows[cues].append(None)
@@ -171,8 +175,10 @@ if __name__ == "__main__":
              else "table1")
     hsd = (sys.argv[sys.argv.index("--height-mean-sd") + 1] if "--height-mean-sd" in sys.argv
            else None)
+    tsd = (sys.argv[sys.argv.index("--stride-mean-sd") + 1] if "--stride-mean-sd" in sys.argv
+           else "0")
     args = [a for a in sys.argv[1:] if not a.startswith("--")
-            and a not in (sets_arg, model, hsd)]
+            and a not in (sets_arg, model, hsd, tsd)]
     n = int(args[0]) if args else 20
     s0 = int(args[1]) if len(args) > 1 else 0
     mix = "--mix" in sys.argv
@@ -183,8 +189,9 @@ if __name__ == "__main__":
     fu = "--frame-union" in sys.argv
     title = f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 "
     sd = HEIGHT_MEAN_SD_M if hsd is None else float(hsd)
-    table(run(n, s0, mix, sets, on, fu, model, sd), title +
+    table(run(n, s0, mix, sets, on, fu, model, sd, float(tsd)), title +
           "walkers" + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on
                                                                   else "")
           + (", frame union undone" if fu else "") + f", stride model {model}"
-          + (f", crowd height +- {sd:g} m" if sd > 0 else ", crowd height held"))
+          + (f", crowd height +- {sd:g} m" if sd > 0 else ", crowd height held")
+          + (f", crowd stride +- {float(tsd):g} m" if float(tsd) > 0 else ", crowd stride held"))

@@ -21,7 +21,7 @@ the classical approach), gait+height and gait+speed+width+height. Rows:
 
     python benchmarks/selfcal_real.py [--data ../shared/data] [--work /tmp/selfcal_real]
         [-o docs/data/selfcal_real.csv] [--only pets,dev,casia] [--outliers] [--observed-only]
-        [--frame-union] [--stride-model walk-ratio] [--height-mean-sd M]
+        [--frame-union] [--stride-model walk-ratio] [--height-mean-sd M] [--stride-mean-sd M]
         [--sets gait+speed+width+height,...]
 
 `--outliers` turns on the fit's foot-point outlier rule (`fit.selfcal_outliers`, off by default)
@@ -32,7 +32,9 @@ point, width and top row). `--frame-union` undoes the frame-difference union in 
 points, widths and top rows (`fit.selfcal_union`, the command's `--frame-union`, off by default).
 `--stride-model walk-ratio` gives the gait cue a stride that follows the pace
 (`fit.selfcal_gait.expected_stride`, the command's `--stride-model`). `--height-mean-sd M` is the
-spread of the walkers' mean height about 1.70 m (the command's `--height-mean-sd`; 0 holds it).
+spread of the walkers' mean height about 1.70 m (the command's `--height-mean-sd`; 0 holds it),
+`--stride-mean-sd M` that of their mean stride about the walking model's (the command's; 0 holds
+it).
 
 Tracks are made under `--work` (WORK/SOURCE/CLIP/tracks.parquet) unless already there, so a
 rerun only fits; the videos are read where they lie and nothing of them is copied into the
@@ -70,6 +72,7 @@ UNION = [False]  # the frame-union correction of the fits (`--frame-union` sets 
 STRIDE = ["table1"]  # the gait cue's stride model (`--stride-model`)
 HEIGHT_MEAN_SD = [None]  # the crowd's mean height's prior spread (m; `--height-mean-sd`;
 # None: fit_selfcal's default)
+STRIDE_MEAN_SD = [None]  # the crowd's mean stride's prior spread (m; `--stride-mean-sd`)
 
 
 def say(msg: str) -> None:
@@ -151,6 +154,8 @@ def fit_rows(source: str, how: str, paths: list[Path], size, fps, truth,
     cfg, batch = pooled_batch(paths, size, fps, window_s)
     for cues in SETS[0]:
         hsd = {} if HEIGHT_MEAN_SD[0] is None else {"height_mean_sd": HEIGHT_MEAN_SD[0]}
+        if STRIDE_MEAN_SD[0] is not None:
+            hsd["stride_mean_sd"] = STRIDE_MEAN_SD[0]
         r = fit_selfcal(cfg, batch, cues=cues, outliers=OUTLIERS[0], frame_union=UNION[0],
                         stride_model=STRIDE[0], **hsd)
         fits[cues] = r
@@ -248,6 +253,8 @@ def main(argv=None) -> int:
     a.add_argument("--stride-model", default="table1", choices=("table1", "walk-ratio"))
     a.add_argument("--height-mean-sd", type=float,
                    help="the command's --height-mean-sd (default the command's; 0 holds it)")
+    a.add_argument("--stride-mean-sd", type=float,
+                   help="the command's --stride-mean-sd (default the command's; 0 holds it)")
     a.add_argument("--sets", help="cue sets to fit, e.g. gait+speed+width+height (default all)")
     args = a.parse_args(argv)
     OUTLIERS[0] = args.outliers
@@ -255,6 +262,7 @@ def main(argv=None) -> int:
     UNION[0] = args.frame_union
     STRIDE[0] = args.stride_model
     HEIGHT_MEAN_SD[0] = args.height_mean_sd
+    STRIDE_MEAN_SD[0] = args.stride_mean_sd
     if args.sets:
         SETS[0] = tuple(tuple(c.split("+")) for c in args.sets.split(","))
     data, work = Path(args.data), Path(args.work)

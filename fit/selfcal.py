@@ -32,6 +32,10 @@ cues, each a residual per track in units of its spread (`CUES`):
   height is estimated too, about width.height with the spread `height_mean_sd` (0.05 m by
   default; 0 holds it at width.height: `fit.selfcal_height.crowd_height`), and the heights are
   compared with it.
+  The crowd's mean stride can be estimated the same way (`stride_mean_sd`, 0 by default: held at
+  the walking model's): each walker's stride over its expected stride, about the crowd's mean of
+  that ratio, 1 a priori with the spread stride_mean_sd / stride_mean
+  (`fit.selfcal_cost.crowd_stride`).
 
 The spreads of the three shape residuals (speed, width, height change) are measurement noise, not
 a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
@@ -67,6 +71,7 @@ from fit.selfcal_checks import geometry_reasons
 from fit.selfcal_cost import (
     N_BLOCKS,
     crowd_mean_height,
+    crowd_mean_stride,
     cue_weights,
     raw_cues,
     residuals,
@@ -127,7 +132,8 @@ def param_spec(fitted) -> CameraParams:
 
 
 def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_scale=None,
-            stride_model: str = "table1", height_mean_sd: float = 0.0):
+            stride_model: str = "table1", height_mean_sd: float = 0.0,
+            stride_mean_sd: float = 0.0):
     """The best `n_best` grid points (tilt x a f) with h from the median stride (each over
     its pace's share of the expected stride, `expected_stride`), or height, or width."""
     f = float(cam0.f)
@@ -162,7 +168,7 @@ def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_sca
     static = eqx.partition(make_params(values0), spec)[1]
     stack = jax.tree.map(lambda *xs: jnp.stack(xs), *dyns)
     wt = cue_weights(cues, width_scale=width_scale, stride_model=stride_model,
-                     height_mean_sd=height_mean_sd)
+                     height_mean_sd=height_mean_sd, stride_mean_sd=stride_mean_sd)
     cost = np.asarray(_grid_cost(stack, static, (cam0, jnp.float64(f), data, cfg, wt)))
     order = [i for i in np.argsort(cost) if np.isfinite(cost[i])][:n_best]
     return [(grid + [values0])[i] for i in order]
@@ -182,7 +188,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                 fit=("af", "h", "theta"), max_steps: int = 200, n_starts: int = 3,
                 width_scale: bool | None = None, outliers: bool = False,
                 frame_union: bool = False, stride_model: str = "table1",
-                height_mean_sd: float = HEIGHT_MEAN_SD_M) -> SelfcalFit:
+                height_mean_sd: float = HEIGHT_MEAN_SD_M,
+                stride_mean_sd: float = 0.0) -> SelfcalFit:
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
     track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
@@ -196,9 +203,12 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     widths and top rows (`fit.selfcal_union`, at the config's fps). `stride_model` is the gait
     cue's (`STRIDE_MODELS`, `expected_stride`): "table1" or "walk-ratio". `height_mean_sd` (m)
     lets the crowd's mean height differ from the config's by about that much
-    (`fit.selfcal_height.crowd_height`; a note gives its estimate); 0 holds it."""
-    if not (height_mean_sd >= 0 and math.isfinite(height_mean_sd)):
-        raise ValueError(f"height_mean_sd {height_mean_sd}: a spread in m, >= 0")
+    (`fit.selfcal_height.crowd_height`; a note gives its estimate); 0 holds it.
+    `stride_mean_sd` (m) does the same for the crowd's mean stride against the walking model's
+    (`fit.selfcal_cost.crowd_stride`; 0, the default, holds it)."""
+    for name, sd in (("height_mean_sd", height_mean_sd), ("stride_mean_sd", stride_mean_sd)):
+        if not (sd >= 0 and math.isfinite(sd)):
+            raise ValueError(f"{name} {sd}: a spread in m, >= 0")
     if stride_model not in STRIDE_MODELS:
         raise ValueError(f"stride model {stride_model!r}: choose from "
                          f"{', '.join(STRIDE_MODELS)}")
@@ -237,7 +247,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     with jax.enable_x64(True):
         data = make_data(batch, used, pace)
         starts = _starts(cam0, values0, data, cfg, cues, spec, n_starts, width_scale,
-                         stride_model, height_mean_sd)
+                         stride_model, height_mean_sd, stride_mean_sd)
 
         def run(start, wt):
             dyn, static = eqx.partition(make_params(start), spec)
@@ -248,7 +258,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
             return cost, val, static, args, res, int(steps)
 
         wt = cue_weights(cues, width_scale=width_scale, stride_model=stride_model,
-                         height_mean_sd=height_mean_sd)
+                         height_mean_sd=height_mean_sd, stride_mean_sd=stride_mean_sd)
         best = min((run(s, wt) for s in starts), key=lambda t: t[0])
         # the shape residuals' spreads from the data (1.4826 MAD), then the final fit
         raw = raw_cues(eqx.combine(best[1], best[2]).camera(cam0, f), data, cfg)
@@ -258,7 +268,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         hok = np.asarray(raw["hok"])[:n_used]
         sd_h = max(mad(np.asarray(raw["dlogh"])[:n_used][hok]) if hok.any() else 0.0,
                    SHAPE_FLOOR)
-        wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h, stride_model, height_mean_sd)
+        wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h, stride_model, height_mean_sd,
+                         stride_mean_sd)
         best = run(_values(best[1], best[2]), wt)
         cost, val, static, args, res, steps = best
         J, G, r = jacobians(residuals, val, static, args, fitted)
@@ -272,6 +283,10 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         if height_mean_sd > 0 and "height" in cues:
             notes.append(f"the walkers' mean height {crowd_mean_height(cam_fit, data, cfg, wt):.3f}"
                          f" m (prior {float(cfg.width.height):.2f} +- {height_mean_sd:g} m)")
+        if stride_mean_sd > 0 and "gait" in cues:
+            ratio = crowd_mean_stride(cam_fit, data, cfg, wt)
+            notes.append(f"the walkers' mean stride {ratio:.3f} x the walking model's (prior 1 +- "
+                         f"{stride_mean_sd / float(cfg.walking.stride_mean):.3f})")
     blk = std.reshape(N_BLOCKS, -1)[:, :n_used]
     parts = {"gait": blk[0], "speed": blk[1], "width": np.r_[blk[2], blk[3]],
              "height": np.r_[blk[4][hok], blk[5][hok]]}

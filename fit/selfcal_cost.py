@@ -2,7 +2,8 @@
 (`raw_cues`), their standardised residuals (`standardised`), the robust residual vector the
 least squares minimises (`residuals`) and the cue weights (`cue_weights`). The cues and their
 models are described in `fit.selfcal`'s module doc; heights are compared with the crowd's mean
-height (`fit.selfcal_height.crowd_height`: the config's, or estimated about it).
+height (`fit.selfcal_height.crowd_height`: the config's, or estimated about it), strides with
+the crowd's mean stride relative to the walking model's (`crowd_stride`: 1, or estimated about it).
 """
 
 from __future__ import annotations
@@ -13,8 +14,9 @@ import jax.numpy as jnp
 
 from fit.camera import CameraParams
 from fit.selfcal_checks import HORIZON_MARGIN_PX
+from fit.selfcal_crowd import crowd_mean
 from fit.selfcal_data import SPEED_SAMPLES, Data
-from fit.selfcal_gait import STRIDE_MODELS, expected_stride
+from fit.selfcal_gait import STRIDE_MODELS, expected_stride, relative_spread
 from fit.selfcal_height import HEIGHT_STD_M, crowd_height, height_cues
 from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
 from rhythmjax.model.params import Camera, Config
@@ -39,6 +41,7 @@ class Weights(eqx.Module):
     sd_hshape: jax.Array
     stride_power: jax.Array  # the gait cue's stride model (`selfcal_gait`): 0 Table 1's
     sd_hmean: jax.Array  # the crowd's mean height's prior spread (m; 0: the config's, held)
+    sd_tmean: jax.Array  # the crowd's mean stride's prior spread (m; 0: the model's, held)
 
 
 def cauchy(r):
@@ -98,26 +101,47 @@ def _crowd(r: dict, data: Data, cfg: Config, wt: Weights) -> tuple[jax.Array, ja
     return crowd_height(r["height"], hok, cfg.width.height, wt.sd_hmean)
 
 
-def _blocks(r: dict, data: Data, cfg: Config, wt: Weights) -> tuple[jax.Array, jax.Array]:
+def crowd_stride(r: dict, data: Data, cfg: Config, wt: Weights):
+    """(ratio, mean, its prior residual): each track's stride over the walking model's
+    expected stride (`expected_stride`, B), and the crowd's mean of that ratio
+    (`fit.selfcal_crowd.crowd_mean` over the valid tracks with a finite stride, when the gait
+    cue is on): 1 a priori with the spread sd_tmean / stride_mean, each walker's ratio about it
+    with `relative_spread`. sd_tmean 0 holds it at 1 (Table 1's or the config's mean stride)."""
+    t_mean = expected_stride(data.pace, cfg.walking, wt.stride_power)[0]
+    ratio = r["stride"] / t_mean
+    ok = data.valid & jnp.isfinite(ratio) & (wt.gait > 0)
+    sd_mean = wt.sd_tmean / cfg.walking.stride_mean
+    mean, prior = crowd_mean(jnp.where(ok, ratio, 1.0), ok, 1.0, sd_mean,
+                             relative_spread(cfg.walking, wt.stride_power))
+    return ratio, mean, prior
+
+
+def _blocks(r: dict, data: Data, cfg: Config, wt: Weights):
     """The residual blocks of `standardised` from `raw_cues`' values, and the crowd's mean
-    height's prior residual (`crowd_height`; 0 where its mean is held). Where the mean is
-    estimated, heights are compared with it relatively, (H / mean - 1) x 1.70 / 0.07, so that
-    their spread does not shrink with the camera's scale; held, (H - 1.70) / 0.07."""
+    height's and mean stride's prior residuals (`crowd_height`, `crowd_stride`; 0 where held).
+    Where the mean height is estimated, heights are compared with it relatively, (H / mean - 1)
+    x 1.70 / 0.07, so that their spread does not shrink with the camera's scale; held,
+    (H - 1.70) / 0.07. Strides likewise: estimated, (ratio / mean - 1) / `relative_spread`;
+    held, (T - expected) / its spread."""
     wk, wm = cfg.walking, cfg.width
     wh = wt.height * r["hok"].astype(wt.height.dtype)
     mean_h, prior_h = _crowd(r, data, cfg, wt)
     t_mean, t_sd = expected_stride(data.pace, wk, wt.stride_power)
+    ratio, mean_t, prior_t = crowd_stride(r, data, cfg, wt)
+    gait = jnp.where(wt.sd_tmean > 0,
+                     (ratio / mean_t - 1.0) / relative_spread(wk, wt.stride_power),
+                     (r["stride"] - t_mean) / t_sd)
     valid = data.valid.astype(wt.gait.dtype)[None, :].repeat(N_BLOCKS, 0).ravel()
     # a cue that is off gives 0, even where a degenerate camera makes its value NaN
     weighted = lambda w, x: jnp.where(w > 0, w * x, 0.0)
     return valid * jnp.concatenate([
-        weighted(wt.gait, (r["stride"] - t_mean) / t_sd),
+        weighted(wt.gait, gait),
         weighted(wt.speed, r["dspeed"] / wt.sd_speed),
         weighted(wt.width_scale, (r["width"] - wm.mean) / wm.std),
         weighted(wt.width, r["dlogw"] / wt.sd_wshape),
         weighted(wh, jnp.where(wt.sd_hmean > 0, (r["height"] / mean_h - 1.0) * wm.height,
                                r["height"] - wm.height) / HEIGHT_STD_M),
-        weighted(wh, r["dlogh"] / wt.sd_hshape)]), prior_h
+        weighted(wh, r["dlogh"] / wt.sd_hshape)]), jnp.stack([prior_h, prior_t])
 
 
 def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Array:
@@ -131,27 +155,35 @@ def crowd_mean_height(camera: Camera, data: Data, cfg: Config, wt: Weights) -> f
     return float(_crowd(raw_cues(camera, data, cfg), data, cfg, wt)[0])
 
 
+def crowd_mean_stride(camera: Camera, data: Data, cfg: Config, wt: Weights) -> float:
+    """The crowd's mean stride over the walking model's (`crowd_stride`; 1 where held)."""
+    return float(crowd_stride(raw_cues(camera, data, cfg), data, cfg, wt)[1])
+
+
 def residuals(dynamic: CameraParams, args) -> jax.Array:
     """The robust residual vector of the camera (optimistix's least squares): the cues'
-    (`standardised`) through the robust loss, the horizon hinges, the crowd height's prior."""
+    (`standardised`) through the robust loss, the horizon hinges, the crowd's mean height's
+    and mean stride's priors."""
     static, like, f, data, cfg, wt = args
     cam = eqx.combine(dynamic, static).camera(like, f)
     r = raw_cues(cam, data, cfg)
-    std, prior_h = _blocks(r, data, cfg, wt)
+    std, priors = _blocks(r, data, cfg, wt)
     return jnp.concatenate([cauchy(std), 10.0 * jnp.where(data.valid, r["hinge"], 0.0),
-                            prior_h[None]])
+                            priors])
 
 
 
 def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=None,
                 sd_hshape=SHAPE_START, stride_model: str = "table1",
-                height_mean_sd: float = 0.0) -> Weights:
+                height_mean_sd: float = 0.0, stride_mean_sd: float = 0.0) -> Weights:
     """`Weights` of a cue set; the width's scale term is on with the width cue when
     `width_scale` is True, or (None) only without gait (module doc); the gait cue's stride
-    model by name (`STRIDE_MODELS`); the crowd's mean height's prior spread (m, 0: held)."""
+    model by name (`STRIDE_MODELS`); the crowd's mean height's and mean stride's prior spreads
+    (m, 0: held)."""
     on = lambda c: jnp.float64(1.0 if c in cues else 0.0)
     ws = "gait" not in cues if width_scale is None else width_scale
     scale = jnp.float64(1.0 if "width" in cues and ws else 0.0)
     return Weights(on("gait"), on("speed"), on("width"), scale, jnp.float64(sd_speed),
                    jnp.float64(sd_wshape), on("height"), jnp.float64(sd_hshape),
-                   jnp.float64(STRIDE_MODELS[stride_model]), jnp.float64(height_mean_sd))
+                   jnp.float64(STRIDE_MODELS[stride_model]), jnp.float64(height_mean_sd),
+                   jnp.float64(stride_mean_sd))

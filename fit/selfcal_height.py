@@ -28,6 +28,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from fit.selfcal_crowd import crowd_mean, masked_median
 from rhythmjax.model.camera import ground_from_image, terms
 from rhythmjax.model.params import Camera
 
@@ -62,35 +63,14 @@ def height_from_top(camera: Camera, u, v, v_top):
     return jnp.where(ok, H, 0.0), ok
 
 
-def masked_median(x, mask):
-    """Median of x (T,) over `mask` (the mean of the two middle values for an even count);
-    differentiable in x (through a sort). Undefined (a large number) when mask is all False."""
-    xs = jnp.sort(jnp.where(mask, x, 1e30))
-    n = jnp.sum(mask)
-    lo = xs[jnp.maximum((n - 1) // 2, 0)]
-    hi = xs[jnp.maximum(n // 2, 0)]
-    return 0.5 * (lo + hi)
-
-
 def crowd_height(height, usable, prior_mean, sd_mean):
     """(mean height m, its prior residual) of the crowd whose walkers' median heights are
-    `height` (B,) where `usable`: the crowd's mean is unknown, N(prior_mean, sd_mean^2) a
-    priori, and each walker's height N(mean, HEIGHT_STD_M^2) about it, so with n walkers of
-    median height m (the median over walkers: robust to a bicycle's or dog's track)
-
-        mean = (n m / s^2 + prior_mean / sd_mean^2) / (n / s^2 + 1 / sd_mean^2),   s = HEIGHT_STD_M
-
-    (the Gaussian posterior mean, the mean profiled out of the least squares) and the prior
-    residual (mean - prior_mean) / sd_mean. `sd_mean` 0: the mean is the prior's (residual 0),
-    as without this rule; also with no usable walker. Differentiable in `height`."""
-    n = jnp.sum(usable).astype(height.dtype)
-    free = (sd_mean > 0) & (n > 0)
-    m = masked_median(height, usable)
-    prec = 1.0 / jnp.where(free, sd_mean, 1.0) ** 2
-    a = n / HEIGHT_STD_M**2
-    mean = jnp.where(free, (a * jnp.where(free, m, 0.0) + prec * prior_mean) / (a + prec),
-                     prior_mean)
-    return mean, jnp.where(free, (mean - prior_mean) / jnp.where(free, sd_mean, 1.0), 0.0)
+    `height` (B,) where `usable` (`fit.selfcal_crowd.crowd_mean` with each walker's height
+    N(mean, HEIGHT_STD_M^2) about the crowd's mean): the crowd's mean is unknown,
+    N(prior_mean, sd_mean^2) a priori, profiled out of the least squares. `sd_mean` 0: the mean
+    is the prior's (residual 0), as without this rule; also with no usable walker.
+    Differentiable in `height`."""
+    return crowd_mean(height, usable, prior_mean, sd_mean, HEIGHT_STD_M)
 
 
 def _slope(t, y, w):

@@ -42,6 +42,7 @@ def spread_m(text: str) -> float:
 
 def add_parser(sub, size_type, at_least) -> None:
     """The `selfcal` subcommand's arguments (`size_type`, `at_least`: fit.cli's parsers)."""
+    from fit.selfcal_gait import STRIDE_MEAN_SD_M
     from fit.selfcal_height import HEIGHT_MEAN_SD_M
     from rhythmjax.track.options import TrackerOptions
 
@@ -80,6 +81,12 @@ def add_parser(sub, size_type, at_least) -> None:
                    "m): the mean is estimated with the camera (fit.selfcal_height."
                    f"crowd_height); default {HEIGHT_MEAN_SD_M:g}, the spread of adult statures "
                    "between countries; 0 holds it at the config's (docs/selfcal.md)")
+    s.add_argument("--stride-mean-sd", type=spread_m, default=0.0, metavar="M",
+                   help="spread (m) of the walkers' mean stride about the walking model's "
+                   "(0.72 m): the mean is estimated with the camera (fit.selfcal_cost."
+                   f"crowd_stride), for a crowd that strolls or hurries; {STRIDE_MEAN_SD_M:g} "
+                   "is the spread of crowds' mean steps between places; default 0: held at "
+                   "the model's (docs/selfcal.md)")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
@@ -171,7 +178,8 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
     r = fit_selfcal(cfg, batch, cues=cues, fit=fit, max_steps=args.max_steps,
                     outliers=args.outliers, frame_union=getattr(args, "frame_union", False),
                     stride_model=getattr(args, "stride_model", "table1"),
-                    height_mean_sd=getattr(args, "height_mean_sd", HEIGHT_MEAN_SD_M))
+                    height_mean_sd=getattr(args, "height_mean_sd", HEIGHT_MEAN_SD_M),
+                    stride_mean_sd=getattr(args, "stride_mean_sd", 0.0))
     r.notes = more + r.notes
     if notes is not None:
         notes += more

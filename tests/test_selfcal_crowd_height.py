@@ -20,9 +20,9 @@ from fit.cli import main as fit_main
 from fit.selfcal import fit_selfcal
 from fit.selfcal_data import camera_values, scene_batch
 from fit.selfcal_height import HEIGHT_MEAN_SD_M, HEIGHT_STD_M, crowd_height
-from fit.walking import make_labelled
-from rhythmjax.io import write_table
 from rhythmjax.model.params import Camera, Config
+
+from .helpers_selfcal import three_track_command, walkers_with
 
 
 F = 0.008
@@ -102,13 +102,8 @@ def test_negative_spread_is_refused():
 @pytest.fixture(scope="module")
 def tall_crowd():
     """20 walkers seen by TRUE (seed 5) whose heads stand N(1.82, 0.07^2) m high."""
-    mp = pytest.MonkeyPatch()
-    mp.setitem(sim_tracks.HEIGHT_M, "pedestrian", (TALL_M, 0.07))
-    try:
-        cols, _ = make_labelled(n_walkers=20, n_bicycles=0, n_dogs=0, n_cars=0, seed=5,
-                                camera=TRUE)
-    finally:
-        mp.undo()
+    cols, _ = walkers_with(TRUE, lambda mp: mp.setitem(sim_tracks.HEIGHT_M, "pedestrian",
+                                                        (TALL_M, 0.07)))
     return cols, scene_batch(cols, START)
 
 
@@ -149,12 +144,7 @@ def test_cli_passes_the_spread(tmp_path, tall_crowd, selfcal_calls, capsys):
     """`--height-mean-sd 0` reaches fit_selfcal; without it the default 0.05 m (three tracks:
     refused after the fit was asked); a negative spread is a usage error (exit 2)."""
     cols = tall_crowd[0]
-    keep = np.isin(cols["track_id"], np.unique(cols["track_id"])[:3])
-    path = tmp_path / "tracks.parquet"
-    names = ["track_id", "frame", "t", "u", "v", "width_px", "intensity", "v_top"]
-    write_table(path, {k: np.asarray(cols[k])[keep] for k in names}, names)
-    base = ["selfcal", str(path), "--image-size", "1280x720", "--fps", "15",
-            "-o", str(tmp_path / "cam.json")]
+    base = three_track_command(tmp_path, cols)
     for extra, want in (((), HEIGHT_MEAN_SD_M), (("--height-mean-sd", "0"), 0.0)):
         assert fit_main([*base, *extra]) == 1 and selfcal_calls[-1].get("height_mean_sd") == want
     with pytest.raises(SystemExit) as e:

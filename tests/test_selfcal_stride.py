@@ -23,6 +23,8 @@ from fit.walking import batch_of, make_labelled
 from rhythmjax.io import write_table
 from rhythmjax.model.params import Camera, Config, WalkingModel
 
+from .helpers_selfcal import strolling_params
+
 
 F = 0.008
 TRUE = Camera(f=F, h=5.5, theta=math.radians(21.0), a=950 / F, b=950 / F, uc=640, vc=360,
@@ -68,18 +70,8 @@ def test_unknown_stride_model_is_refused():
 def strollers(monkeypatch_module):
     """20 walkers seen by TRUE (seed 5) who step at N(1.75, 0.12^2) Hz with steps of
     0.72 F / 2.05 m (a constant walk ratio): about 0.61 m, 0.85 of Table 1's mean."""
-    draw = sim_tracks.kind_params
-
-    def strolling(kind, rng, size=None):
-        if kind != "pedestrian":
-            return draw(kind, rng, size)
-        pace = np.clip(rng.normal(STROLL_PACE_HZ, 0.12, size), 1.5, 2.1)
-        stride = 0.72 * pace / 2.05
-        if size is None:
-            pace, stride = float(pace), float(stride)
-        return pace, stride, pace * stride, (1.0 if size is None else np.ones(size))
-
-    monkeypatch_module.setattr(sim_tracks, "kind_params", strolling)
+    monkeypatch_module.setattr(sim_tracks, "kind_params",
+                               strolling_params(sim_tracks.kind_params, STROLL_PACE_HZ))
     cols, truth = make_labelled(n_walkers=20, n_bicycles=0, n_dogs=0, n_cars=0, seed=5,
                                 camera=TRUE)
     paces = [t.pace_hz for t in truth if t.label == "pedestrian"]
