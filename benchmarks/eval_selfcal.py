@@ -176,7 +176,7 @@ if __name__ == "__main__":
     hsd = (sys.argv[sys.argv.index("--height-mean-sd") + 1] if "--height-mean-sd" in sys.argv
            else None)
     tsd = (sys.argv[sys.argv.index("--stride-mean-sd") + 1] if "--stride-mean-sd" in sys.argv
-           else "0")
+           else None)
     args = [a for a in sys.argv[1:] if not a.startswith("--")
             and a not in (sets_arg, model, hsd, tsd)]
     n = int(args[0]) if args else 20
@@ -189,9 +189,10 @@ if __name__ == "__main__":
     fu = "--frame-union" in sys.argv
     title = f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 "
     sd = HEIGHT_MEAN_SD_M if hsd is None else float(hsd)
-    table(run(n, s0, mix, sets, on, fu, model, sd, float(tsd)), title +
+    ssd = 0.0 if tsd is None else float(tsd)
+    table(run(n, s0, mix, sets, on, fu, model, sd, ssd), title +
           "walkers" + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on
                                                                   else "")
           + (", frame union undone" if fu else "") + f", stride model {model}"
           + (f", crowd height +- {sd:g} m" if sd > 0 else ", crowd height held")
-          + (f", crowd stride +- {float(tsd):g} m" if float(tsd) > 0 else ", crowd stride held"))
+          + (f", crowd stride +- {ssd:g} m" if ssd > 0 else ", crowd stride held"))
