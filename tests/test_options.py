@@ -86,6 +86,7 @@ COUNT_DEFAULTS = [
     ("stitch_fit_s", "stitch.fit_s", 1.0),
     ("(new: issue 16 item 4)", "stitch.reid", False),
     ("(new: issue 16 item 4)", "stitch.reid_max_dv_w", 2.0),
+    ("(new: issue 16 counting)", "stitch.max_dv_mps", math.inf),  # ground-velocity gate, off
     ("min_track_frames", "verdicts.min_track_frames", 10),
     ("online_verdicts", "verdicts.online", True),
     ("classify", "verdicts.classify", True),

@@ -10,6 +10,7 @@ Change one setting with `track.options.with_changes(CountOptions(), {"stitch.ena
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from ..track.options import with_changes
@@ -129,6 +130,14 @@ class StitchOptions:
     # whole gap, puts it (same gate: gate_w W, gate_h H, growing gate_per_s per s of gap)
     # continues it (`count.stitch.reid_distance`, `track.relink.gate_distance`)
     reid_max_dv_w: float = 2.0  # ... with image velocities within this many W/s (inf: any)
+    max_dv_mps: float = math.inf  # finite: a joined pair's ground velocities (A's at its end,
+    # B's at its start) within this many m/s, the misfit ranking the pairs instead of the
+    # image's W/s (`count.stitch.ground_dv_misfit`); inf: off (1.5, life.max_dv_mps, measured)
+
+    def __post_init__(self):
+        if not self.max_dv_mps > 0:  # NaN too
+            raise ValueError(f"stitch.max_dv_mps must be > 0 m/s (inf: off), got "
+                             f"{self.max_dv_mps!r}")
 
 
 @dataclass(frozen=True)
