@@ -21,8 +21,8 @@ if TYPE_CHECKING:
     from .options import AppearanceOptions
 
 
-__all__ = ["Piece", "ground_dv_misfit", "ground_velocity", "piece_of", "reach_misfit",
-           "reid_distance", "stitch_level", "stitch_pieces"]
+__all__ = ["Piece", "ground_dv_misfit", "ground_velocity", "halfway_misfit", "piece_of",
+           "reach_misfit", "reid_distance", "stitch_level", "stitch_pieces"]
 
 
 @dataclass(frozen=True)
@@ -132,6 +132,23 @@ def _predict(A: Piece, dt: float, camera: tuple | None) -> np.ndarray:
     return e[:2] + e[2:] * dt
 
 
+def halfway_misfit(A: Piece, B: Piece, camera: tuple | None, *, gate_w: float, gate_h: float,
+                   gate_per_s: float, max_dv_w: float) -> tuple[float, float]:
+    """`stitch_pieces`' halfway misfits of B after A, each over its gate (<= 1: inside): the
+    position d (A predicted gap/2 s on, `_predict`, against B's start taken gap/2 s back at its
+    own velocity; an ellipse gate_w W across and gate_h H up or down, W, H: B's patch, growing
+    by gate_per_s per second of gap) and the image velocity dv (over max_dv_w W/s). A.end and
+    B.start must be finite; B after A."""
+    sb, (w, h) = np.asarray(B.start, np.float64), B.size
+    gap = B.t_first - A.t_last
+    mid_a = _predict(A, 0.5 * gap, camera)
+    mid_b = sb[:2] - sb[2:] * 0.5 * gap
+    d = float(np.hypot((mid_a[0] - mid_b[0]) / (gate_w * w),
+                       (mid_a[1] - mid_b[1]) / (gate_h * h))) / (1.0 + gate_per_s * gap)
+    dv = float(np.hypot(*(np.asarray(A.end, np.float64)[2:] - sb[2:]))) / (max_dv_w * w)
+    return d, dv
+
+
 def reid_distance(A: Piece, B: Piece, camera: tuple | None, *, gate_w: float, gate_h: float,
                   gate_per_s: float) -> float:
     """Ground-plane re-identification misfit (<= 1: inside the gate) of B's first foot point
@@ -233,12 +250,8 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
                                          look.reach_speed_mps) <= 1.0):
                     cand.append((2, dist, a, b))
                 continue
-            mid_a = _predict(A, 0.5 * gap, camera)
-            mid_b = sb[:2] - sb[2:] * 0.5 * gap
-            grow = 1.0 + gate_per_s * gap
-            d = float(np.hypot((mid_a[0] - mid_b[0]) / (gate_w * w),
-                               (mid_a[1] - mid_b[1]) / (gate_h * h))) / grow
-            dv = float(np.hypot(*(ea[2:] - sb[2:]))) / (max_dv_w * w)
+            d, dv = halfway_misfit(A, B, camera, gate_w=gate_w, gate_h=gate_h,
+                                   gate_per_s=gate_per_s, max_dv_w=max_dv_w)
             r = reid_distance(A, B, camera, **gate) if reid else math.inf
             dv_r = dv * max_dv_w / reid_max_dv_w
             ok, ok_r = d <= 1.0 and dv <= 1.0, r <= 1.0 and dv_r <= 1.0

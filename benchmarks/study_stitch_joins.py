@@ -1,0 +1,236 @@
+"""How right the counting tracker's stitching is (issue 16, counting; a study, nothing chosen).
+
+`count.count_frames` stitches fragments of one walker into one track (`count.stitch`): a later
+piece B continues an ended piece A when they meet halfway within the image gate. This records,
+per clip, every candidate pair the gate lets through and every pair stitching took, each piece
+labelled with the truth object its box is on (IoU >= 0.3, the majority over A's last and B's
+first 8 frames: `diag_count_unjudged.frame_owners`), with the pair's misfits: position d and
+image velocity dv (each over its gate, as `stitch_pieces` computes them) and the ground-velocity
+misfit |v_A - v_B| m/s (`count.stitch.ground_dv_misfit`). A taken pair is "right" when both
+pieces are on the same object, "wrong" when on two, "mixed" when one is a walker and the other
+a cyclist or dog.
+
+    python benchmarks/study_stitch_joins.py record count OUT.pkl --seed 160001,160002 \\
+        [--scenes 10] [--clothing any] [--focal-px 500] [--set stitch.max_dv_mps=1.5]
+    python benchmarks/study_stitch_joins.py summary OUT.pkl [OUT2.pkl ...]   # joins, misfits
+    python benchmarks/study_stitch_joins.py compare OFF.pkl[,OFF2.pkl] ON.pkl[,ON2.pkl]
+    python benchmarks/study_stitch_joins.py greedy OUT.pkl [...]   # the pairs re-taken offline
+
+`compare`: the two runs' joins, walkers counted and per-clip count errors summed, and the paired
+change in that figure with a bootstrap interval over clips (as `paired_count.py`). `greedy`
+re-takes the recorded candidates cheapest first under other costs (the default d + dv; d plus
+the ground misfit over 1.5 m/s; the same gated at 1.5 m/s) and counts right and wrong pairs:
+what a different ranking could do on the same pieces (the verdicts and counts are not rerun).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import pickle
+import sys
+from collections import Counter
+
+import numpy as np
+
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+
+def owner(truth, boxes, offset: int) -> int | None:
+    """The truth id a piece's boxes (frame index, left, top, w, h) are on in most frames."""
+    from diag_count_unjudged import frame_owners
+
+    if not boxes:
+        return None
+    b = np.asarray(boxes, np.float64)
+    hyp = {"frame": b[:, 0].astype(np.int64) + 1, "id": np.zeros(len(b), np.int64),
+           "bb_left": b[:, 1], "bb_top": b[:, 2], "bb_width": b[:, 3], "bb_height": b[:, 4]}
+    on = list(frame_owners(truth, hyp, offset).get(0, {}).values())
+    if not on:
+        return None
+    v, n = np.unique(on, return_counts=True)
+    return int(v[np.argmax(n)])
+
+
+def pair_misfits(st, A, B, opt, camera) -> tuple[float, float, float, float] | None:
+    """(d, dv, ground misfit m/s, gap s) of B after A, d and dv over their gates as
+    `stitch_pieces` computes them; None where B cannot follow A (order, gap, unknowns)."""
+    S = opt.stitch
+    ea, sb, (w, h) = np.asarray(A.end, np.float64), np.asarray(B.start, np.float64), B.size
+    gap = B.t_first - A.t_last
+    if (B.first <= A.last or not np.all(np.isfinite(ea)) or not np.all(np.isfinite(sb))
+            or not (w > 0 and h > 0) or gap > S.max_gap_s):
+        return None
+    d, dv = st.halfway_misfit(A, B, camera, gate_w=S.gate_w, gate_h=S.gate_h,
+                              gate_per_s=S.gate_per_s, max_dv_w=S.max_dv_w)
+    return d, dv, st.ground_dv_misfit(A, B), gap
+
+
+def record(args) -> int:
+    import count_dump as cd
+
+    import rhythmjax.count.counting as counting
+    import rhythmjax.count.stitch as st
+    from rhythmjax.count import CountOptions, count_frames
+    from rhythmjax.track.options import with_changes
+
+    seen: list[dict] = []
+    original = st.stitch_level
+
+    def watched(level, peds):
+        opt = level.opt
+        if opt.stitch.enabled and len(peds) >= 2:
+            pieces = [st.piece_of(p, level.shape, opt.dynamics, opt.stitch.fit_s) for p in peds]
+            cands = []
+            for a, A in enumerate(pieces):
+                for b, B in enumerate(pieces):
+                    m = pair_misfits(st, A, B, opt, level.shape.camera)
+                    if m is not None and m[0] <= 1.0 and m[1] <= 1.0:
+                        cands.append((a, b, *m))
+            taken = st.stitch_pieces(
+                pieces, max_gap_s=opt.stitch.max_gap_s, gate_w=opt.stitch.gate_w,
+                gate_h=opt.stitch.gate_h, gate_per_s=opt.stitch.gate_per_s,
+                max_dv_w=opt.stitch.max_dv_w, camera=level.shape.camera, reid=opt.stitch.reid,
+                reid_max_dv_w=opt.stitch.reid_max_dv_w, look=opt.appearance,
+                body_width_m=float(level.cfg.width.mean), max_dv_mps=opt.stitch.max_dv_mps)
+            joins = [(a, b, *(pair_misfits(st, pieces[a], pieces[b], opt, level.shape.camera)
+                              or (math.nan,) * 4)) for a, b in enumerate(taken) if b >= 0]
+            seen.append({"cands": cands, "joins": joins, "boxes": [
+                [(q.frame, q.left, q.top, q.w, q.h) for q in p.boxes] for p in peds]})
+        return original(level, peds)
+
+    counting.stitch_level = watched  # where `count_frames` looks it up
+    opt = with_changes(CountOptions(),
+                       {k: json.loads(v) for k, v in (x.split("=", 1) for x in args.set)})
+    out = []
+    for seed in args.seed.split(","):
+        for name, cfg, frames, truth, kinds, off, true in cd.clips_of(
+                args.source, int(seed), args.scenes, args.clothing, args.focal_px):
+            seen.clear()
+            res = count_frames(cfg, iter(frames), n_frames=len(frames), options=opt)
+            row = {"clip": name, "walkers": int(res.counts["walkers"]), "true": int(true),
+                   "kinds": kinds, "cands": [], "joins": [], "own_a": [], "own_b": []}
+            if seen:
+                s = seen[0]
+                row.update(cands=s["cands"], joins=s["joins"],
+                           own_a=[owner(truth, bx[-8:], off) for bx in s["boxes"]],
+                           own_b=[owner(truth, bx[:8], off) for bx in s["boxes"]])
+            out.append(row)
+            print(name, row["walkers"], "of", true, len(row["joins"]), "joins", flush=True)
+    tmp = args.out + ".tmp"
+    with open(tmp, "wb") as f:
+        pickle.dump(out, f)
+    os.replace(tmp, args.out)
+    return 0
+
+
+def load(paths) -> list[dict]:
+    rows = []
+    for p in paths:
+        with open(p, "rb") as f:
+            rows += pickle.load(f)
+    return rows
+
+
+def label(row: dict, a: int, b: int) -> str:
+    oa, ob = row["own_a"][a], row["own_b"][b]
+    if oa is None or ob is None:
+        return "unknown"
+    if oa == ob:
+        return "right"
+    ka, kb = row["kinds"].get(oa), row["kinds"].get(ob)
+    return "mixed" if (ka == "pedestrian") != (kb == "pedestrian") else "wrong"
+
+
+def tally(rows: list[dict]) -> dict:
+    c = Counter(label(r, j[0], j[1]) for r in rows for j in r["joins"])
+    true = sum(r["true"] for r in rows)
+    err = sum(abs(r["walkers"] - r["true"]) for r in rows)
+    return {"joins": sum(c.values()), "right": c["right"], "wrong": c["wrong"],
+            "mixed": c["mixed"], "unknown": c["unknown"],
+            "counted": sum(r["walkers"] for r in rows), "true": true,
+            "err_sum_pct": round(100.0 * err / max(true, 1), 1)}
+
+
+def summary(args) -> int:
+    rows = load(args.paths)
+    print(tally(rows))
+    joins = [(label(r, j[0], j[1]), j) for r in rows for j in r["joins"]]
+    for name, k, edges in (("d (position / gate)", 2, (0, 0.25, 0.5, 0.75, 1.01)),
+                           ("dv (image velocity / gate)", 3, (0, 0.25, 0.5, 0.75, 1.01)),
+                           ("ground misfit m/s", 4, (0, 0.5, 1, 1.5, 2, 3, 5, math.inf)),
+                           ("gap s", 5, (0, 1, 2, 3, 5.01))):
+        print(name)
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            c = Counter(lab for lab, j in joins if lo <= j[k] < hi)
+            print(f"  [{lo}, {hi}): right {c['right']:4d}  wrong {c['wrong']:4d}  "
+                  f"mixed {c['mixed']:4d}")
+    return 0
+
+
+def compare(args) -> int:
+    off, on = load(args.off.split(",")), load(args.on.split(","))
+    print("OFF", tally(off))
+    print("ON ", tally(on))
+    a, b = {r["clip"]: r for r in off}, {r["clip"]: r for r in on}
+    keys = sorted(set(a) & set(b))
+    true = np.asarray([a[k]["true"] for k in keys], np.float64)
+    ea = np.asarray([abs(a[k]["walkers"] - a[k]["true"]) for k in keys], np.float64)
+    eb = np.asarray([abs(b[k]["walkers"] - b[k]["true"]) for k in keys], np.float64)
+    idx = np.random.default_rng(0).integers(0, len(keys), (10000, len(keys)))
+    boot = 100.0 * (eb[idx].sum(1) - ea[idx].sum(1)) / true[idx].sum(1)
+    lo, hi = np.percentile(boot, [2.5, 97.5])
+    print(f"change in per-clip errors summed over {len(keys)} clips: "
+          f"{100.0 * (eb.sum() - ea.sum()) / true.sum():+.1f} points [{lo:+.1f}, {hi:+.1f}]")
+    return 0
+
+
+def greedy(args) -> int:
+    rows = load(args.paths)
+    g = lambda c: c[4] / 1.5 if math.isfinite(c[4]) else 1.0  # noqa: E731
+    variants = {"default: d + dv": (lambda c: c[2] + c[3], lambda c: True),
+                "d + ground / 1.5": (lambda c: c[2] + g(c), lambda c: True),
+                "d + dv + ground / 1.5": (lambda c: c[2] + c[3] + g(c), lambda c: True),
+                "ground <= 1.5, d + ground / 1.5": (lambda c: c[2] + g(c),
+                                                    lambda c: c[4] <= 1.5)}
+    print(f"{sum(len(r['cands']) for r in rows)} candidate pairs in {len(rows)} clips")
+    for name, (cost, keep) in variants.items():
+        c: Counter = Counter()
+        for r in rows:
+            succ: dict[int, int] = {}
+            pred: dict[int, int] = {}
+            for _, a, b in sorted((cost(x), x[0], x[1]) for x in r["cands"] if keep(x)):
+                if a not in succ and b not in pred:
+                    succ[a], pred[b] = b, a
+                    c[label(r, a, b)] += 1
+        print(f"  {name:34s} joins {sum(c.values()):4d}: right {c['right']:4d}, wrong "
+              f"{c['wrong']:4d}, mixed {c['mixed']:4d}")
+    return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("record")
+    r.add_argument("source")
+    r.add_argument("out")
+    r.add_argument("--seed", default="160001")
+    r.add_argument("--scenes", type=int, default=10)
+    r.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
+    r.add_argument("--focal-px", type=float, default=0.0)
+    r.add_argument("--set", action="append", default=[])
+    for name in ("summary", "greedy"):
+        s = sub.add_parser(name)
+        s.add_argument("paths", nargs="+")
+    c = sub.add_parser("compare")
+    c.add_argument("off")
+    c.add_argument("on")
+    a = p.parse_args(argv)
+    return {"record": record, "summary": summary, "compare": compare, "greedy": greedy}[a.cmd](a)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
