@@ -15,12 +15,15 @@ a cyclist or dog.
     python benchmarks/study_stitch_joins.py summary OUT.pkl [OUT2.pkl ...]   # joins, misfits
     python benchmarks/study_stitch_joins.py compare OFF.pkl[,OFF2.pkl] ON.pkl[,ON2.pkl]
     python benchmarks/study_stitch_joins.py greedy OUT.pkl [...]   # the pairs re-taken offline
+    python benchmarks/study_stitch_joins.py fit --train TRAIN.pkl ... --test TEST.pkl ...
 
 `compare`: the two runs' joins, walkers counted and per-clip count errors summed, and the paired
 change in that figure with a bootstrap interval over clips (as `paired_count.py`). `greedy`
 re-takes the recorded candidates cheapest first under other costs (the default d + dv; d plus
 the ground misfit over 1.5 m/s; the same gated at 1.5 m/s) and counts right and wrong pairs:
 what a different ranking could do on the same pieces (the verdicts and counts are not rerun).
+`fit`: a logistic score of a pair being right, fitted on labelled training candidates, and the
+pairs it would take on held-out records.
 """
 
 from __future__ import annotations
@@ -200,14 +203,62 @@ def greedy(args) -> int:
     for name, (cost, keep) in variants.items():
         c: Counter = Counter()
         for r in rows:
-            succ: dict[int, int] = {}
-            pred: dict[int, int] = {}
-            for _, a, b in sorted((cost(x), x[0], x[1]) for x in r["cands"] if keep(x)):
-                if a not in succ and b not in pred:
-                    succ[a], pred[b] = b, a
-                    c[label(r, a, b)] += 1
+            c += take(r, cost, keep)
         print(f"  {name:34s} joins {sum(c.values()):4d}: right {c['right']:4d}, wrong "
               f"{c['wrong']:4d}, mixed {c['mixed']:4d}")
+    return 0
+
+
+def take(row: dict, score, keep=lambda c: True) -> Counter:
+    """The labels of the pairs taken cheapest first by `score` (lower first) among `row`'s
+    candidates that `keep` keeps, each piece at most once before and once after."""
+    c: Counter = Counter()
+    succ: dict[int, int] = {}
+    pred: dict[int, int] = {}
+    for _, a, b in sorted((score(x), x[0], x[1]) for x in row["cands"] if keep(x)):
+        if a not in succ and b not in pred:
+            succ[a], pred[b] = b, a
+            c[label(row, a, b)] += 1
+    return c
+
+
+def pair_features(c) -> list[float]:
+    """A candidate's features for `fit`: d, dv, the ground misfit (m/s, capped at 5; 5 when
+    unknown) and the gap (s)."""
+    g = c[4] if math.isfinite(c[4]) else 5.0
+    return [c[2], c[3], min(g, 5.0), c[5]]
+
+
+def fit(args) -> int:
+    """A logistic pair score fitted on the training records' labelled candidates (right 1,
+    wrong or mixed 0, unknown left out; `study_count_model.fit_logistic`, l2 0.01), then pairs
+    taken on the test records highest score first, all of them or those with p >= 0.5."""
+    from study_count_model import fit_logistic, predict
+
+    def xy(rows):
+        x, y = [], []
+        for r in rows:
+            for c in r["cands"]:
+                lab = label(r, c[0], c[1])
+                if lab != "unknown":
+                    x.append(pair_features(c))
+                    y.append(1.0 if lab == "right" else 0.0)
+        return np.asarray(x), np.asarray(y)
+
+    model = fit_logistic(*xy(load(args.train)), 0.01)
+    print("weights (standardised d, dv, ground, gap; intercept):", np.round(model[2], 3))
+    p_of = lambda c: float(predict(model, np.asarray([pair_features(c)]))[0])  # noqa: E731
+    for name, paths in (("train", args.train), ("test", args.test)):
+        rows = load(paths)
+        for rule, score, keep in (("default d + dv", lambda c: c[2] + c[3], lambda c: True),
+                                  ("fitted, all", lambda c: -p_of(c), lambda c: True),
+                                  ("fitted, p >= 0.5", lambda c: -p_of(c),
+                                   lambda c: p_of(c) >= 0.5)):
+            t: Counter = Counter()
+            for r in rows:
+                t += take(r, score, keep)
+            print(f"  {name:5s} {rule:18s} joins {sum(t.values()):4d}: right {t['right']:4d}, "
+                  f"wrong {t['wrong']:4d}, mixed {t['mixed']:4d}")
     return 0
 
 
@@ -225,11 +276,15 @@ def main(argv=None) -> int:
     for name in ("summary", "greedy"):
         s = sub.add_parser(name)
         s.add_argument("paths", nargs="+")
+    f = sub.add_parser("fit")
+    f.add_argument("--train", nargs="+", required=True)
+    f.add_argument("--test", nargs="+", required=True)
     c = sub.add_parser("compare")
     c.add_argument("off")
     c.add_argument("on")
     a = p.parse_args(argv)
-    return {"record": record, "summary": summary, "compare": compare, "greedy": greedy}[a.cmd](a)
+    return {"record": record, "summary": summary, "compare": compare, "greedy": greedy,
+            "fit": fit}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ see N samples of a walker it saw only in pieces before. With `stitch.reid` (off:
 own seeds) a pair the halfway gate refuses is joined, after every halfway pair, when the later
 track's first foot point lies where the earlier one's ground state at constant velocity puts it
 (`stitch.reid_distance`: the single-object tracker's `track.relink` gate, same ellipse).
+`stitch.max_dv_mps` (off; docs/rules.md) also asks a pair's ground velocities to agree.
 
 The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestrian it tracked,
 and its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged
