@@ -6,16 +6,19 @@ per clip, every candidate pair the gate lets through and every pair stitching to
 labelled with the truth object its box is on (IoU >= 0.3, the majority over A's last and B's
 first 8 frames: `diag_count_unjudged.frame_owners`), with the pair's misfits: position d and
 image velocity dv (each over its gate, as `stitch_pieces` computes them) and the ground-velocity
-misfit |v_A - v_B| m/s (`count.stitch.ground_dv_misfit`). A taken pair is "right" when both
+misfit |v_A - v_B| m/s (`count.stitch.ground_dv_misfit`) and, when the run computes
+descriptors (`--set appearance.enabled=true --set appearance.max_distance=0`: the joins of the
+defaults), the pieces' appearance distance (`count.appearance`). A taken pair is "right" when both
 pieces are on the same object, "wrong" when on two, "mixed" when one is a walker and the other
 a cyclist or dog.
 
     python benchmarks/study_stitch_joins.py record count OUT.pkl --seed 160001,160002 \\
         [--scenes 10] [--clothing any] [--focal-px 500] [--set stitch.max_dv_mps=1.5]
     python benchmarks/study_stitch_joins.py summary OUT.pkl [OUT2.pkl ...]   # joins, misfits
-    python benchmarks/study_stitch_joins.py compare OFF.pkl[,OFF2.pkl] ON.pkl[,ON2.pkl]
+    python benchmarks/study_stitch_joins.py compare OFF.pkl[,OFF2.pkl] ON.pkl[,ON2.pkl]  # paired in order
     python benchmarks/study_stitch_joins.py greedy OUT.pkl [...]   # the pairs re-taken offline
     python benchmarks/study_stitch_joins.py fit --train TRAIN.pkl ... --test TEST.pkl ...
+    python benchmarks/study_stitch_joins.py veto --train TRAIN.pkl ... --test TEST.pkl ...
 
 `compare`: the two runs' joins, walkers counted and per-clip count errors summed, and the paired
 change in that figure with a bootstrap interval over clips (as `paired_count.py`). `greedy`
@@ -23,7 +26,8 @@ re-takes the recorded candidates cheapest first under other costs (the default d
 the ground misfit over 1.5 m/s; the same gated at 1.5 m/s) and counts right and wrong pairs:
 what a different ranking could do on the same pieces (the verdicts and counts are not rerun).
 `fit`: a logistic score of a pair being right, fitted on labelled training candidates, and the
-pairs it would take on held-out records.
+pairs it would take on held-out records. `veto`: `appearance.veto_distance` fitted on the
+training records' labelled joins (records made with descriptors), scored on held-out ones.
 """
 
 from __future__ import annotations
@@ -58,9 +62,13 @@ def owner(truth, boxes, offset: int) -> int | None:
     return int(v[np.argmax(n)])
 
 
-def pair_misfits(st, A, B, opt, camera) -> tuple[float, float, float, float] | None:
-    """(d, dv, ground misfit m/s, gap s) of B after A, d and dv over their gates as
-    `stitch_pieces` computes them; None where B cannot follow A (order, gap, unknowns)."""
+def pair_misfits(st, A, B, opt, camera) -> tuple[float, ...] | None:
+    """(d, dv, ground misfit m/s, gap s, appearance distance) of B after A, d and dv over their
+    gates as `stitch_pieces` computes them, the distance of their descriptors
+    (`appearance.appearance_distance`; NaN without `appearance.enabled`); None where B cannot
+    follow A (order, gap, unknowns)."""
+    from rhythmjax.count.appearance import appearance_distance
+
     S = opt.stitch
     ea, sb, (w, h) = np.asarray(A.end, np.float64), np.asarray(B.start, np.float64), B.size
     gap = B.t_first - A.t_last
@@ -69,7 +77,7 @@ def pair_misfits(st, A, B, opt, camera) -> tuple[float, float, float, float] | N
         return None
     d, dv = st.halfway_misfit(A, B, camera, gate_w=S.gate_w, gate_h=S.gate_h,
                               gate_per_s=S.gate_per_s, max_dv_w=S.max_dv_w)
-    return d, dv, st.ground_dv_misfit(A, B), gap
+    return d, dv, st.ground_dv_misfit(A, B), gap, appearance_distance(A.look, B.look)
 
 
 def record(args) -> int:
@@ -100,7 +108,7 @@ def record(args) -> int:
                 reid_max_dv_w=opt.stitch.reid_max_dv_w, look=opt.appearance,
                 body_width_m=float(level.cfg.width.mean), max_dv_mps=opt.stitch.max_dv_mps)
             joins = [(a, b, *(pair_misfits(st, pieces[a], pieces[b], opt, level.shape.camera)
-                              or (math.nan,) * 4)) for a, b in enumerate(taken) if b >= 0]
+                              or (math.nan,) * 5)) for a, b in enumerate(taken) if b >= 0]
             seen.append({"cands": cands, "joins": joins, "boxes": [
                 [(q.frame, q.left, q.top, q.w, q.h) for q in p.boxes] for p in peds]})
         return original(level, peds)
@@ -175,10 +183,13 @@ def summary(args) -> int:
 
 
 def compare(args) -> int:
-    off, on = load(args.off.split(",")), load(args.on.split(","))
-    print("OFF", tally(off))
-    print("ON ", tally(on))
-    a, b = {r["clip"]: r for r in off}, {r["clip"]: r for r in on}
+    offs, ons = args.off.split(","), args.on.split(",")
+    if len(offs) != len(ons):
+        raise SystemExit("compare: as many OFF files as ON files, paired in order")
+    a = {(i, r["clip"]): r for i, p in enumerate(offs) for r in load([p])}
+    b = {(i, r["clip"]): r for i, p in enumerate(ons) for r in load([p])}
+    print("OFF", tally(list(a.values())))
+    print("ON ", tally(list(b.values())))
     keys = sorted(set(a) & set(b))
     true = np.asarray([a[k]["true"] for k in keys], np.float64)
     ea = np.asarray([abs(a[k]["walkers"] - a[k]["true"]) for k in keys], np.float64)
@@ -262,6 +273,42 @@ def fit(args) -> int:
     return 0
 
 
+def veto(args) -> int:
+    """The appearance veto's threshold fitted on the training records' taken joins: V with the
+    best balanced accuracy of "distance <= V" for right joins (1) against wrong or mixed ones
+    (0), over the joins with a distance; then its balanced accuracy, the AUC of -distance, and
+    the joins it would refuse (before any re-pairing) on the test records."""
+    def joins_of(paths):
+        rows = load(paths)
+        lab = [(label(r, j[0], j[1]), j[6]) for r in rows for j in r["joins"]]
+        lab = [(x, dist) for x, dist in lab if x != "unknown"]
+        known = [(x, dist) for x, dist in lab if math.isfinite(dist)]
+        y = np.asarray([x == "right" for x, _ in known])
+        return y, np.asarray([dist for _, dist in known]), len(lab) - len(known)
+
+    def balanced(y, dist, v):
+        keep = dist <= v
+        return 0.5 * (keep[y].mean() + (~keep[~y]).mean())
+
+    def auc(y, dist):
+        pos, neg = -dist[y], -dist[~y]
+        return float(((pos[:, None] > neg[None]) + 0.5 * (pos[:, None] == neg[None])).mean())
+
+    y, dist, none = joins_of(args.train)
+    grid = np.unique(dist)
+    v = float(grid[int(np.argmax([balanced(y, dist, g) for g in grid]))])
+    print(f"fitted veto_distance {v:.4f} on {len(y)} joins ({int(y.sum())} right; {none} "
+          f"without a distance)")
+    for name, paths in (("train", args.train), ("test", args.test)):
+        y, dist, none = joins_of(paths)
+        keep = dist <= v
+        print(f"  {name}: balanced accuracy {balanced(y, dist, v):.3f}, AUC {auc(y, dist):.3f}; "
+              f"refuses {int((~keep & y).sum())} of {int(y.sum())} right and "
+              f"{int((~keep & ~y).sum())} of {int((~y).sum())} wrong joins ({none} without a "
+              f"distance)")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -276,15 +323,16 @@ def main(argv=None) -> int:
     for name in ("summary", "greedy"):
         s = sub.add_parser(name)
         s.add_argument("paths", nargs="+")
-    f = sub.add_parser("fit")
-    f.add_argument("--train", nargs="+", required=True)
-    f.add_argument("--test", nargs="+", required=True)
+    for name in ("fit", "veto"):
+        f = sub.add_parser(name)
+        f.add_argument("--train", nargs="+", required=True)
+        f.add_argument("--test", nargs="+", required=True)
     c = sub.add_parser("compare")
     c.add_argument("off")
     c.add_argument("on")
     a = p.parse_args(argv)
     return {"record": record, "summary": summary, "compare": compare, "greedy": greedy,
-            "fit": fit}[a.cmd](a)
+            "fit": fit, "veto": veto}[a.cmd](a)
 
 
 if __name__ == "__main__":
