@@ -15,7 +15,7 @@ a cyclist or dog.
     python benchmarks/study_stitch_joins.py record count OUT.pkl --seed 160001,160002 \\
         [--scenes 10] [--clothing any] [--focal-px 500] [--set stitch.max_dv_mps=1.5]
     python benchmarks/study_stitch_joins.py summary OUT.pkl [OUT2.pkl ...]   # joins, misfits
-    python benchmarks/study_stitch_joins.py compare OFF.pkl[,OFF2.pkl] ON.pkl[,ON2.pkl]  # paired in order
+    python benchmarks/study_stitch_joins.py compare OFF.pkl[,OFF2.pkl] ON.pkl[,ON2.pkl]   # in order
     python benchmarks/study_stitch_joins.py greedy OUT.pkl [...]   # the pairs re-taken offline
     python benchmarks/study_stitch_joins.py fit --train TRAIN.pkl ... --test TEST.pkl ...
     python benchmarks/study_stitch_joins.py veto --train TRAIN.pkl ... --test TEST.pkl ...
