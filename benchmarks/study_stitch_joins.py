@@ -80,6 +80,21 @@ def pair_misfits(st, A, B, opt, camera) -> tuple[float, ...] | None:
     return d, dv, st.ground_dv_misfit(A, B), gap, appearance_distance(A.look, B.look)
 
 
+def mot_figures(res, truth, kinds: dict, offset: int) -> dict:
+    """eval_all's per-clip figures of a `CountResult`: non-walkers counted, MOTA, IDF1."""
+    import eval_count as ec
+
+    from rhythmjax.evaluation.motscore import score_mot
+
+    walk = ec.walking_ids(res)
+    seen = set(np.asarray(truth["id"]).tolist())
+    s = score_mot(truth, res.mot, frame_offset=offset, walking_ids=walk,
+                  truth_walking_ids=[t for t in seen if kinds.get(t) == "pedestrian"])
+    own = ec.owner_of_tracks(truth, res.mot, offset)
+    return {"others": sum(1 for h in walk if own.get(h) and kinds[own[h]] != "pedestrian"),
+            "mota": float(s.mota), "idf1": float(s.idf1)}
+
+
 def record(args) -> int:
     import count_dump as cd
 
@@ -123,7 +138,8 @@ def record(args) -> int:
             seen.clear()
             res = count_frames(cfg, iter(frames), n_frames=len(frames), options=opt)
             row = {"clip": name, "walkers": int(res.counts["walkers"]), "true": int(true),
-                   "kinds": kinds, "cands": [], "joins": [], "own_a": [], "own_b": []}
+                   "kinds": kinds, "cands": [], "joins": [], "own_a": [], "own_b": [],
+                   **mot_figures(res, truth, kinds, off)}
             if seen:
                 s = seen[0]
                 row.update(cands=s["cands"], joins=s["joins"],
@@ -160,10 +176,14 @@ def tally(rows: list[dict]) -> dict:
     c = Counter(label(r, j[0], j[1]) for r in rows for j in r["joins"])
     true = sum(r["true"] for r in rows)
     err = sum(abs(r["walkers"] - r["true"]) for r in rows)
+    mean = lambda k: round(float(np.mean([r[k] for r in rows])), 3) if rows and all(  # noqa: E731
+        k in r for r in rows) else None
     return {"joins": sum(c.values()), "right": c["right"], "wrong": c["wrong"],
             "mixed": c["mixed"], "unknown": c["unknown"],
             "counted": sum(r["walkers"] for r in rows), "true": true,
-            "err_sum_pct": round(100.0 * err / max(true, 1), 1)}
+            "err_sum_pct": round(100.0 * err / max(true, 1), 1),
+            "others": sum(r.get("others", 0) for r in rows) if rows and "others" in rows[0]
+            else None, "mota": mean("mota"), "idf1": mean("idf1")}
 
 
 def summary(args) -> int:
