@@ -155,3 +155,9 @@ def test_veto_refuses_geometric_join_of_different_look():
     veto = AppearanceOptions(enabled=True, veto_distance=0.5)
     assert stitch_pieces(pieces(OTHER, **near), **GATE, look=veto) == [-1, -1]
     assert stitch_pieces(pieces(SHIRT, **near), **GATE, look=veto) == [1, -1]
+    # descriptors for the veto only: no join by appearance alone, even of identical looks
+    veto_only = AppearanceOptions(enabled=True, max_distance=0.0, veto_distance=0.5)
+    assert stitch_pieces(pieces(SHIRT), **GATE, look=on) == [1, -1]  # 0.387: joined
+    assert stitch_pieces(pieces(SHIRT), **GATE, look=veto_only) == [-1, -1]
+    assert stitch_pieces(pieces(OTHER, **near), **GATE, look=veto_only) == [-1, -1]
+    assert stitch_pieces(pieces(SHIRT, **near), **GATE, look=veto_only) == [1, -1]

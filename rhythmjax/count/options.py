@@ -158,7 +158,8 @@ class AppearanceOptions:
     reach_widths: float = 2.0  # body widths ...
     reach_speed_mps: float = 2.0  # ... + this speed x the gap (m/s): where A's walker can be
     max_distance: float = 0.387  # descriptors at most this far apart (0-1; fitted: balanced
-    # accuracy on own seed 42024's pairs within reach, 0.873; held out on 31337: 0.788, AUC 0.871)
+    # accuracy on own seed 42024's pairs within reach, 0.873; held out on 31337: 0.788, AUC
+    # 0.871); 0: no joins by appearance alone (the descriptors serve the veto only)
     veto_distance: float = float("inf")  # a geometric join farther apart than this is refused
 
 

@@ -221,9 +221,9 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
     `look` (`AppearanceOptions`, when enabled; a second fallback, taken after both): B may also
     follow A when B starts within look.max_gap_s s, within reach (`reach_misfit` <= 1 with
     reach_widths x body_width_m m and reach_speed_mps) and their descriptors (`Piece.look`) are
-    at most look.max_distance apart (`appearance.appearance_distance`), cheapest first; a
-    halfway or re-identified pair whose descriptors are more than look.veto_distance apart is
-    refused.
+    at most look.max_distance apart (`appearance.appearance_distance`), cheapest first (none
+    when look.max_distance is 0); a halfway or re-identified pair whose descriptors are more
+    than look.veto_distance apart is refused.
 
     `max_dv_mps` (finite: on; inf, the default: off): a halfway or re-identified pair must also
     have A's ground velocity at its end and B's at its start (`ground_dv_misfit`) within
@@ -233,6 +233,7 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
     their speeds."""
     ground_gate = math.isfinite(max_dv_mps)
     use_look = look is not None and look.enabled
+    look_joins = use_look and look.max_distance > 0  # 0: descriptors for the veto only
     cand, gate = [], dict(gate_w=gate_w, gate_h=gate_h, gate_per_s=gate_per_s)
     for a, A in enumerate(pieces):
         ea = np.asarray(A.end, np.float64)
@@ -245,7 +246,7 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
                 continue
             dist = appearance_distance(A.look, B.look) if use_look else math.nan
             if gap > max_gap_s:
-                if (use_look and gap <= look.max_gap_s and dist <= look.max_distance
+                if (look_joins and gap <= look.max_gap_s and dist <= look.max_distance
                         and reach_misfit(A, B, camera, look.reach_widths * body_width_m,
                                          look.reach_speed_mps) <= 1.0):
                     cand.append((2, dist, a, b))
@@ -264,7 +265,7 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
                 cand.append((0, d + dv, a, b))
             elif ok_r:
                 cand.append((1, r + dv_r, a, b))
-            elif (use_look and gap <= look.max_gap_s and dist <= look.max_distance
+            elif (look_joins and gap <= look.max_gap_s and dist <= look.max_distance
                   and reach_misfit(A, B, camera, look.reach_widths * body_width_m,
                                    look.reach_speed_mps) <= 1.0):
                 cand.append((2, dist, a, b))
