@@ -232,12 +232,17 @@ def greedy(args) -> int:
                                                     lambda c: c[4] <= 1.5)}
     print(f"{sum(len(r['cands']) for r in rows)} candidate pairs in {len(rows)} clips")
     for name, (cost, keep) in variants.items():
-        c: Counter = Counter()
-        for r in rows:
-            c += take(r, cost, keep)
-        print(f"  {name:34s} joins {sum(c.values()):4d}: right {c['right']:4d}, wrong "
-              f"{c['wrong']:4d}, mixed {c['mixed']:4d}")
+        print(taken_line(name, rows, cost, keep))
     return 0
+
+
+def taken_line(name: str, rows: list[dict], score, keep) -> str:
+    """One line: the pairs `take` takes over every row of `rows`, by label."""
+    c: Counter = Counter()
+    for r in rows:
+        c += take(r, score, keep)
+    return (f"  {name:34s} joins {sum(c.values()):4d}: right {c['right']:4d}, wrong "
+            f"{c['wrong']:4d}, mixed {c['mixed']:4d}")
 
 
 def take(row: dict, score, keep=lambda c: True) -> Counter:
@@ -285,11 +290,7 @@ def fit(args) -> int:
                                   ("fitted, all", lambda c: -p_of(c), lambda c: True),
                                   ("fitted, p >= 0.5", lambda c: -p_of(c),
                                    lambda c: p_of(c) >= 0.5)):
-            t: Counter = Counter()
-            for r in rows:
-                t += take(r, score, keep)
-            print(f"  {name:5s} {rule:18s} joins {sum(t.values()):4d}: right {t['right']:4d}, "
-                  f"wrong {t['wrong']:4d}, mixed {t['mixed']:4d}")
+            print(taken_line(f"{name}: {rule}", rows, score, keep))
     return 0
 
 
