@@ -228,9 +228,9 @@ def stitch_pieces(pieces: list[Piece], *, max_gap_s: float, gate_w: float, gate_
     `max_dv_mps` (finite: on; inf, the default: off): a halfway or re-identified pair must also
     have A's ground velocity at its end and B's at its start (`ground_dv_misfit`) within
     max_dv_mps m/s (unknown: refused), and that misfit / max_dv_mps replaces the image velocity
-    misfit in its cost. In the image a walker's and a cyclist's velocities differ little when they move in depth
-    (the rows foreshorten), and W/s weighs rows and columns alike; on the ground they differ by
-    their speeds."""
+    misfit in its cost. In the image a walker's and a cyclist's velocities differ little when
+    they move in depth (the rows foreshorten), and W/s weighs rows and columns alike; on the
+    ground they differ by their speeds."""
     ground_gate = math.isfinite(max_dv_mps)
     use_look = look is not None and look.enabled
     look_joins = use_look and look.max_distance > 0  # 0: descriptors for the veto only
