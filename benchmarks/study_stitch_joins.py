@@ -8,9 +8,9 @@ first 8 frames: `diag_count_unjudged.frame_owners`), with the pair's misfits: po
 image velocity dv (each over its gate, as `stitch_pieces` computes them) and the ground-velocity
 misfit |v_A - v_B| m/s (`count.stitch.ground_dv_misfit`) and, when the run computes
 descriptors (`--set appearance.enabled=true --set appearance.max_distance=0`: the joins of the
-defaults), the pieces' appearance distance (`count.appearance`). A taken pair is "right" when both
-pieces are on the same object, "wrong" when on two, "mixed" when one is a walker and the other
-a cyclist or dog.
+defaults), the pieces' appearance distance (`count.appearance`). A pair is "right" when both
+pieces are on the same object, "wrong" when on two of one kind (two walkers, two cyclists),
+"mixed" when one is a walker and the other is not, "unknown" when either is on none.
 
     python benchmarks/study_stitch_joins.py record count OUT.pkl --seed 160001,160002 \\
         [--scenes 10] [--clothing any] [--focal-px 500] [--set stitch.max_dv_mps=1.5]
