@@ -5,6 +5,7 @@ moving in depth, whose image velocities differ by less than the image gate."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -61,7 +62,6 @@ def test_misfit_by_hand_and_unknown():
     # 4.0 - 1.4 = 2.6 m/s, the start's image velocity by duv's 10 ms forward difference
     assert ground_dv_misfit(a, b) == pytest.approx(2.6, abs=0.02)
     assert ground_dv_misfit(b, a) == pytest.approx(2.6, abs=0.02)
-    import dataclasses
     assert ground_dv_misfit(dataclasses.replace(a, end_v=None), b) == math.inf
     assert ground_dv_misfit(a, dataclasses.replace(b, start_v=None)) == math.inf
 
