@@ -29,6 +29,7 @@ from .common import (
     reading_check,
     say,
 )
+from .option_changes import add_set, apply_option_changes
 from .overlay import FrameSampler, TrackOverlay, in_colour
 from .report import REPORT_NAME, render_report, write_report
 from .spectra import table_windows, write_spectra
@@ -87,6 +88,7 @@ def cmd_count(args) -> int:
                                                window_candidates=args.window_candidates),
                        new=NewPedestrianOptions(head_feet=TALL_HEIGHTS if args.feet_from_head
                                                 else 0.0))
+    opt, changes = apply_option_changes(opt, args.option_changes)
     out = lambda name: os.path.join(args.output, name)
     names = COUNT_OUTPUTS + (() if args.no_report else (REPORT_NAME,))
     with output_set(args.output, names, overlay=args.overlay, inputs=[args.video, args.config],
@@ -107,7 +109,8 @@ def cmd_count(args) -> int:
                 res.summary.get("notes", [])
             summary = {"video": args.video, "output": args.output, "counts": res.counts,
                        **{k: v for k, v in res.summary.items() if k != "notes"},
-                       "bad_frames": len(src.bad_frames), "notes": notes}
+                       "bad_frames": len(src.bad_frames), "notes": notes,
+                       **({"option_changes": changes} if changes else {})}
             write_mot(outs.path(out("mot.txt")), res.mot)
             write_mot(outs.path(out("mot_velocity.txt")), res.mot, VELOCITY_COLUMNS)
             write_table(outs.path(out("tracks.parquet")), res.tracks,
@@ -180,5 +183,6 @@ def register(sub, formatter=None) -> None:
                    "standing on its bottom) with the feet where its top row is a 1.7 m "
                    "walker's head: for low cameras and clothing of the ground's grey; off by "
                    "default (docs/rules.md, 'the feet from the head')")
+    add_set(p, "counting (count.options.CountOptions)")
     add_common(p)
     p.set_defaults(func=cmd_count)

@@ -34,6 +34,7 @@ from .common import (
     say,
     seed_arg,
 )
+from .option_changes import add_set, apply_option_changes
 from .overlay import FrameSampler, TrackOverlay, in_colour
 from .report import REPORT_NAME, render_report
 from .spectra import write_spectra
@@ -59,14 +60,15 @@ def _notes(args, notes) -> None:
         say(args, note if note.startswith("warning") else f"note: {note}")
 
 
-def _options(args) -> TrackerOptions:
+def _options(args) -> tuple[TrackerOptions, dict]:
+    """The tracker options of the flags, then --set; and the --set changes."""
     if args.max_objects < 1:
         raise ConfigError("--max-objects", f"must be >= 1, got {args.max_objects}")
     opt = TrackerOptions(max_objects=args.max_objects)
     changes = {"body.window_candidates": bool(args.window_candidates)}
     if args.no_stabilise:
         changes["motion.stabilise"] = False
-    return with_changes(opt, changes)
+    return apply_option_changes(with_changes(opt, changes), args.option_changes)
 
 
 def _write_outputs(outs, out_dir, cfg, tracks, verdicts, objs, *, truth_ids=None):
@@ -137,7 +139,7 @@ def cmd_track(args) -> int:
     write the tracks file; classification happens as in `run` and is in the summary. The tracks
     file and the overlay are replaced together, only when the run succeeds."""
     table_suffix(args.output)
-    options = _options(args)
+    options, changes = _options(args)
     with output_set(None, (), extra=[args.output], overlay=args.overlay,
                     inputs=[args.video, args.config]) as outs:
         src, cfg, notes = open_source(args, load_config_dict(args.config))
@@ -150,7 +152,8 @@ def cmd_track(args) -> int:
             reading_check(args, src, notes)
             write_table(outs.path(args.output), tracks,
                         [*TRACK_ORDER, "v_top", *candidate_columns(tracks)])
-    _report(args, _summary(tracker, verdicts, src), verdicts, cfg)
+    _report(args, {**_summary(tracker, verdicts, src),
+                   **({"option_changes": changes} if changes else {})}, verdicts, cfg)
     return 0
 
 
@@ -186,7 +189,7 @@ def cmd_run(args) -> int:
     DIR/report.html (summary, verdicts, spectra, overlay, config) as one set: they replace the
     previous set together, only when the run succeeds (an old overlay or report.html is removed
     with --no-overlay, --no-report)."""
-    options = _options(args)
+    options, changes = _options(args)
     names = _names(args)
     with output_set(args.output, names, inputs=[args.video, args.config],
                     drop=_drop(args)) as outs:
@@ -202,7 +205,8 @@ def cmd_run(args) -> int:
                 progress=not (args.quiet or args.json), options=options)
             reading_check(args, src, notes)
             spectra = _write_outputs(outs, args.output, cfg, tracks, verdicts, objs)
-            summary = {"video": args.video, **_summary(tracker, verdicts, src)}
+            summary = {"video": args.video, **_summary(tracker, verdicts, src),
+                       **({"option_changes": changes} if changes else {})}
             _write_report(outs, args, names, title=f"rhythmjax run {os.path.basename(args.video)}",
                           summary=summary, verdicts=verdicts, cfg=cfg, spectra=spectra,
                           sampler=sampler)
@@ -349,3 +353,4 @@ def _video_flags(p) -> None:
                    help="do not compensate camera shake before the frame difference (a fixed "
                    "camera's results are the same either way; this only saves ~0.2 ms a frame)")
     add_window_candidates(p, TrackerOptions().body.window_candidates)
+    add_set(p, "tracker (track.options.TrackerOptions)")
