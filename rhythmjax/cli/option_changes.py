@@ -59,7 +59,7 @@ def _field(options, dotted: str):
 def _typed(dotted: str, text: str, current: Any) -> Any:
     """`text` read as the type of `current` (the field's present value)."""
     bad = lambda what: ConfigError(  # noqa: E731
-        "--set", f"{dotted}={text}: expected {what} (its default is {current!r})")
+        "--set", f"{dotted}={text}: expected {what} (now {current!r})")
     if isinstance(current, bool):
         if text.lower() not in ("true", "false"):
             raise bad("true or false")
