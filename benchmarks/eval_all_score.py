@@ -84,7 +84,10 @@ def count_row(clips: list[dict]) -> dict:
     distinct): the per-clip errors summed, sum |counted - true| / sum true; MOTA / IDF1 as the
     mean over clips (each clip weighted equally); when every clip has `distinct` (the most
     tracks standing for distinct walkers, `count_bounds`), its sum and its per-clip errors
-    summed, the floor a counting rule that counts no walker twice could reach on these tracks."""
+    summed, the floor a counting rule that counts no walker twice could reach on these tracks;
+    when every clip has `counts` (counts.json's), how often its stated range walkers_low ..
+    walkers_high holds the true count: `range_holds`, and the clips whose truth lies below
+    (`true_below_range`) or above it (`true_above_range`: walkers no track stood for)."""
     true = sum(c["true"] for c in clips)
     out = {"counted": sum(c["counted"] for c in clips), "true": true,
            "count_err_sum": _div(sum(abs(c["counted"] - c["true"]) for c in clips), true),
@@ -92,6 +95,11 @@ def count_row(clips: list[dict]) -> dict:
     if clips and all("distinct" in c for c in clips):
         out["distinct"] = sum(c["distinct"] for c in clips)
         out["distinct_err_sum"] = _div(sum(abs(c["distinct"] - c["true"]) for c in clips), true)
+    if clips and all("counts" in c for c in clips):
+        lo = [c["true"] < c["counts"]["walkers_low"] for c in clips]
+        hi = [c["true"] > c["counts"]["walkers_high"] for c in clips]
+        out.update(range_holds=len(clips) - sum(lo) - sum(hi), true_below_range=sum(lo),
+                   true_above_range=sum(hi), clips=len(clips))
     for k in ("mota", "idf1"):
         v = [c[k] for c in clips if math.isfinite(c.get(k, math.nan))]
         out[k] = float(np.mean(v)) if v else math.nan

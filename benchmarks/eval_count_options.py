@@ -3,8 +3,8 @@ sources: own counting scenes of a seed (`count:SEED`, eval_count's scene specs, 
 them, clothing as `--clothing`), `dev_count` (the dev crowd clips; report only) and
 `pets_count`. Prints one line per source: walkers counted / true, per-clip errors summed,
 non-walkers counted, MOTA, IDF1 (eval_all's columns) and the distinct bound (the most tracks
-standing for distinct walkers and its per-clip errors summed, `count_bounds`); `-o` keeps every
-clip.
+standing for distinct walkers and its per-clip errors summed, `count_bounds`) and how often
+counts.json's range walkers_low .. walkers_high holds the true count; `-o` keeps every clip.
 
     python benchmarks/eval_count_options.py --sources count:42024,count:31337 \\
         [--scenes 10] [--clothing any] [--focal-px 500] [--set new.head_feet=1.25 ...] \\
@@ -98,6 +98,8 @@ def main(argv=None) -> int:
               f"{c['counted']}/{c['true']} err {100 * c['count_err_sum']:.1f} % others "
               f"{c['others_counted']} mota {c['mota']:.3f} idf1 {c['idf1']:.3f} distinct "
               f"{c.get('distinct', '-')} err {100 * c.get('distinct_err_sum', math.nan):.1f} % "
+              f"range holds the truth {c.get('range_holds', '-')}/{c.get('clips', '-')} "
+              f"(below {c.get('true_below_range', '-')}, above {c.get('true_above_range', '-')}) "
               f"({time.perf_counter() - t0:.0f} s)", flush=True)
     if a.output:
         with open(a.output, "w") as f:

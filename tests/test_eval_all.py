@@ -85,6 +85,14 @@ def test_count_row_sums_per_clip_errors():
     c = es.count_row(clips)
     assert c["distinct"] == 16
     assert c["distinct_err_sum"] == pytest.approx(2 / 18, abs=1e-12)  # 0 + |-1| + |-1|
+    assert "range_holds" not in c  # no clip has counts.json's range
+    for clip, (lo, hi) in zip(clips, ((4, 4), (1, 5), (8, 12))):
+        clip["counts"] = {"walkers_low": lo, "walkers_high": hi}
+    c = es.count_row(clips)  # true 4 in 4..4, 6 above 1..5, 8 in 8..12
+    assert (c["range_holds"], c["true_below_range"], c["true_above_range"], c["clips"]) == \
+        (2, 0, 1, 3)
+    clips[2]["counts"] = {"walkers_low": 9, "walkers_high": 12}
+    assert es.count_row(clips)["true_below_range"] == 1
 
 
 def test_read_gt(tmp_path):
