@@ -83,7 +83,8 @@ COUNT_RULE = ("walkers = tracks - non_pedestrians - too_fast = pedestrians + "
               "only) to walkers_high = pedestrians + unclassified (every unjudged track a "
               "walker); per track, verdicts.csv gives the unjudged ones' guess by speed "
               "(track_speed_mps) and size (width_m: the median measured width at the foot "
-              "point, width_ok: inside the width gate (10))")
+              "point, width_ok: inside the width gate (10)). Walkers no track stood for "
+              "(hidden in a group, lost in the foreground mask) are in neither bound")
 
 
 # ----------------------------------------------------------------------------------------------
