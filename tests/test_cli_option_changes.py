@@ -11,7 +11,7 @@ import math
 import pytest
 
 from rhythmjax.cli.main import main
-from rhythmjax.cli.option_changes import apply_option_changes, parse_option_changes
+from rhythmjax.cli.option_changes import apply_option_changes, parse_option_changes, recorded
 from rhythmjax.count import CountOptions
 from rhythmjax.model.params import ConfigError
 from rhythmjax.track.options import TrackerOptions, with_changes
@@ -30,6 +30,9 @@ def test_values_are_read_as_their_fields_type():
                    "stitch.max_dv_mps": math.inf}  # the last of a field set twice wins
     assert type(got["appearance.bins"]) is int and type(got["stitch.max_gap_s"]) is float
     assert type(got["appearance.enabled"]) is bool
+    assert recorded(got)["stitch.max_dv_mps"] == "inf" and recorded({"a.b": -math.inf}) == {
+        "a.b": "-inf"}
+    assert recorded(got)["appearance.veto_distance"] == 0.359  # finite values as they are
 
 
 def test_applied_as_with_changes_applies_them():
@@ -72,10 +75,12 @@ def test_count_applies_set_and_says_so(videos, tmp_path, capsys):  # noqa: F811
     capsys.readouterr()
     rc = main(["count", str(videos["cross"]), "-c", str(videos["config"]), "-o",
                str(tmp_path / "o"), "--fps", "15", "--json", "--no-report",
-               "--set", "verdicts.classify=false", "--set", "appearance.enabled=true"])
+               "--set", "verdicts.classify=false", "--set", "appearance.enabled=true",
+               "--set", "stitch.max_dv_mps=inf"])
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["option_changes"] == {"verdicts.classify": False, "appearance.enabled": True}
+    assert summary["option_changes"] == {"verdicts.classify": False, "appearance.enabled": True,
+                                         "stitch.max_dv_mps": "inf"}  # JSON has no infinity
     c = summary["counts"]
     assert c["tracks"] == 2 and c["unclassified"] == 2 and c["pedestrians"] == 0
     on_disk = json.loads((tmp_path / "o" / "counts.json").read_text())

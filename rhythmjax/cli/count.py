@@ -29,7 +29,7 @@ from .common import (
     reading_check,
     say,
 )
-from .option_changes import add_set, apply_option_changes
+from .option_changes import add_set, apply_option_changes, recorded
 from .overlay import FrameSampler, TrackOverlay, in_colour
 from .report import REPORT_NAME, render_report, write_report
 from .spectra import table_windows, write_spectra
@@ -110,7 +110,7 @@ def cmd_count(args) -> int:
             summary = {"video": args.video, "output": args.output, "counts": res.counts,
                        **{k: v for k, v in res.summary.items() if k != "notes"},
                        "bad_frames": len(src.bad_frames), "notes": notes,
-                       **({"option_changes": changes} if changes else {})}
+                       **({"option_changes": recorded(changes)} if changes else {})}
             write_mot(outs.path(out("mot.txt")), res.mot)
             write_mot(outs.path(out("mot_velocity.txt")), res.mot, VELOCITY_COLUMNS)
             write_table(outs.path(out("tracks.parquet")), res.tracks,

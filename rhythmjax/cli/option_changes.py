@@ -20,7 +20,8 @@ from ..model.params import ConfigError
 from ..track.options import with_changes
 
 
-__all__ = ["SET_METAVAR", "add_set", "apply_option_changes", "parse_option_changes"]
+__all__ = ["SET_METAVAR", "add_set", "apply_option_changes", "parse_option_changes",
+           "recorded"]
 
 SET_METAVAR = "GROUP.FIELD=VALUE"
 
@@ -111,3 +112,10 @@ def apply_option_changes(options, items: Sequence[str]):
         return with_changes(options, changes), changes
     except (KeyError, ValueError, TypeError) as e:
         raise ConfigError("--set", str(e.args[0] if e.args else e)) from None
+
+
+def recorded(changes: dict[str, Any]) -> dict[str, Any]:
+    """The changes as the summary records them (`option_changes`): JSON has no infinity, so an
+    infinite number is written as the text 'inf' / '-inf' rather than null."""
+    return {k: (str(v) if isinstance(v, float) and math.isinf(v) else v)
+            for k, v in changes.items()}

@@ -34,7 +34,7 @@ from .common import (
     say,
     seed_arg,
 )
-from .option_changes import add_set, apply_option_changes
+from .option_changes import add_set, apply_option_changes, recorded
 from .overlay import FrameSampler, TrackOverlay, in_colour
 from .report import REPORT_NAME, render_report
 from .spectra import write_spectra
@@ -153,7 +153,7 @@ def cmd_track(args) -> int:
             write_table(outs.path(args.output), tracks,
                         [*TRACK_ORDER, "v_top", *candidate_columns(tracks)])
     _report(args, {**_summary(tracker, verdicts, src),
-                   **({"option_changes": changes} if changes else {})}, verdicts, cfg)
+                   **({"option_changes": recorded(changes)} if changes else {})}, verdicts, cfg)
     return 0
 
 
@@ -206,7 +206,7 @@ def cmd_run(args) -> int:
             reading_check(args, src, notes)
             spectra = _write_outputs(outs, args.output, cfg, tracks, verdicts, objs)
             summary = {"video": args.video, **_summary(tracker, verdicts, src),
-                       **({"option_changes": changes} if changes else {})}
+                       **({"option_changes": recorded(changes)} if changes else {})}
             _write_report(outs, args, names, title=f"rhythmjax run {os.path.basename(args.video)}",
                           summary=summary, verdicts=verdicts, cfg=cfg, spectra=spectra,
                           sampler=sampler)
