@@ -1,0 +1,120 @@
+"""Self-calibration from the counting tracker's tracks (issue 19; a measurement, nothing chosen).
+
+`rhythmjax-fit selfcal` fits the tracks files of `rhythmjax run` (frame-difference foot
+points). `rhythmjax count` writes tracks in the same format from background subtraction and
+camera-sized patches (no top rows, so the cues are gait, speed and width). This runs the
+counting tracker and the fit in rounds, each round counted with the previous round's camera:
+
+- `pets`: PETS09-S2L1 (480x360, 7 fps) from a rough camera (f 500 px, h 5 m, tilt 20 deg),
+  `--rounds` rounds; against Tsai's h 7.07 m, tilt 16.5 deg, a f 742 px (the footprints');
+- `dev`: the 18 dev clips, each counted, their tracks pooled (one camera), with their true
+  camera and with a rough one (f 700 px, h 1.5 m, tilt 10 deg); against the clips' camera.
+
+    python benchmarks/selfcal_count_tracks.py [--data ../shared/data] [--work /tmp/scc] \\
+        [--only pets,dev] [--rounds 4]
+
+Results in docs/selfcal.md, "From the counting tracker's tracks".
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+CUES = ("gait", "speed", "width")  # the default cues less height: count's tracks have no v_top
+
+
+def counted(video: Path, config: Path, out: Path, fps: float) -> Path | None:
+    """out/tracks.parquet of `rhythmjax count` on `video` (made when absent; None on failure)."""
+    t = out / "tracks.parquet"
+    if not t.exists():
+        subprocess.run(["rhythmjax", "count", str(video), "-c", str(config), "--fps", str(fps),
+                        "--no-report", "--no-camera-check", "-q", "-o", str(out)],
+                       check=False, capture_output=True)
+    return t if t.exists() else None
+
+
+def fit_line(name: str, paths: list[Path], size, fps: float, truth) -> dict | None:
+    """Fit the pooled tracks; print one line; the fitted values (None when refused)."""
+    import selfcal_real as sr
+
+    from fit.selfcal import fit_selfcal
+
+    cfg, batch = sr.pooled_batch(paths, size, fps)
+    r = fit_selfcal(cfg, batch, cues=CUES)
+    if r.camera is None or r.ill_determined:
+        print(f"{name}: {r.n_walkers} walkers of {r.n_tracks} tracks; refused: "
+              f"{'; '.join(r.reasons)}", flush=True)
+        return None if r.camera is None else r.values
+    v, se = r.values, r.se
+    print(f"{name}: {r.n_walkers} walkers of {r.n_tracks} tracks; h {v['h']:.2f} +- "
+          f"{se['h']:.2f} m ({100 * (v['h'] / truth[0] - 1):+.1f} %), tilt {v['theta']:.1f} +- "
+          f"{se['theta']:.1f} deg ({v['theta'] - truth[1]:+.1f}), a f {v['af']:.0f} +- "
+          f"{se['af']:.0f} px (truth {truth[0]} m, {truth[1]} deg, {truth[2]} px)", flush=True)
+    return v
+
+
+def pets(data: Path, work: Path, rounds: int) -> None:
+    import selfcal_real as sr
+
+    video = data / "real" / "pets2009_s2l1" / "video" / "vtest_480x360.avi"
+    if not video.exists():
+        print("PETS09 absent: skipped")
+        return
+    size, fps, truth = (480, 360), 7.0, (7.07, 16.5, 742)
+    cam = sr.camera_json(work / "pets_cam0.json", size, fps, 500, 5, 20)
+    for k in range(1, rounds + 1):
+        t = counted(video, cam, work / f"pets_round{k}", fps)
+        v = fit_line(f"PETS round {k}", [t] if t else [], size, fps, truth)
+        if v is None:
+            return
+        cam = sr.camera_json(work / f"pets_cam{k}.json", size, fps, v["af"], v["h"], v["theta"])
+
+
+def dev(data: Path, work: Path) -> None:
+    import selfcal_real as sr
+
+    clips = sorted((data / "dev").glob("dev_*.avi"))
+    if not clips:
+        print("dev clips absent: skipped")
+        return
+    c = json.loads(clips[0].with_suffix(".json").read_text())["camera"]
+    size, fps = (c["width_px"], c["height_px"]), 15.0
+    truth = (c["h_m"], c["theta_deg"], c["f_px"])
+    for tag, cam in (("true", (c["f_px"], c["h_m"], c["theta_deg"])), ("rough", (700, 1.5, 10))):
+        cfg = sr.camera_json(work / f"dev_{tag}.json", size, fps, *cam)
+        paths = [counted(v, cfg, work / f"dev_{tag}" / v.stem, fps) for v in clips]
+        fit_line(f"dev clips ({len(clips)}, pooled), counted with the {tag} camera",
+                 [p for p in paths if p], size, fps, truth)
+
+
+def main(argv=None) -> int:
+    a = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    a.add_argument("--data", default=os.path.join(os.path.dirname(__file__), "..", "..",
+                                                  "shared", "data"))
+    a.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "selfcal_count"))
+    a.add_argument("--only", default="pets,dev")
+    a.add_argument("--rounds", type=int, default=4)
+    args = a.parse_args(argv)
+    data, work = Path(args.data), Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    for name in args.only.split(","):
+        if name == "pets":
+            pets(data, work, args.rounds)
+        elif name == "dev":
+            dev(data, work)
+        else:
+            raise SystemExit(f"unknown part {name!r} (pets, dev)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
