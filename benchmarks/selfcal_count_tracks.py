@@ -36,18 +36,26 @@ def counted(video: Path, config: Path, out: Path, fps: float) -> Path | None:
     """out/tracks.parquet of `rhythmjax count` on `video` (made when absent; None on failure)."""
     t = out / "tracks.parquet"
     if not t.exists():
-        subprocess.run(["rhythmjax", "count", str(video), "-c", str(config), "--fps", str(fps),
-                        "--no-report", "--no-camera-check", "-q", "-o", str(out)],
-                       check=False, capture_output=True)
+        done = subprocess.run(["rhythmjax", "count", str(video), "-c", str(config), "--fps",
+                               str(fps), "--no-report", "--no-camera-check", "-q", "-o",
+                               str(out)], check=False, capture_output=True, text=True)
+        if done.returncode:
+            print(f"{video.name}: rhythmjax count exited {done.returncode}: "
+                  f"{done.stderr.strip()[-300:]}", flush=True)
     return t if t.exists() else None
 
 
 def fit_line(name: str, paths: list[Path], size, fps: float, truth) -> dict | None:
-    """Fit the pooled tracks; print one line; the fitted values (None when refused)."""
+    """Fit the pooled tracks; print one line; the fitted values (None without tracks or a
+    camera; an ill-determined fit is printed as refused and its values still returned, so the
+    next round can count with them, as the video command's rounds do)."""
     import selfcal_real as sr
 
     from fit.selfcal import fit_selfcal
 
+    if not paths:
+        print(f"{name}: no tracks", flush=True)
+        return None
     cfg, batch = sr.pooled_batch(paths, size, fps)
     r = fit_selfcal(cfg, batch, cues=CUES)
     if r.camera is None or r.ill_determined:
@@ -86,7 +94,11 @@ def dev(data: Path, work: Path) -> None:
     if not clips:
         print("dev clips absent: skipped")
         return
-    c = json.loads(clips[0].with_suffix(".json").read_text())["camera"]
+    cams = {json.dumps(json.loads(p.with_suffix(".json").read_text())["camera"],
+                       sort_keys=True) for p in clips}
+    if len(cams) != 1:
+        raise SystemExit(f"the dev clips have {len(cams)} cameras: not pooled")
+    c = json.loads(cams.pop())
     size, fps = (c["width_px"], c["height_px"]), 15.0
     truth = (c["h_m"], c["theta_deg"], c["f_px"])
     for tag, cam in (("true", (c["f_px"], c["h_m"], c["theta_deg"])), ("rough", (700, 1.5, 10))):
