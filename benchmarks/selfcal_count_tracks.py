@@ -29,7 +29,7 @@ from pathlib import Path
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-CUES = ("gait", "speed", "width")  # the default cues less height: count's tracks have no v_top
+CUES = ("gait", "speed", "width", "height")  # the command's default cues (`--cues` to change)
 
 
 def counted(video: Path, config: Path, out: Path, fps: float) -> Path | None:
@@ -45,7 +45,7 @@ def counted(video: Path, config: Path, out: Path, fps: float) -> Path | None:
     return t if t.exists() else None
 
 
-def fit_line(name: str, paths: list[Path], size, fps: float, truth) -> dict | None:
+def fit_line(name: str, paths: list[Path], size, fps: float, truth, cues=CUES) -> dict | None:
     """Fit the pooled tracks; print one line; the fitted values (None without tracks or a
     camera; an ill-determined fit is printed as refused and its values still returned, so the
     next round can count with them, as the video command's rounds do)."""
@@ -57,7 +57,7 @@ def fit_line(name: str, paths: list[Path], size, fps: float, truth) -> dict | No
         print(f"{name}: no tracks", flush=True)
         return None
     cfg, batch = sr.pooled_batch(paths, size, fps)
-    r = fit_selfcal(cfg, batch, cues=CUES)
+    r = fit_selfcal(cfg, batch, cues=cues)
     if r.camera is None or r.ill_determined:
         print(f"{name}: {r.n_walkers} walkers of {r.n_tracks} tracks; refused: "
               f"{'; '.join(r.reasons)}", flush=True)
@@ -70,7 +70,7 @@ def fit_line(name: str, paths: list[Path], size, fps: float, truth) -> dict | No
     return v
 
 
-def pets(data: Path, work: Path, rounds: int) -> None:
+def pets(data: Path, work: Path, rounds: int, cues=CUES) -> None:
     import selfcal_real as sr
 
     video = data / "real" / "pets2009_s2l1" / "video" / "vtest_480x360.avi"
@@ -81,13 +81,13 @@ def pets(data: Path, work: Path, rounds: int) -> None:
     cam = sr.camera_json(work / "pets_cam0.json", size, fps, 500, 5, 20)
     for k in range(1, rounds + 1):
         t = counted(video, cam, work / f"pets_round{k}", fps)
-        v = fit_line(f"PETS round {k}", [t] if t else [], size, fps, truth)
+        v = fit_line(f"PETS round {k}", [t] if t else [], size, fps, truth, cues)
         if v is None:
             return
         cam = sr.camera_json(work / f"pets_cam{k}.json", size, fps, v["af"], v["h"], v["theta"])
 
 
-def dev(data: Path, work: Path) -> None:
+def dev(data: Path, work: Path, cues=CUES) -> None:
     import selfcal_real as sr
 
     clips = sorted((data / "dev").glob("dev_*.avi"))
@@ -105,7 +105,52 @@ def dev(data: Path, work: Path) -> None:
         cfg = sr.camera_json(work / f"dev_{tag}.json", size, fps, *cam)
         paths = [counted(v, cfg, work / f"dev_{tag}" / v.stem, fps) for v in clips]
         fit_line(f"dev clips ({len(clips)}, pooled), counted with the {tag} camera",
-                 [p for p in paths if p], size, fps, truth)
+                 [p for p in paths if p], size, fps, truth, cues)
+
+
+def rendered(work: Path, seeds: list[int], clips: int, cues) -> None:
+    """Own rendered videos: per seed a random camera (`fit.selfcal_data.random_camera`), `clips`
+    scenes of 5 walkers, a bicycle and a dog (`rhythmjax.sim.scene.random_spec`), each counted
+    with the true camera (in process), their tracks pooled and fitted; then the median errors."""
+    import numpy as np
+
+    from fit.selfcal_data import camera_values, random_camera
+    from rhythmjax.count import count_frames
+    from rhythmjax.io import write_table
+    from rhythmjax.model.params import Config
+    from rhythmjax.sim.placement import PlacementError
+    from rhythmjax.sim.scene import random_spec, render_scene
+
+    errs = []
+    for seed in seeds:
+        rng = np.random.default_rng(seed)
+        paths = []
+        while not paths:
+            cam = random_camera(rng)
+            try:
+                specs = [random_spec(seed * 100 + k, camera=cam) for k in range(clips)]
+            except PlacementError:
+                continue  # a camera that sees too little of the ground: drawn again
+            for k, spec in enumerate(specs):
+                t = work / f"rendered_{seed}" / f"clip{k}" / "tracks.parquet"
+                if not t.exists():
+                    sc = render_scene(seed * 100 + k, spec)
+                    res = count_frames(Config(camera=cam), ((i, i / sc.fps, g) for i, g in
+                                                            enumerate(sc.frames)))
+                    t.parent.mkdir(parents=True, exist_ok=True)
+                    write_table(t, res.tracks, list(res.tracks))
+                paths.append(t)
+        c = camera_values(cam)
+        size = (int(cam.image_width), int(cam.image_height))
+        v = fit_line(f"seed {seed} ({size[0]}x{size[1]})", paths, size, float(cam.fps),
+                     (round(c["h"], 2), round(c["theta"], 1), round(c["af"])), cues)
+        if v is not None:
+            errs.append((abs(v["h"] / c["h"] - 1) * 100, abs(v["theta"] - c["theta"]),
+                         abs(v["af"] / c["af"] - 1) * 100))
+    if errs:
+        e = np.median(np.asarray(errs), axis=0)
+        print(f"rendered, {len(errs)} of {len(seeds)} fitted: median |h err| {e[0]:.1f} %, "
+              f"|tilt err| {e[1]:.2f} deg, |a f err| {e[2]:.1f} %", flush=True)
 
 
 def main(argv=None) -> int:
@@ -115,14 +160,21 @@ def main(argv=None) -> int:
     a.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "selfcal_count"))
     a.add_argument("--only", default="pets,dev")
     a.add_argument("--rounds", type=int, default=4)
+    a.add_argument("--cues", default=",".join(CUES))
+    a.add_argument("--seeds", default="3800-3807", help="rendered: first-last")
+    a.add_argument("--clips", type=int, default=3, help="rendered: clips per camera")
     args = a.parse_args(argv)
+    cues = tuple(args.cues.split(","))
+    lo, _, hi = args.seeds.partition("-")
     data, work = Path(args.data), Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     for name in args.only.split(","):
         if name == "pets":
-            pets(data, work, args.rounds)
+            pets(data, work, args.rounds, cues)
         elif name == "dev":
-            dev(data, work)
+            dev(data, work, cues)
+        elif name == "rendered":
+            rendered(work, list(range(int(lo), int(hi or lo) + 1)), args.clips, cues)
         else:
             raise SystemExit(f"unknown part {name!r} (pets, dev)")
     return 0

@@ -1,5 +1,6 @@
 """The measured width of a pedestrian's patch (`count.widths.measured_width`, the W_IMG of gate
-(10) in count's tracks): hand-worked cases and a plain-loop reference on random label images."""
+(10) in count's tracks) and its top row (`measured_top`, the tracks' `v_top`): hand-worked cases
+and plain-loop references on random label images."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import math
 
 import numpy as np
 
-from rhythmjax.count.widths import column_runs, measured_width
+from rhythmjax.count.widths import column_runs, measured_top, measured_width
 
 
 def _reference(labels, related, claimed, u, v, w, h, reach):
@@ -80,3 +81,49 @@ def test_matches_the_plain_loop_on_random_images():
         got = measured_width(labels, related, claimed, u, v, w, h, reach)
         want = _reference(labels, set(related), claimed, u, v, w, h, reach)
         assert (math.isnan(got) and math.isnan(want)) or got == want, (u, v, w, h, reach)
+
+
+def _top_reference(labels, related, claimed, u, v, w, reach):
+    """Row by row from the top in plain Python (`measured_top`'s rule)."""
+    H, W = labels.shape
+    y0, y1 = max(0, math.floor(v - reach + 0.5)), min(H, math.floor(v) + 1)
+    a0, a1 = max(0, math.floor(u - w / 2 + 0.5)), min(W, math.floor(u + w / 2 + 0.5))
+    for y in range(y0, y1):
+        if any(int(labels[y, x]) in related and not (claimed is not None and claimed[y, x])
+               for x in range(a0, a1)):
+            return math.nan if y == y0 else float(y)
+    return math.nan
+
+
+def test_top_of_a_lone_blob():
+    """A body on rows 20..60 in columns 40..56, the patch 10 px wide at u 48 on row 60: its top
+    row 20; a head (rows 12..19) off the patch's columns [43, 53) is not seen; cut tops are
+    not given."""
+    labels = np.zeros((80, 100), np.int32)
+    labels[20:61, 40:57] = 3
+    labels[12:20, 54:57] = 3  # an arm raised beside the patch's columns
+    assert measured_top(labels, [3], None, 48.0, 60.0, 10.0, 60.0) == 20.0
+    assert measured_top(labels, [3], None, 55.0, 60.0, 4.0, 60.0) == 12.0  # columns 53..56
+    # searched from row floor(60 - 40.2 + 0.5) = 20: the top on the first row searched is cut
+    assert math.isnan(measured_top(labels, [3], None, 48.0, 60.0, 10.0, 40.2))
+    assert measured_top(labels, [3], None, 48.0, 60.0, 10.0, 41.0) == 20.0
+    claimed = np.zeros(labels.shape, bool)
+    claimed[:31, :] = True  # an older patch took the upper part
+    assert measured_top(labels, [3], claimed, 48.0, 60.0, 10.0, 60.0) == 31.0
+    assert math.isnan(measured_top(labels, [4], None, 48.0, 60.0, 10.0, 60.0))
+    labels[0:20, 40:57] = 3  # reaching the image's first row: cut
+    assert math.isnan(measured_top(labels, [3], None, 48.0, 60.0, 10.0, 200.0))
+
+
+def test_top_matches_the_plain_loop_on_random_images():
+    rng = np.random.default_rng(12)
+    for _ in range(200):
+        H, W = rng.integers(20, 60, 2)
+        labels = (rng.random((H, W)) < 0.05).astype(np.int32) * rng.integers(1, 4, (H, W))
+        claimed = rng.random((H, W)) < 0.2 if rng.random() < 0.5 else None
+        related = [int(q) for q in rng.choice([1, 2, 3], rng.integers(1, 3), replace=False)]
+        u, v = rng.uniform(-5, W + 5), rng.uniform(0, H + 5)
+        w, reach = rng.uniform(2, 15), rng.uniform(0, 40)
+        got = measured_top(labels, related, claimed, u, v, w, reach)
+        want = _top_reference(labels, set(related), claimed, u, v, w, reach)
+        assert (math.isnan(got) and math.isnan(want)) or got == want, (u, v, w, reach)

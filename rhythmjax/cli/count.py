@@ -114,7 +114,8 @@ def cmd_count(args) -> int:
             write_mot(outs.path(out("mot.txt")), res.mot)
             write_mot(outs.path(out("mot_velocity.txt")), res.mot, VELOCITY_COLUMNS)
             write_table(outs.path(out("tracks.parquet")), res.tracks,
-                        TRACK_ORDER + list(VELOCITY_COLUMNS) + candidate_columns(res.tracks))
+                        TRACK_ORDER + ["v_top", *VELOCITY_COLUMNS]
+                        + candidate_columns(res.tracks))
             write_table(outs.path(out("verdicts.csv")), res.verdicts,
                         VERDICT_ORDER + list(GUESS_COLUMNS)
                         + [c for c in ("candidate",) if c in res.verdicts])

@@ -35,7 +35,9 @@ Every frame each pedestrian samples I(k) in window B at its foot point
 (`detect.window_b_intensity` on the frame difference, W = its patch width; with
 `verdicts.window_candidates` also in window B moved by each offset of `io.files.
 WINDOW_CANDIDATES`: `window_candidates`) and keeps its ground state (`Pedestrian.ground`) for
-stitching; an ended one loses its trailing predicted frames, and
+stitching, and, where its blobs are its own, their top row in its columns (`widths.measured_top`
+up to `TOP_REACH` patch heights above the feet: the tracks' `v_top`, the head row that the
+height cue of `rhythmjax-fit selfcal` reads); an ended one loses its trailing predicted frames, and
 `count` stitches, judges and counts the ended tracks.
 """
 
@@ -67,13 +69,15 @@ from .pedestrian import Pedestrian as Pedestrian, finite_uv
 from .refinement import in_range, new_pedestrians
 from .rows import BlobRow, BoxRow, GroundRow
 from .still import duplicates, is_still
-from .widths import measured_width
+from .widths import measured_top, measured_width
 from .window_candidates import sample_candidates
 
 
 if TYPE_CHECKING:
     from .options import CountOptions
 
+TOP_REACH = 3.0  # patch heights above the feet searched for the top row (`widths.measured_top`):
+# a camera whose patch is a third of the walker's image height still finds the head; set a priori
 
 class PedestrianLevel:
     """Feed frames with `update(index, t, gray)`; `finish()` returns the `CountResult`. `defer`:
@@ -141,7 +145,7 @@ class PedestrianLevel:
                 self.detections += [BlobRow(index, *b.box, b.area) for b in blobs]
         self._flush()
         for p in self.peds:
-            p.z, p.z_width = (math.nan, math.nan), math.nan  # none unless placed below
+            p.z, p.z_width, p.z_top = (math.nan, math.nan), math.nan, math.nan  # unless placed
         boxes = box_table(blobs)
         rel = self._relate(graph, blobs, boxes)
         S = self.filter.slots
@@ -247,6 +251,8 @@ class PedestrianLevel:
                 continue
             p.z = z  # the object's width: its blob's run, a patch width around
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
+            if k == 1:  # its blobs not shared: their top in its columns is its head
+                p.z_top = measured_top(labels, lab, claimed, pl.u, pl.v, pl.w, TOP_REACH * pl.h)
             if k == 1 and opt.appearance.enabled:  # its blobs not shared: its descriptor
                 a = opt.appearance
                 p.look = look_of_frame(p.look, self.gray, labels, lab, claimed, pl.u, pl.v,
@@ -296,7 +302,7 @@ class PedestrianLevel:
             p.candidate_rows.append(sample_candidates(D, fu, fv, W, inten))
         state = TrackState.OBSERVE if measured else TrackState.PREDICT
         p.rows.append(TrackRow(index, t, p.z[0], p.z[1], p.z_width if measured else math.nan,
-                               inten, gx, gy, int(state)))
+                               inten, gx, gy, int(state), p.z_top if measured else math.nan))
         p.boxes.append(BoxRow(index, eu - w / 2, ev - h, w, h, 1.0 if measured else 0.5, gx,
                               gy, bool(ok)))
         vx, vy = out.velocity[s] if self.opt.dynamics == "3d" else (math.nan, math.nan)

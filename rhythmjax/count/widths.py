@@ -8,6 +8,12 @@ hold any of them within `reach_px` of the patch's sides, and returns the length 
 such columns that overlaps the patch's own columns most: the object's horizontal extent, as the
 online tracker's `detect.detect_in_window` measures it (a walker with a leg forward is wider than
 the patch; two walkers merged into one blob are twice as wide, and (10) rejects the row).
+
+`measured_top` is the same measurement upwards: the top row of those pixels in the patch's
+columns (the head), the tracks format's `v_top`, which the height cue of self-calibration
+(`fit.selfcal_height`) reads. Like the width it does not depend on the patch's model height,
+except through how far up it looks (`reach_px`): a top on the first row searched or on the
+image's first row may be cut, and is not given.
 """
 
 from __future__ import annotations
@@ -54,3 +60,28 @@ def measured_width(labels: np.ndarray, related, claimed: np.ndarray | None, u: f
         if overlap > best:
             best, width = overlap, float(end - start)
     return width
+
+
+def measured_top(labels: np.ndarray, related, claimed: np.ndarray | None, u: float, v: float,
+                 w: float, reach_px: float) -> float:
+    """Top row px of the object under the patch standing on (u, v) px, w px wide (module doc).
+
+    Pixels: those of the `related` labels in `labels` (H, W int), not `claimed` (H, W bool; None:
+    none), in the patch's columns [floor(u - w/2 + 0.5), floor(u + w/2 + 0.5)) and the rows from
+    floor(v - reach_px + 0.5) down to floor(v). NaN when there is none, or when the topmost is
+    the first row searched or the image's first row (the object may go on above: cut)."""
+    H, W = labels.shape
+    if not all(math.isfinite(q) for q in (u, v, w, reach_px)):
+        return math.nan
+    y0, y1 = max(0, int(math.floor(v - reach_px + 0.5))), min(H, int(math.floor(v)) + 1)
+    a0 = max(0, int(math.floor(u - 0.5 * w + 0.5)))
+    a1 = min(W, int(math.floor(u + 0.5 * w + 0.5)))
+    if y1 <= y0 or a1 <= a0:
+        return math.nan
+    mask = related_mask(labels[y0:y1, a0:a1], related)
+    if claimed is not None:
+        mask &= ~claimed[y0:y1, a0:a1]
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0 or rows[0] == 0:  # none, or cut by the search or the image's top
+        return math.nan
+    return float(y0 + rows[0])
