@@ -2,18 +2,24 @@
 
 `rhythmjax-fit selfcal` fits the tracks files of `rhythmjax run` (frame-difference foot
 points). `rhythmjax count` writes tracks in the same format from background subtraction and
-camera-sized patches (no top rows, so the cues are gait, speed and width). This runs the
-counting tracker and the fit in rounds, each round counted with the previous round's camera:
+camera-sized patches, with the top rows of the pedestrians' own blobs (`v_top`), so all four
+default cues apply (`--cues` to change). This runs the counting tracker and the fit:
 
 - `pets`: PETS09-S2L1 (480x360, 7 fps) from a rough camera (f 500 px, h 5 m, tilt 20 deg),
-  `--rounds` rounds; against Tsai's h 7.07 m, tilt 16.5 deg, a f 742 px (the footprints');
+  `--rounds` rounds, each counted with the previous round's camera; against Tsai's h 7.07 m,
+  tilt 16.5 deg, a f 742 px (the footprints');
 - `dev`: the 18 dev clips, each counted, their tracks pooled (one camera), with their true
-  camera and with a rough one (f 700 px, h 1.5 m, tilt 10 deg); against the clips' camera.
+  camera and with a rough one (f 700 px, h 1.5 m, tilt 10 deg); against the clips' camera;
+- `rendered`: own videos, per seed a random camera and `--clips` clips of 5 walkers, a bicycle
+  and a dog, counted with the true camera (in process) and pooled; the median errors.
 
     python benchmarks/selfcal_count_tracks.py [--data ../shared/data] [--work /tmp/scc] \\
-        [--only pets,dev] [--rounds 4]
+        [--only pets,dev,rendered] [--rounds 4] [--seeds 3800-3807] [--clips 3] \\
+        [--cues gait,speed,width,height] [--top-depth M]
 
-Results in docs/selfcal.md, "From the counting tracker's tracks".
+`--top-depth` is `rhythmjax-fit selfcal --top-depth` for every fit. Counted tracks are kept in
+`--work` and reused. Results in docs/selfcal.md, "From the counting tracker's tracks" and
+"Count's top rows and the top row's depth".
 """
 
 from __future__ import annotations
@@ -45,6 +51,9 @@ def counted(video: Path, config: Path, out: Path, fps: float) -> Path | None:
     return t if t.exists() else None
 
 
+TOP_DEPTH = {"value": 0.0}  # `--top-depth` (m): fit_selfcal's top_depth_m for every fit
+
+
 def fit_line(name: str, paths: list[Path], size, fps: float, truth, cues=CUES) -> dict | None:
     """Fit the pooled tracks; print one line; the fitted values (None without tracks or a
     camera; an ill-determined fit is printed as refused and its values still returned, so the
@@ -57,7 +66,7 @@ def fit_line(name: str, paths: list[Path], size, fps: float, truth, cues=CUES) -
         print(f"{name}: no tracks", flush=True)
         return None
     cfg, batch = sr.pooled_batch(paths, size, fps)
-    r = fit_selfcal(cfg, batch, cues=cues)
+    r = fit_selfcal(cfg, batch, cues=cues, top_depth_m=TOP_DEPTH["value"])
     if r.camera is None or r.ill_determined:
         print(f"{name}: {r.n_walkers} walkers of {r.n_tracks} tracks; refused: "
               f"{'; '.join(r.reasons)}", flush=True)
@@ -161,10 +170,12 @@ def main(argv=None) -> int:
     a.add_argument("--only", default="pets,dev")
     a.add_argument("--rounds", type=int, default=4)
     a.add_argument("--cues", default=",".join(CUES))
+    a.add_argument("--top-depth", type=float, default=0.0, help="m (fit.selfcal_height)")
     a.add_argument("--seeds", default="3800-3807", help="rendered: first-last")
     a.add_argument("--clips", type=int, default=3, help="rendered: clips per camera")
     args = a.parse_args(argv)
     cues = tuple(args.cues.split(","))
+    TOP_DEPTH["value"] = args.top_depth
     lo, _, hi = args.seeds.partition("-")
     data, work = Path(args.data), Path(args.work)
     work.mkdir(parents=True, exist_ok=True)

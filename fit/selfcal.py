@@ -189,7 +189,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                 width_scale: bool | None = None, outliers: bool = False,
                 frame_union: bool = False, stride_model: str = "table1",
                 height_mean_sd: float = HEIGHT_MEAN_SD_M,
-                stride_mean_sd: float = 0.0) -> SelfcalFit:
+                stride_mean_sd: float = 0.0, top_depth_m: float = 0.0) -> SelfcalFit:
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
     track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
@@ -205,10 +205,13 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     lets the crowd's mean height differ from the config's by about that much
     (`fit.selfcal_height.crowd_height`; a note gives its estimate); 0 holds it.
     `stride_mean_sd` (m) does the same for the crowd's mean stride against the walking model's
-    (`fit.selfcal_cost.crowd_stride`; 0, the default, holds it)."""
-    for name, sd in (("height_mean_sd", height_mean_sd), ("stride_mean_sd", stride_mean_sd)):
+    (`fit.selfcal_cost.crowd_stride`; 0, the default, holds it). `top_depth_m` (m): the top
+    rows image a point that far beyond the foot point along the ground (`fit.selfcal_height`;
+    0, the default: the vertical segment on the foot point)."""
+    for name, sd in (("height_mean_sd", height_mean_sd), ("stride_mean_sd", stride_mean_sd),
+                     ("top_depth_m", top_depth_m)):
         if not (sd >= 0 and math.isfinite(sd)):
-            raise ValueError(f"{name} {sd}: a spread in m, >= 0")
+            raise ValueError(f"{name} {sd}: a distance in m, >= 0")
     if stride_model not in STRIDE_MODELS:
         raise ValueError(f"stride model {stride_model!r}: choose from "
                          f"{', '.join(STRIDE_MODELS)}")
@@ -241,11 +244,14 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
             return _refused(cam0, cues, fitted, n_tracks, n_used, ids, why)
         cues = tuple(c for c in cues if c != "height")
         notes.append(f"cue height dropped: {why}")
+    if top_depth_m > 0 and "height" in cues:
+        notes.append(f"top rows taken {top_depth_m:g} m beyond their foot points along the "
+                     "ground (--top-depth)")
     values0 = camera_values(cam0)
     spec = param_spec(fitted)
     f = float(cam0.f)
     with jax.enable_x64(True):
-        data = make_data(batch, used, pace)
+        data = make_data(batch, used, pace, top_depth_m)
         starts = _starts(cam0, values0, data, cfg, cues, spec, n_starts, width_scale,
                          stride_model, height_mean_sd, stride_mean_sd)
 

@@ -89,7 +89,7 @@ def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
     cw = jax.vmap(lambda t, y, w: _linear_fit(t, y[:, None], w, 1))(tn, logw, ww)
     vh = horizon_v(camera) + jnp.tan(camera.roll) * (u - camera.uc)
     hinge = jnp.max(jnp.where(data.obs, vh + HORIZON_MARGIN_PX - v, -jnp.inf), 1)
-    height, dlogh, hok = height_cues(camera, u, v, data.v_top, use, tn)
+    height, dlogh, hok = height_cues(camera, u, v, data.v_top, use, tn, data.top_depth)
     return {"stride": speed / data.pace, "dspeed": dspeed, "width": wmean,
             "dlogw": cw[:, 1, 0], "height": height, "dlogh": dlogh, "hok": hok,
             "hinge": jnp.maximum(hinge, 0.0) / HORIZON_MARGIN_PX}

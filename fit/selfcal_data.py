@@ -113,7 +113,8 @@ MIN_ROWS = 20  # a track needs this many measured rows
 class Data(eqx.Module):
     """The used tracks, padded (B, T), float64: foot points z (px, 0 where `obs` is False),
     widths (px, NaN missing), times (s from the track's middle), pace F (Hz), top rows v_top
-    (px, NaN missing)."""
+    (px, NaN missing) and top_depth (m, a scalar): how much farther from the camera, along the
+    ground, the point a top row images lies than the foot point's (`fit.selfcal_height`)."""
 
     z: jax.Array
     width: jax.Array
@@ -122,6 +123,7 @@ class Data(eqx.Module):
     pace: jax.Array
     valid: jax.Array  # False on the padding (copies of the first track, weight 0)
     v_top: jax.Array
+    top_depth: jax.Array
 
 
 def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
@@ -136,8 +138,9 @@ def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
     return peaks.clear & ok, peaks.pace_hz
 
 
-def make_data(batch, used: np.ndarray, pace: np.ndarray) -> Data:
-    """`Data` of the used tracks of a batch, float64 (call inside ``jax.enable_x64``)."""
+def make_data(batch, used: np.ndarray, pace: np.ndarray, top_depth_m: float = 0.0) -> Data:
+    """`Data` of the used tracks of a batch, float64 (call inside ``jax.enable_x64``);
+    `top_depth_m` the top rows' depth offset (m, `Data`)."""
     z = np.asarray(batch.z, np.float64)[used]
     obs = batch.present[used] & np.all(np.isfinite(z), -1)
     t = np.asarray(batch.t, np.float64)[used]
@@ -156,7 +159,7 @@ def make_data(batch, used: np.ndarray, pace: np.ndarray) -> Data:
         wide(np.where(obs[..., None], z, 0.0), 0.0),
         wide(np.asarray(batch.width, np.float64)[used], np.nan), wide(t, 0.0),
         wide(obs, False), pace[used])), jnp.asarray(np.arange(pad.size) < B),
-        jnp.asarray(wide(top, np.nan)[pad]))
+        jnp.asarray(wide(top, np.nan)[pad]), jnp.asarray(float(top_depth_m), jnp.float64))
 
 
 # ----------------------------------------------------------------------------------------------

@@ -20,6 +20,14 @@ foot-head calibration. Per track the cue gives the median height (robust to the 
 tracker's top row is off) and the change of log height over the track (a linear fit against
 time, rows more than `TRIM_LOG` from the track's median left out), both differentiable in the
 camera (the median through a sort).
+
+A silhouette's top row is not quite the top of that vertical segment: seen from above, the
+topmost pixel of a head is its far edge and the lowest pixel of the feet their near edge, so
+the point the top row images lies D m farther along the ground than the foot point's (x, y).
+With `depth_m` = D, (H1) is taken at (x, y + D) (y grows away from the camera): d0 and N0 with
+y + D. The plain segment (D = 0, the default) reads a walker z m tall as z + (h - z) D / (y + D)
+(h the camera's height): 1.82 m for 1.7 m at 10 m from a 7 m camera with D = 0.23 m.
+`--top-depth` and docs/selfcal.md give what it changes on measured tracks.
 """
 
 from __future__ import annotations
@@ -43,14 +51,16 @@ TRIM_LOG = 0.15  # rows whose log height is further than this from the track's m
 # the slope (a top row 15 % off: the head clipped or another object's motion joined)
 
 
-def height_from_top(camera: Camera, u, v, v_top):
+def height_from_top(camera: Camera, u, v, v_top, depth_m=0.0):
     """(H m, ok) of (H1): the height above the ground point of the foot point (u, v) px whose
-    top projects to the image row v_top px. `ok` is False where the foot point is not on the
-    ground in front of the camera (`ground_from_image`), v_top is not finite, or the top lies
-    at or beyond the vertical vanishing point (denominator <= 0); H is 0 there (finite, so
-    gradients stay finite). Differentiable in the camera."""
+    top, `depth_m` m farther along the ground (module doc), projects to the image row v_top
+    px. `ok` is False where the foot point is not on the ground in front of the camera
+    (`ground_from_image`), v_top is not finite, or the top lies at or beyond the vertical
+    vanishing point (denominator <= 0); H is 0 there (finite, so gradients stay finite).
+    Differentiable in the camera."""
     k = terms(camera)
     x, y, ok = ground_from_image(camera, u, v)
+    y = y + depth_m
     ok = ok & jnp.isfinite(v_top)
     v_top = jnp.where(ok, v_top, v)  # data, not parameters: no NaN reaches a gradient
     bf, af = k.b * k.f, k.a * k.f
@@ -80,11 +90,12 @@ def _slope(t, y, w):
     return jnp.sum(w * (t - tb) * (y - yb)) / jnp.maximum(jnp.sum(w * (t - tb) ** 2), 1e-12)
 
 
-def height_cues(camera: Camera, u, v, v_top, use, tn):
+def height_cues(camera: Camera, u, v, v_top, use, tn, depth_m=0.0):
     """Per track (B,): (median height m, change of log height over the track, usable) of foot
-    points (u, v), top rows v_top (px) and the rows `use` (B, T), times `tn` (B, T) in units of
-    the track's duration. Usable: at least `MIN_TOP_ROWS` rows with a height."""
-    H, ok = height_from_top(camera, u, v, v_top)
+    points (u, v), top rows v_top (px; `depth_m` m farther, `height_from_top`) and the rows `use`
+    (B, T), times `tn` (B, T) in units of the track's duration. Usable: at least
+    `MIN_TOP_ROWS` rows with a height."""
+    H, ok = height_from_top(camera, u, v, v_top, depth_m)
     ok = ok & use & (H > 0)
     med = jax.vmap(masked_median)(H, ok)
     enough = jnp.sum(ok, 1) >= MIN_TOP_ROWS

@@ -87,6 +87,12 @@ def add_parser(sub, size_type, at_least) -> None:
                    f"crowd_stride), for a crowd that strolls or hurries; {STRIDE_MEAN_SD_M:g} "
                    "is the spread of crowds' mean steps between places; default 0: held at "
                    "the model's (docs/selfcal.md)")
+    s.add_argument("--top-depth", type=spread_m, default=0.0, metavar="M",
+                   help="how much farther (m, along the ground) the point a track's top row "
+                   "images lies than its foot point: a silhouette's top is the head's far "
+                   "edge, its bottom the feet's near edge (fit.selfcal_height); default 0, "
+                   "the plain vertical segment; 0.23 (half a head and half a foot long, set "
+                   "a priori) is measured in docs/selfcal.md")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
@@ -179,7 +185,8 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
                     outliers=args.outliers, frame_union=getattr(args, "frame_union", False),
                     stride_model=getattr(args, "stride_model", "table1"),
                     height_mean_sd=getattr(args, "height_mean_sd", HEIGHT_MEAN_SD_M),
-                    stride_mean_sd=getattr(args, "stride_mean_sd", 0.0))
+                    stride_mean_sd=getattr(args, "stride_mean_sd", 0.0),
+                    top_depth_m=getattr(args, "top_depth", 0.0))
     r.notes = more + r.notes
     if notes is not None:
         notes += more
