@@ -138,8 +138,10 @@ def _starts(cam0: Camera, values0, data, cfg, cues, spec, n_best: int, width_sca
     its pace's share of the expected stride, `expected_stride`), or height, or width."""
     f = float(cam0.f)
     grid = []
+    # a f held (not in `spec`): every start at the start camera's
+    af_grid = AF_GRID if spec.log_af else (values0["af"] / float(cam0.image_width),)
     for th in THETA_GRID:
-        for k in AF_GRID:
+        for k in af_grid:
             af = k * cam0.image_width
             grid.append({**values0, "af": af, "bf": af * values0["bf"] / values0["af"],
                          "theta": th, "h": 1.0})
@@ -193,7 +195,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
     track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
-    of ("af", "h", "theta", "roll", "uc", "vc"); b f follows a f at the start's b/a. Refuses
+    of ("af", "h", "theta", "roll", "uc", "vc") holding h and theta (without "af" the focal
+    length is held at the start's: a known lens); b f follows a f at the start's b/a. Refuses
     (ill_determined with a reason, no camera) with fewer than `MIN_WALKERS` walkers; flags the
     fit ill-determined when a fitted parameter is not determined (module doc). The height cue
     needs top rows (`batch.v_top`) on `MIN_TOP_ROWS` rows of `MIN_WALKERS` walkers: alone it is
@@ -220,8 +223,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     if bad or not cues:
         raise ValueError(f"cues {list(bad) or 'none'}: choose from {', '.join(CUES)}")
     fitted = tuple(k for k in NAMES if k in fit)
-    if not {"af", "h", "theta"} <= set(fitted) or set(fit) - set(FITTABLE):
-        raise ValueError(f"fit {fit}: af, h and theta, optionally roll, uc, vc")
+    if not {"h", "theta"} <= set(fitted) or set(fit) - set(FITTABLE):
+        raise ValueError(f"fit {fit}: h and theta, optionally af, roll, uc, vc")
     cam0 = cfg.camera
     if frame_union:
         batch = undo_union(batch, float(cam0.fps))[0]

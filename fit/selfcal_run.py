@@ -101,6 +101,9 @@ def add_parser(sub, size_type, at_least) -> None:
                    "tracks' own)")
     s.add_argument("--fit-roll", action="store_true", help="fit the roll too (else held at the "
                    "config's, 0 by default)")
+    s.add_argument("--hold-focal", action="store_true", help="hold the focal length at the "
+                   "config's (-c, camera.a_px_per_m: a known lens) and fit h and the tilt only; "
+                   "where the tilt and the focal length trade off (PETS09: docs/selfcal.md)")
     s.add_argument("--fit-center", action="store_true", help="fit the principal point too "
                    "(else held at the config's, or the image centre)")
     s.add_argument("--max-steps", type=at_least(1), default=200,
@@ -179,7 +182,8 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
             more.append(f"{n_left} foot points of rows the tracker did not observe (state "
                         "predict: detections its gates refused) left out (fit.selfcal_rows)")
     batch = to_batch(tr, max_gap_frames=5, min_len=cfg.thresholds.n, fps=cfg.camera.fps)
-    fit = ("af", "h", "theta") + (("roll",) if args.fit_roll else ()) + (
+    fit = (() if getattr(args, "hold_focal", False) else ("af",)) + ("h", "theta") + (
+        ("roll",) if args.fit_roll else ()) + (
         ("uc", "vc") if args.fit_center else ())
     r = fit_selfcal(cfg, batch, cues=cues, fit=fit, max_steps=args.max_steps,
                     outliers=args.outliers, frame_union=getattr(args, "frame_union", False),
@@ -229,6 +233,10 @@ def selfcal_main(args) -> int:
         except ValueError as e:
             raise BadInput(args.tracks, str(e)) from None
         d = read_config_dict(args.config) if args.config else {}
+        if args.hold_focal and "a_px_per_m" not in d.get("camera", {}):
+            raise BadInput(args.config or args.tracks, "--hold-focal holds the config's focal "
+                           "length: give a config (-c) whose camera has a_px_per_m "
+                           "(`rhythmjax camera --focal-px`)")
         if is_video(args.tracks):
             if args.image_size is not None:
                 raise BadInput(args.tracks, "--image-size is for a tracks file: a video gives "
