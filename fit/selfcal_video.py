@@ -53,10 +53,11 @@ class Round:
         if r.camera is None:
             return f"{head}: no camera ({'; '.join(r.reasons)})"
         v, se = r.values, r.se
-        pm = lambda k, fmt: f"{v[k]:{fmt}} +- {se.get(k, float('nan')):{fmt}}"  # noqa: E731
+        pm = lambda k, fmt, unit: (f"{v[k]:{fmt}} +- {se[k]:{fmt}} {unit}" if k in se  # noqa: E731
+                                   else f"{v[k]:{fmt}} {unit} (held)")
         flag = f" (refused: {'; '.join(r.reasons)})" if r.ill_determined else ""
-        return (f"{head}: h {pm('h', '.2f')} m, tilt {pm('theta', '.1f')} deg, "
-                f"a f {pm('af', '.0f')} px{flag}")
+        return (f"{head}: h {pm('h', '.2f', 'm')}, tilt {pm('theta', '.1f', 'deg')}, "
+                f"a f {pm('af', '.0f', 'px')}{flag}")
 
     def to_dict(self) -> dict:
         r = self.fit

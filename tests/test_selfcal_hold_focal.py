@@ -77,3 +77,20 @@ def test_the_command_needs_a_config_with_the_focal_length(tmp_path, scene, capsy
     cam = json.loads((tmp_path / "c.json").read_text())["camera"]
     assert cam["a_px_per_m"] * cam["f_m"] == pytest.approx(950.0, rel=1e-5)
     assert np.isfinite(doc["se"]["theta"])
+
+
+def test_a_rounds_line_says_the_focal_length_was_held():
+    """The video input's per-round line (`fit.selfcal_video.Round.line`) gives a held a f
+    without an SE."""
+    from types import SimpleNamespace
+
+    from fit.selfcal_video import Round
+
+    fit = SimpleNamespace(n_walkers=23, camera=object(), ill_determined=False, reasons=[],
+                          values={"h": 6.65, "theta": 16.1, "af": 742.0},
+                          se={"h": 0.4, "theta": 0.6})
+    line = Round(2, {}, 184, fit).line(2)
+    assert line == ("round 2 of 2: 184 tracks, 23 walkers: h 6.65 +- 0.40 m, tilt 16.1 +- 0.6 "
+                    "deg, a f 742 px (held)")
+    fit.se["af"] = 30.0
+    assert Round(2, {}, 184, fit).line(2).endswith("a f 742 +- 30 px")
