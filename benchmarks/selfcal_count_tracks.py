@@ -51,13 +51,11 @@ def counted(video: Path, config: Path, out: Path, fps: float) -> Path | None:
     return t if t.exists() else None
 
 
-TOP_DEPTH = {"value": 0.0}  # `--top-depth` (m): fit_selfcal's top_depth_m for every fit
-
-
-def fit_line(name: str, paths: list[Path], size, fps: float, truth, cues=CUES) -> dict | None:
-    """Fit the pooled tracks; print one line; the fitted values (None without tracks or a
-    camera; an ill-determined fit is printed as refused and its values still returned, so the
-    next round can count with them, as the video command's rounds do)."""
+def fit_line(name: str, paths: list[Path], size, fps: float, truth, fit_kw: dict) -> dict | None:
+    """Fit the pooled tracks (`fit_selfcal(cfg, batch, **fit_kw)`: cues, top_depth_m); print
+    one line; the fitted values (None without tracks or a camera; an ill-determined fit is
+    printed as refused and its values still returned, so the next round can count with them,
+    as the video command's rounds do)."""
     import selfcal_real as sr
 
     from fit.selfcal import fit_selfcal
@@ -66,7 +64,7 @@ def fit_line(name: str, paths: list[Path], size, fps: float, truth, cues=CUES) -
         print(f"{name}: no tracks", flush=True)
         return None
     cfg, batch = sr.pooled_batch(paths, size, fps)
-    r = fit_selfcal(cfg, batch, cues=cues, top_depth_m=TOP_DEPTH["value"])
+    r = fit_selfcal(cfg, batch, **fit_kw)
     if r.camera is None or r.ill_determined:
         print(f"{name}: {r.n_walkers} walkers of {r.n_tracks} tracks; refused: "
               f"{'; '.join(r.reasons)}", flush=True)
@@ -79,7 +77,7 @@ def fit_line(name: str, paths: list[Path], size, fps: float, truth, cues=CUES) -
     return v
 
 
-def pets(data: Path, work: Path, rounds: int, cues=CUES) -> None:
+def pets(data: Path, work: Path, rounds: int, fit_kw: dict) -> None:
     import selfcal_real as sr
 
     video = data / "real" / "pets2009_s2l1" / "video" / "vtest_480x360.avi"
@@ -90,13 +88,13 @@ def pets(data: Path, work: Path, rounds: int, cues=CUES) -> None:
     cam = sr.camera_json(work / "pets_cam0.json", size, fps, 500, 5, 20)
     for k in range(1, rounds + 1):
         t = counted(video, cam, work / f"pets_round{k}", fps)
-        v = fit_line(f"PETS round {k}", [t] if t else [], size, fps, truth, cues)
+        v = fit_line(f"PETS round {k}", [t] if t else [], size, fps, truth, fit_kw)
         if v is None:
             return
         cam = sr.camera_json(work / f"pets_cam{k}.json", size, fps, v["af"], v["h"], v["theta"])
 
 
-def dev(data: Path, work: Path, cues=CUES) -> None:
+def dev(data: Path, work: Path, fit_kw: dict) -> None:
     import selfcal_real as sr
 
     clips = sorted((data / "dev").glob("dev_*.avi"))
@@ -114,10 +112,10 @@ def dev(data: Path, work: Path, cues=CUES) -> None:
         cfg = sr.camera_json(work / f"dev_{tag}.json", size, fps, *cam)
         paths = [counted(v, cfg, work / f"dev_{tag}" / v.stem, fps) for v in clips]
         fit_line(f"dev clips ({len(clips)}, pooled), counted with the {tag} camera",
-                 [p for p in paths if p], size, fps, truth, cues)
+                 [p for p in paths if p], size, fps, truth, fit_kw)
 
 
-def rendered(work: Path, seeds: list[int], clips: int, cues) -> None:
+def rendered(work: Path, seeds: list[int], clips: int, fit_kw: dict) -> None:
     """Own rendered videos: per seed a random camera (`fit.selfcal_data.random_camera`), `clips`
     scenes of 5 walkers, a bicycle and a dog (`rhythmjax.sim.scene.random_spec`), each counted
     with the true camera (in process), their tracks pooled and fitted; then the median errors."""
@@ -152,7 +150,7 @@ def rendered(work: Path, seeds: list[int], clips: int, cues) -> None:
         c = camera_values(cam)
         size = (int(cam.image_width), int(cam.image_height))
         v = fit_line(f"seed {seed} ({size[0]}x{size[1]})", paths, size, float(cam.fps),
-                     (round(c["h"], 2), round(c["theta"], 1), round(c["af"])), cues)
+                     (round(c["h"], 2), round(c["theta"], 1), round(c["af"])), fit_kw)
         if v is not None:
             errs.append((abs(v["h"] / c["h"] - 1) * 100, abs(v["theta"] - c["theta"]),
                          abs(v["af"] / c["af"] - 1) * 100))
@@ -174,18 +172,17 @@ def main(argv=None) -> int:
     a.add_argument("--seeds", default="3800-3807", help="rendered: first-last")
     a.add_argument("--clips", type=int, default=3, help="rendered: clips per camera")
     args = a.parse_args(argv)
-    cues = tuple(args.cues.split(","))
-    TOP_DEPTH["value"] = args.top_depth
+    fit_kw = {"cues": tuple(args.cues.split(",")), "top_depth_m": args.top_depth}
     lo, _, hi = args.seeds.partition("-")
     data, work = Path(args.data), Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     for name in args.only.split(","):
         if name == "pets":
-            pets(data, work, args.rounds, cues)
+            pets(data, work, args.rounds, fit_kw)
         elif name == "dev":
-            dev(data, work, cues)
+            dev(data, work, fit_kw)
         elif name == "rendered":
-            rendered(work, list(range(int(lo), int(hi or lo) + 1)), args.clips, cues)
+            rendered(work, list(range(int(lo), int(hi or lo) + 1)), args.clips, fit_kw)
         else:
             raise SystemExit(f"unknown part {name!r} (pets, dev)")
     return 0
