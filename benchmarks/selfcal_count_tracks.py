@@ -184,7 +184,7 @@ def main(argv=None) -> int:
         elif name == "rendered":
             rendered(work, list(range(int(lo), int(hi or lo) + 1)), args.clips, fit_kw)
         else:
-            raise SystemExit(f"unknown part {name!r} (pets, dev)")
+            raise SystemExit(f"unknown part {name!r} (pets, dev, rendered)")
     return 0
 
 

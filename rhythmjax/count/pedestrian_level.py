@@ -79,6 +79,7 @@ if TYPE_CHECKING:
 TOP_REACH = 3.0  # patch heights above the feet searched for the top row (`widths.measured_top`):
 # a camera whose patch is a third of the walker's image height still finds the head; set a priori
 
+
 class PedestrianLevel:
     """Feed frames with `update(index, t, gray)`; `finish()` returns the `CountResult`. `defer`:
     a frame's filter results reach its pedestrians (`_flush`) only in the next `update`, after
