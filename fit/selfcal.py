@@ -36,6 +36,14 @@ cues, each a residual per track in units of its spread (`CUES`):
   the walking model's): each walker's stride over its expected stride, about the crowd's mean of
   that ratio, 1 a priori with the spread stride_mean_sd / stride_mean
   (`fit.selfcal_cost.crowd_stride`).
+- ``slant`` (not in `DEFAULT_CUES`): heads over feet (`fit.selfcal_slant`): per track the median
+  of the head column u_top (the tracks format's optional column, `rhythmjax count` writes it)
+  less the column of the point H m above the foot point's ground point (H from v_top), in units
+  of its own standard error. People off the image's centre column lean towards the vertical
+  vanishing point, b f / tan(theta) below the principal point: with heights' horizon row
+  (b f tan(theta) above it) this gives a f and the tilt apart. Scale-free. The head is taken
+  delta m ahead of the feet along the track's ground direction (walkers lean into their
+  stride), delta one unknown for the crowd, profiled out (`fit.selfcal_slant.profile_lean`).
 
 The spreads of the three shape residuals (speed, width, height change) are measurement noise, not
 a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
@@ -90,12 +98,13 @@ from fit.selfcal_gait import STRIDE_MODELS, expected_stride
 from fit.selfcal_height import HEIGHT_MEAN_SD_M, MIN_TOP_ROWS, top_walkers
 from fit.selfcal_outliers import without_outliers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
+from fit.selfcal_slant import slant_walkers
 from fit.selfcal_union import undo_union
 from rhythmjax.model.params import Camera, Config
 
 
-CUES = ("gait", "speed", "width", "height")
-DEFAULT_CUES = CUES  # the height cue is dropped (a note) where the tracks have no top rows
+CUES = ("gait", "speed", "width", "height", "slant")
+DEFAULT_CUES = CUES[:4]  # the height cue is dropped (a note) where the tracks have no top rows
 SHAPE_FLOOR = 0.02  # their spread is never below this (set a priori; seeds 0-5 checked)
 MIN_WALKERS = 5  # fewer tracks with a clear gait peak: refused
 MIN_ROW_SPREAD = 0.02  # walkers' median foot rows (10-90 %) span less of the image: refused
@@ -240,13 +249,15 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     notes = [] if dropped is None else [
         f"{int(dropped[used].sum())} foot points of the walkers left out as outliers (each "
         "track's image path, fit.selfcal_outliers)"]
-    if "height" in cues and (n_top := top_walkers(batch, used)) < MIN_WALKERS:
-        why = (f"only {n_top} of the {n_used} walkers have top rows (v_top) on {MIN_TOP_ROWS} "
-               f"rows; the height cue needs {MIN_WALKERS}")
-        if cues == ("height",):
-            return _refused(cam0, cues, fitted, n_tracks, n_used, ids, why)
-        cues = tuple(c for c in cues if c != "height")
-        notes.append(f"cue height dropped: {why}")
+    for cue, walkers_with, what in (("height", top_walkers, "top rows (v_top)"),
+                                    ("slant", slant_walkers, "head columns (v_top, u_top)")):
+        if cue in cues and (n_with := walkers_with(batch, used)) < MIN_WALKERS:
+            why = (f"only {n_with} of the {n_used} walkers have {what} on {MIN_TOP_ROWS} "
+                   f"rows; the {cue} cue needs {MIN_WALKERS}")
+            if cues == (cue,):
+                return _refused(cam0, cues, fitted, n_tracks, n_used, ids, why)
+            cues = tuple(c for c in cues if c != cue)
+            notes.append(f"cue {cue} dropped: {why}")
     if top_depth_m > 0 and "height" in cues:
         notes.append(f"top rows taken {top_depth_m:g} m beyond their foot points along the "
                      "ground (--top-depth)")
@@ -275,6 +286,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         sd_s = max(mad(np.asarray(raw["dspeed"])[:n_used]), SHAPE_FLOOR)
         sd_w = max(mad(np.asarray(raw["dlogw"])[:n_used]), SHAPE_FLOOR)
         hok = np.asarray(raw["hok"])[:n_used]
+        sok = np.asarray(raw["sok"])[:n_used]
         sd_h = max(mad(np.asarray(raw["dlogh"])[:n_used][hok]) if hok.any() else 0.0,
                    SHAPE_FLOOR)
         wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h, stride_model, height_mean_sd,
@@ -284,7 +296,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         J, G, r = jacobians(residuals, val, static, args, fitted)
         n_eff = n_used * (("gait" in cues) + ("speed" in cues) + ("width" in cues)
                           + int(float(wt.width_scale) > 0)) + 2 * int(hok.sum()) * (
-                              "height" in cues)
+                              "height" in cues) + int(sok.sum()) * ("slant" in cues)
         cov, se, cond, weak = report(J, G, r, fitted, n_eff)
         values = _values(val, static)
         cam_fit = eqx.combine(val, static).camera(cam0, f)
@@ -298,8 +310,9 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                          f"{stride_mean_sd / float(cfg.walking.stride_mean):.3f})")
     blk = std.reshape(N_BLOCKS, -1)[:, :n_used]
     parts = {"gait": blk[0], "speed": blk[1], "width": np.r_[blk[2], blk[3]],
-             "height": np.r_[blk[4][hok], blk[5][hok]]}
-    cue_rms = {k: float(np.sqrt(np.mean(parts[k] ** 2))) for k in cues}
+             "height": np.r_[blk[4][hok], blk[5][hok]], "slant": blk[6][sok]}
+    cue_rms = {k: float(np.sqrt(np.mean(parts[k] ** 2))) if parts[k].size else math.nan
+               for k in cues}
     msg = optx.RESULTS[res]
     success = res == optx.RESULTS.successful
     if res == optx.RESULTS.nonlinear_max_steps_reached:

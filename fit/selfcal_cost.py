@@ -18,6 +18,7 @@ from fit.selfcal_crowd import crowd_mean
 from fit.selfcal_data import SPEED_SAMPLES, Data
 from fit.selfcal_gait import STRIDE_MODELS, expected_stride, relative_spread
 from fit.selfcal_height import HEIGHT_STD_M, crowd_height, height_cues
+from fit.selfcal_slant import profile_lean, slant_cue
 from rhythmjax.model.camera import ground_from_image, ground_width, horizon_v
 from rhythmjax.model.params import Camera, Config
 from rhythmjax.model.rhythm import ground_speed
@@ -25,7 +26,7 @@ from rhythmjax.model.rhythm import ground_speed
 
 CAUCHY_C = 2.385  # Cauchy's constant at 95 % efficiency, in spreads
 SHAPE_START = 0.1  # start spread of the shape residuals (relative change over a track)
-N_BLOCKS = 6  # residual blocks per track (`standardised`)
+N_BLOCKS = 7  # residual blocks per track (`standardised`)
 
 
 class Weights(eqx.Module):
@@ -42,6 +43,7 @@ class Weights(eqx.Module):
     stride_power: jax.Array  # the gait cue's stride model (`selfcal_gait`): 0 Table 1's
     sd_hmean: jax.Array  # the crowd's mean height's prior spread (m; 0: the config's, held)
     sd_tmean: jax.Array  # the crowd's mean stride's prior spread (m; 0: the model's, held)
+    slant: jax.Array  # the slant cue (`fit.selfcal_slant`): heads over feet
 
 
 def cauchy(r):
@@ -63,7 +65,9 @@ def _linear_fit(t, y, w, degree):
 def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
     """The cues' raw values per track (B): stride T (m), relative speed change, mean ground
     width (m), change of log width over the track, median height (m), change of log height,
-    whether the track has heights, and the horizon hinge (px)."""
+    whether the track has heights, the head columns' median residual (px), its standard error
+    (px), whether the track has head columns and the head column's change per metre of lean
+    (px/m; `fit.selfcal_slant`), and the horizon hinge (px)."""
     u, v = data.z[..., 0], data.z[..., 1]
     gx, gy, ok = ground_from_image(camera, u, v)
     use = data.obs & ok
@@ -90,8 +94,12 @@ def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
     vh = horizon_v(camera) + jnp.tan(camera.roll) * (u - camera.uc)
     hinge = jnp.max(jnp.where(data.obs, vh + HORIZON_MARGIN_PX - v, -jnp.inf), 1)
     height, dlogh, hok = height_cues(camera, u, v, data.v_top, use, tn, data.top_depth)
+    heading = vel / jnp.maximum(jnp.linalg.norm(vel, axis=-1, keepdims=True), 1e-9)
+    slant, slant_se, sok, lean_g = slant_cue(camera, u, v, data.v_top, data.u_top, use,
+                                             data.top_depth, heading)
     return {"stride": speed / data.pace, "dspeed": dspeed, "width": wmean,
             "dlogw": cw[:, 1, 0], "height": height, "dlogh": dlogh, "hok": hok,
+            "slant": slant, "slant_se": slant_se, "sok": sok, "lean_g": lean_g,
             "hinge": jnp.maximum(hinge, 0.0) / HORIZON_MARGIN_PX}
 
 
@@ -122,9 +130,12 @@ def _blocks(r: dict, data: Data, cfg: Config, wt: Weights):
     Where the mean height is estimated, heights are compared with it relatively, (H / mean - 1)
     x 1.70 / 0.07, so that their spread does not shrink with the camera's scale; held,
     (H - 1.70) / 0.07. Strides likewise: estimated, (ratio / mean - 1) / `relative_spread`;
-    held, (T - expected) / its spread."""
+    held, (T - expected) / its spread. The slant's residuals less the crowd's lean
+    (`fit.selfcal_slant.profile_lean`), in their standard errors."""
     wk, wm = cfg.walking, cfg.width
     wh = wt.height * r["hok"].astype(wt.height.dtype)
+    ws = wt.slant * r["sok"].astype(wt.slant.dtype)
+    slant = profile_lean(r["slant"], r["slant_se"], r["lean_g"], r["sok"] & data.valid)[1]
     mean_h, prior_h = _crowd(r, data, cfg, wt)
     t_mean, t_sd = expected_stride(data.pace, wk, wt.stride_power)
     ratio, mean_t, prior_t = crowd_stride(r, data, cfg, wt)
@@ -141,7 +152,8 @@ def _blocks(r: dict, data: Data, cfg: Config, wt: Weights):
         weighted(wt.width, r["dlogw"] / wt.sd_wshape),
         weighted(wh, jnp.where(wt.sd_hmean > 0, (r["height"] / mean_h - 1.0) * wm.height,
                                r["height"] - wm.height) / HEIGHT_STD_M),
-        weighted(wh, r["dlogh"] / wt.sd_hshape)]), jnp.stack([prior_h, prior_t])
+        weighted(wh, r["dlogh"] / wt.sd_hshape),
+        weighted(ws, slant / r["slant_se"])]), jnp.stack([prior_h, prior_t])
 
 
 def standardised(camera: Camera, data: Data, cfg: Config, wt: Weights) -> jax.Array:
@@ -186,4 +198,4 @@ def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=N
     return Weights(on("gait"), on("speed"), on("width"), scale, jnp.float64(sd_speed),
                    jnp.float64(sd_wshape), on("height"), jnp.float64(sd_hshape),
                    jnp.float64(STRIDE_MODELS[stride_model]), jnp.float64(height_mean_sd),
-                   jnp.float64(stride_mean_sd))
+                   jnp.float64(stride_mean_sd), on("slant"))

@@ -114,7 +114,8 @@ class Data(eqx.Module):
     """The used tracks, padded (B, T), float64: foot points z (px, 0 where `obs` is False),
     widths (px, NaN missing), times (s from the track's middle), pace F (Hz), top rows v_top
     (px, NaN missing) and top_depth (m, a scalar): how much farther from the camera, along the
-    ground, the point a top row images lies than the foot point's (`fit.selfcal_height`)."""
+    ground, the point a top row images lies than the foot point's (`fit.selfcal_height`); the
+    head's columns u_top at the top rows (px, NaN missing; `fit.selfcal_slant`)."""
 
     z: jax.Array
     width: jax.Array
@@ -124,6 +125,7 @@ class Data(eqx.Module):
     valid: jax.Array  # False on the padding (copies of the first track, weight 0)
     v_top: jax.Array
     top_depth: jax.Array
+    u_top: jax.Array
 
 
 def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
@@ -153,13 +155,17 @@ def make_data(batch, used: np.ndarray, pace: np.ndarray, top_depth_m: float = 0.
     cols = -T % SPEED_SAMPLES
     wide = lambda a, fill: np.pad(a, [(0, 0), (0, cols)] + [(0, 0)] * (a.ndim - 2),
                                   constant_values=fill)
-    top = (np.full(obs.shape, np.nan) if getattr(batch, "v_top", None) is None
-           else np.where(obs, np.asarray(batch.v_top, np.float64)[used], np.nan))
+    def head(name):  # the optional head rows / columns of the used tracks, NaN where absent
+        col = getattr(batch, name, None)
+        return (np.full(obs.shape, np.nan) if col is None
+                else np.where(obs, np.asarray(col, np.float64)[used], np.nan))
     return Data(*(jnp.asarray(a[pad]) for a in (
         wide(np.where(obs[..., None], z, 0.0), 0.0),
         wide(np.asarray(batch.width, np.float64)[used], np.nan), wide(t, 0.0),
         wide(obs, False), pace[used])), jnp.asarray(np.arange(pad.size) < B),
-        jnp.asarray(wide(top, np.nan)[pad]), jnp.asarray(float(top_depth_m), jnp.float64))
+        jnp.asarray(wide(head("v_top"), np.nan)[pad]), jnp.asarray(float(top_depth_m),
+                                                                    jnp.float64),
+        jnp.asarray(wide(head("u_top"), np.nan)[pad]))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -244,7 +250,7 @@ def radial(camera: Camera, batch, used: np.ndarray, within_deg: float = 15.0) ->
 
 
 def scene_batch(cols: dict, cfg: Config, *, max_gap_frames: int = 5):
-    """A `TrackBatch` of a scene's tracks columns with their top rows (v_top), through a
+    """A `TrackBatch` of a scene's tracks columns with their heads (v_top, u_top), through a
     temporary file so that `rhythmjax.io.read_tracks`' validation applies (as
     `fit.walking.batch_of`, which keeps only the required columns and the label)."""
     import tempfile
@@ -252,7 +258,8 @@ def scene_batch(cols: dict, cfg: Config, *, max_gap_frames: int = 5):
 
     from rhythmjax.io import read_tracks, to_batch, write_table
 
-    keep = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "label", "v_top")
+    keep = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "label", "v_top",
+            "u_top")
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "tracks.parquet"
         write_table(p, cols, [k for k in cols if k in keep])

@@ -106,16 +106,18 @@ def outlier_rows(batch, *, degree: int = DEGREE, k_sigma: float = K_SIGMA) -> np
 
 
 def without_outliers(batch, *, degree: int = DEGREE, k_sigma: float = K_SIGMA):
-    """(the batch with the dropped rows' foot point, width and top row made missing, the (B, T)
-    mask of dropped rows). The intensity is kept: the gait peak does not use the foot point."""
+    """(the batch with the dropped rows' foot point, width and head (v_top, u_top) made missing,
+    the (B, T) mask of dropped rows). The intensity is kept: the gait peak does not use the
+    foot point."""
     drop = outlier_rows(batch, degree=degree, k_sigma=k_sigma)
     if not drop.any():
         return batch, drop
     z = np.where(drop[..., None], np.nan, batch.z).astype(np.asarray(batch.z).dtype)
     width = np.where(drop, np.nan, batch.width).astype(np.asarray(batch.width).dtype)
-    top = None if batch.v_top is None else np.where(drop, np.nan, batch.v_top).astype(
-        np.asarray(batch.v_top).dtype)
-    return dataclasses.replace(batch, z=z, width=width, v_top=top), drop
+    nan = lambda a: None if a is None else np.where(drop, np.nan, a).astype(  # noqa: E731
+        np.asarray(a).dtype)
+    return dataclasses.replace(batch, z=z, width=width, v_top=nan(batch.v_top),
+                               u_top=nan(getattr(batch, "u_top", None))), drop
 
 
 def dropped_rows(batch, used=None) -> tuple[int, int]:

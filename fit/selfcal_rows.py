@@ -13,8 +13,8 @@ with a finite foot point are such ``predict`` rows.
 The rule (rows used: measured and observed; `rhythmjax-fit selfcal --observed-only`, off by
 default): where the tracks give the state (the tracks format's optional ``state`` column,
 `rhythmjax.io.Tracks.state`), the geometric cues (foot points, widths, top rows: every cue but
-the pace) use only the rows whose state is ``observe``; every other row's u, v, width_px and
-v_top are made missing. The rhythm signal I(k) is kept on every row (the gait windows need
+the pace) use only the rows whose state is ``observe``; every other row's u, v, width_px, v_top
+and u_top are made missing. The rhythm signal I(k) is kept on every row (the gait windows need
 contiguous rows; the classifier reads it there too). Rows whose state is not given (an empty
 cell, or no column: `simulate`'s and hand-made tracks) are used as before, wherever they hold
 a foot point.
@@ -48,9 +48,10 @@ def unobserved(tracks) -> np.ndarray:
 
 
 def observed_rows(tracks):
-    """(the tracks with the foot point u, v px, width_px and v_top px made missing (NaN) on the
-    rows `unobserved` marks, how many of those rows held a foot point). The intensity (the
-    rhythm signal), times and the state are kept. The same tracks object when nothing changes."""
+    """(the tracks with the foot point u, v px, width_px, v_top and u_top px made missing (NaN)
+    on the rows `unobserved` marks, how many of those rows held a foot point). The intensity
+    (the rhythm signal), times and the state are kept. The same tracks object when nothing
+    changes."""
     drop = unobserved(tracks)
     held = drop & np.isfinite(np.asarray(tracks.u, np.float64)) & np.isfinite(
         np.asarray(tracks.v, np.float64))
@@ -59,5 +60,6 @@ def observed_rows(tracks):
     nan = lambda a: None if a is None else np.where(drop, np.nan, a).astype(  # noqa: E731
         np.asarray(a).dtype)
     return dataclasses.replace(tracks, u=nan(tracks.u), v=nan(tracks.v),
-                               width_px=nan(tracks.width_px), v_top=nan(tracks.v_top)), int(
+                               width_px=nan(tracks.width_px), v_top=nan(tracks.v_top),
+                               u_top=nan(tracks.u_top)), int(
                                    held.sum())

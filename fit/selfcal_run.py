@@ -23,7 +23,9 @@ CUE_HELP = ("comma-separated cues (default gait,speed,width,height): gait (strid
             "gait), "
             "height (foot-head heights from the tracks' top rows, column v_top, against people's "
             "1.7 +- 0.07 m: alone the classical foot-head calibration; dropped with a note when "
-            "the tracks have no top rows)")
+            "the tracks have no top rows); not by default: slant (heads over feet: the head "
+            "column u_top against the vertical through the foot point; `rhythmjax count` writes "
+            "it; separates the focal length from the tilt)")
 
 
 def spread_m(text: str) -> float:
@@ -172,6 +174,13 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
                            "`rhythmjax track` and `run` write it); add gait, speed or width")
         cues = tuple(c for c in cues if c != "height")
         more.append("cue height dropped: the tracks have no top rows (column v_top)")
+    if "slant" in cues and (tr.u_top is None or tr.v_top is None
+                            or not np.isfinite(tr.u_top).any()):
+        if cues == ("slant",):
+            raise BadInput(source, "--cues slant: the tracks have no head columns (columns "
+                           "v_top and u_top; `rhythmjax count` writes them)")
+        cues = tuple(c for c in cues if c != "slant")
+        more.append("cue slant dropped: the tracks have no head columns (column u_top)")
     dt = np.diff(tr.t)[np.diff(tr.frame) == 1] if len(tr) > 1 else np.zeros(0)
     fps_tracks = tr.fps or (1.0 / float(np.median(dt)) if dt.size and np.median(dt) > 0
                             else None)

@@ -25,7 +25,7 @@ from .test_pedestrians import CFG, FAST
 
 ON = with_changes(FAST, {"verdicts.window_candidates": True})
 TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",
-                 "v_top", "state", "vx", "vy", "du", "dv")
+                 "v_top", "u_top", "state", "vx", "vy", "du", "dv")
 
 
 @pytest.fixture(scope="module")

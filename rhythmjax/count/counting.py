@@ -357,7 +357,7 @@ def tracks_table(peds: list[Pedestrian], candidates: bool = False) -> dict[str, 
     cols = _columns(rows, TrackRow._fields)
     out = {"track_id": np.asarray([p.track_id for p in peds for _ in p.rows], np.int64),
            "frame": np.asarray(cols["frame"], np.int64)}
-    for name in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est", "v_top"):
+    for name in (f for f in TrackRow._fields if f not in ("frame", "state")):
         out[name] = np.asarray(cols[name], np.float64)
     out["state"] = np.asarray([TrackState(s).name.lower() for s in cols["state"]], dtype=object)
     out.update(velocity_columns(peds))

@@ -37,8 +37,10 @@ Every frame each pedestrian samples I(k) in window B at its foot point
 WINDOW_CANDIDATES`: `window_candidates`) and keeps its ground state (`Pedestrian.ground`) for
 stitching, and, where its blobs are its own, their top row in its columns (`widths.measured_top`
 up to `TOP_REACH` patch heights above the feet: the tracks' `v_top`, the head row that the
-height cue of `rhythmjax-fit selfcal` reads); an ended one loses its trailing predicted frames, and
-`count` stitches, judges and counts the ended tracks.
+height cue of `rhythmjax-fit selfcal` reads, and the head's column there, `u_top`, the foot
+point's column plus the silhouette's lean, `widths.measured_lean`, which its slant cue reads);
+an ended one loses its trailing predicted frames, and `count` stitches, judges and counts the
+ended tracks.
 """
 
 from __future__ import annotations
@@ -69,7 +71,7 @@ from .pedestrian import Pedestrian as Pedestrian, finite_uv
 from .refinement import in_range, new_pedestrians
 from .rows import BlobRow, BoxRow, GroundRow
 from .still import duplicates, is_still
-from .widths import measured_top, measured_width
+from .widths import measured_lean, measured_top, measured_width
 from .window_candidates import sample_candidates
 
 
@@ -146,7 +148,8 @@ class PedestrianLevel:
                 self.detections += [BlobRow(index, *b.box, b.area) for b in blobs]
         self._flush()
         for p in self.peds:
-            p.z, p.z_width, p.z_top = (math.nan, math.nan), math.nan, math.nan  # unless placed
+            p.z, p.z_width = (math.nan, math.nan), math.nan  # unless placed
+            p.z_top = p.z_top_u = math.nan
         boxes = box_table(blobs)
         rel = self._relate(graph, blobs, boxes)
         S = self.filter.slots
@@ -254,6 +257,8 @@ class PedestrianLevel:
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
             if k == 1:  # its blobs not shared: their top in its columns is its head
                 p.z_top = measured_top(labels, lab, claimed, pl.u, pl.v, pl.w, TOP_REACH * pl.h)
+                p.z_top_u = p.z[0] + measured_lean(labels, lab, claimed, pl.u, pl.v, pl.w,
+                                                   p.z_top, 0.5 * pl.w)
             if k == 1 and opt.appearance.enabled:  # its blobs not shared: its descriptor
                 a = opt.appearance
                 p.look = look_of_frame(p.look, self.gray, labels, lab, claimed, pl.u, pl.v,
@@ -303,7 +308,8 @@ class PedestrianLevel:
             p.candidate_rows.append(sample_candidates(D, fu, fv, W, inten))
         state = TrackState.OBSERVE if measured else TrackState.PREDICT
         p.rows.append(TrackRow(index, t, p.z[0], p.z[1], p.z_width if measured else math.nan,
-                               inten, gx, gy, int(state), p.z_top if measured else math.nan))
+                               inten, gx, gy, int(state), p.z_top if measured else math.nan,
+                               p.z_top_u if measured else math.nan))
         p.boxes.append(BoxRow(index, eu - w / 2, ev - h, w, h, 1.0 if measured else 0.5, gx,
                               gy, bool(ok)))
         vx, vy = out.velocity[s] if self.opt.dynamics == "3d" else (math.nan, math.nan)

@@ -13,7 +13,15 @@ the patch; two walkers merged into one blob are twice as wide, and (10) rejects 
 columns (the head), the tracks format's `v_top`, which the height cue of self-calibration
 (`fit.selfcal_height`) reads. Like the width it does not depend on the patch's model height,
 except through how far up it looks (`reach_px`): a top on the first row searched or on the
-image's first row may be cut, and is not given.
+image's first row may be cut, and is not given. `measured_lean` gives how far the head's column
+lies right of the feet's: a vertical segment seen by a tilted camera slants towards the vertical
+vanishing point (people off the image's centre column lean outwards), which the slant cue of
+self-calibration reads (the tracks' `u_top` is the foot point's u plus the lean: the patch is an
+upright rectangle, so its column is the silhouette's middle, not its feet's, and only the lean
+measured within the silhouette is unbiased). A head's own pixels are few and arms and legs
+swing, so the lean comes from the whole silhouette: the straight line through each row's mean
+column (least squares over the rows from the top row to the feet), read at the top row less at
+the feet's row.
 """
 
 from __future__ import annotations
@@ -85,3 +93,36 @@ def measured_top(labels: np.ndarray, related, claimed: np.ndarray | None, u: flo
     if rows.size == 0 or rows[0] == 0:  # none, or cut by the search or the image's top
         return math.nan
     return float(y0 + rows[0])
+
+
+def measured_lean(labels: np.ndarray, related, claimed: np.ndarray | None, u: float, v: float,
+                  w: float, v_top: float, reach_px: float) -> float:
+    """Lean px (head's column less the feet's; > 0: the head lies right) of the object under the
+    patch standing on (u, v) px, w px wide, whose top row is v_top px (`measured_top`; module
+    doc).
+
+    Pixels: those of the `related` labels, not `claimed`, in the rows floor(v_top) to floor(v)
+    and the columns [floor(u - w/2 - reach_px + 0.5), floor(u + w/2 + reach_px + 0.5)) inside
+    the image. Each row with a pixel gives its mean column (the pixel centres: column index);
+    the least-squares line of those means against the row, read at v_top less at floor(v). NaN
+    where v_top is not finite or fewer than a third of the rows (and 3) have a pixel."""
+    H, W = labels.shape
+    if not all(math.isfinite(q) for q in (u, v, w, v_top, reach_px)) or v_top > v:
+        return math.nan
+    y0, y1 = max(0, int(math.floor(v_top))), min(H, int(math.floor(v)) + 1)
+    a0 = max(0, int(math.floor(u - 0.5 * w - reach_px + 0.5)))
+    a1 = min(W, int(math.floor(u + 0.5 * w + reach_px + 0.5)))
+    if y1 <= y0 or a1 <= a0:
+        return math.nan
+    mask = related_mask(labels[y0:y1, a0:a1], related)
+    if claimed is not None:
+        mask &= ~claimed[y0:y1, a0:a1]
+    count = mask.sum(axis=1)
+    rows = np.flatnonzero(count)
+    if rows.size < max(3, (y1 - y0) / 3):
+        return math.nan
+    mean_col = (mask[rows] * np.arange(a0, a1)).sum(axis=1) / count[rows]
+    r = (y0 + rows).astype(np.float64)
+    rb = r.mean()
+    slope = float(np.sum((r - rb) * (mean_col - mean_col.mean())) / np.sum((r - rb) ** 2))
+    return float(slope * (v_top - (y1 - 1)))

@@ -55,14 +55,15 @@ TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity")
 WINDOW_CANDIDATES = (("intensity_up20", -0.2), ("intensity_up10", -0.1),
                      ("intensity_down10", 0.1))
 CANDIDATE_COLUMNS = tuple(name for name, _ in WINDOW_CANDIDATES)
-OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top", "state", *CANDIDATE_COLUMNS)
+OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top", "u_top", "state", *CANDIDATE_COLUMNS)
 LABELS = ("pedestrian", "bicycle", "dog", "car", "other")
 TRACK_STATES = ("none", "detect", "observe", "predict")  # `state` (`status.TrackState` names)
-MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top", *CANDIDATE_COLUMNS)
+MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top", "u_top",
+                *CANDIDATE_COLUMNS)
 MAX_ABS = 1e12
 TRACK_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
                "width_px": "float", "intensity": "float", "label": "str", "x": "float",
-               "y": "float", "v_top": "float", "state": "str",
+               "y": "float", "v_top": "float", "u_top": "float", "state": "str",
                **{name: "float" for name in CANDIDATE_COLUMNS}}
 TRACK_NOT_EMPTY = ("track_id", "frame", "t")
 TRACK_KEY = "track_id" + KEY_SUFFIX  # a Table's codes of its track ids (`tables.convert_parquet`)
@@ -89,6 +90,7 @@ class Tracks:
     y: np.ndarray | None = None
     fps: float | int | None = None
     v_top: np.ndarray | None = None  # top row px of the moving region (the head); NaN missing
+    u_top: np.ndarray | None = None  # the head's column px at v_top; NaN missing
     notes: list[str] = field(default_factory=list)
     track_key: np.ndarray | None = None  # int64 codes equal where track_id is (`run_key`)
     state: np.ndarray | None = None  # object array of `TRACK_STATES` ("" = not given)
@@ -127,7 +129,8 @@ class Tracks:
             self, track_id=take(self.track_id), frame=take(self.frame), t=take(self.t),
             u=take(self.u), v=take(self.v), width_px=take(self.width_px),
             intensity=take(self.intensity), line=take(self.line), label=take(self.label),
-            x=take(self.x), y=take(self.y), v_top=take(self.v_top), notes=[],
+            x=take(self.x), y=take(self.y), v_top=take(self.v_top), u_top=take(self.u_top),
+            notes=[],
             track_key=take(self.track_key), state=take(self.state),
             candidates=take(self.candidates))
 
@@ -155,6 +158,7 @@ class TrackBatch:
     labels: list[str] | None = None
     xy: np.ndarray | None = None  # (B, T, 2) m
     v_top: np.ndarray | None = None  # (B, T) px, the top row (head) where the file has it
+    u_top: np.ndarray | None = None  # (B, T) px, the head's column at v_top, likewise
     candidates: np.ndarray | None = None  # (B, T, K): the candidate windows' I(k), if any
 
 
@@ -237,7 +241,8 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
     return Tracks(path=p, track_id=tid, frame=col["frame"].astype(np.int64), t=col["t"],
                   u=col["u"], v=col["v"], width_px=col["width_px"], intensity=col["intensity"],
                   line=lines, unit=tab.unit, label=labels, x=col.get("x"), y=col.get("y"),
-                  fps=None if fps is None else float(fps), v_top=col.get("v_top"), notes=notes,
+                  fps=None if fps is None else float(fps), v_top=col.get("v_top"),
+                  u_top=col.get("u_top"), notes=notes,
                   track_key=col.get(TRACK_KEY), state=col.get("state"), candidates=candidates)
 
 
@@ -336,7 +341,8 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
                       width=grid(tracks.width_px), intensity=grid(tracks.intensity),
                       t=tg.astype(np.float32), dt=dt.astype(np.float32), present=present,
                       length=length, labels=labels, xy=grid(tracks.x, tracks.y),
-                      v_top=grid(tracks.v_top), candidates=candidate_grid)
+                      v_top=grid(tracks.v_top), u_top=grid(tracks.u_top),
+                      candidates=candidate_grid)
 
 
 __all__: Sequence[str] = (

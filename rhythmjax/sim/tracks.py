@@ -51,6 +51,12 @@ def top_rows(camera: Camera, x, y, height_m: float, noise) -> np.ndarray:
     return np.asarray(project_3d(camera, x, y, np.full(np.shape(x), height_m))[1]) + noise
 
 
+def head_columns(camera: Camera, x, y, height_m: float, noise) -> np.ndarray:
+    """Image column u_top (px) of the point `height_m` m above the ground point (x, y) m (the
+    head, slanted towards the vertical vanishing point; (3) with z), plus `noise` px."""
+    return np.asarray(project_3d(camera, x, y, np.full(np.shape(x), height_m))[0]) + noise
+
+
 @dataclass(frozen=True)
 class TrackTruth:
     track_id: str
@@ -193,14 +199,17 @@ def make_tracks(
     Measurements are missing (empty u, v, width) at `gap_rate` of frames. v_top: the image row
     of the object's top (`top_rows`: a height per object from `HEIGHT_M`, noise as the foot
     point's), drawn from a generator of its own (seed (seed, 19)) so that the other columns
-    are those of earlier versions."""
+    are those of earlier versions; u_top: the head's column at that height (`head_columns`,
+    noise as the foot point's from a generator (seed, 23)), where v_top is given."""
     camera = camera or Camera()
     rng = np.random.default_rng(seed)
     rng_top = np.random.default_rng([seed, 19])
+    rng_head = np.random.default_rng([seed, 23])
     kinds = (["pedestrian"] * n_walkers + ["bicycle"] * n_bicycles + ["dog"] * n_dogs
              + ["car"] * n_cars + ["short"] * n_short)
     cols: dict[str, list] = {k: [] for k in ("track_id", "frame", "t", "u", "v", "width_px",
-                                             "intensity", "label", "x", "y", "v_top")}
+                                             "intensity", "label", "x", "y", "v_top",
+                                             "u_top")}
     truth = []
     frame0 = 0
     for i, kind in enumerate(kinds):
@@ -234,9 +243,11 @@ def make_tracks(
         intensity = np.maximum(per_px, 0.0) * area
         gaps = rng.random(n) < gap_rate
         u[gaps], v[gaps], w_px[gaps] = np.nan, np.nan, np.nan
-        top = top_rows(camera, x, y, rng_top.normal(*HEIGHT_M[label]),
-                       rng_top.normal(0, r_std_px, n))
+        height = rng_top.normal(*HEIGHT_M[label])
+        top = top_rows(camera, x, y, height, rng_top.normal(0, r_std_px, n))
         top[gaps | ~(top >= 0)] = np.nan  # a head above the image is not measured
+        head = head_columns(camera, x, y, height, rng_head.normal(0, r_std_px, n))
+        head[~np.isfinite(top)] = np.nan
         tid = f"{label[:3]}{i:03d}" if kind != "short" else f"sho{i:03d}"
         frames = frame0 + np.arange(n)
         frame0 += int(rng.integers(0, 5))
@@ -244,7 +255,7 @@ def make_tracks(
         cols["frame"] += list(frames)
         cols["t"] += list(frames / camera.fps)
         for k, a in (("u", u), ("v", v), ("width_px", w_px), ("intensity", intensity),
-                     ("x", x), ("y", y), ("v_top", top)):
+                     ("x", x), ("y", y), ("v_top", top), ("u_top", head)):
             cols[k] += list(a)
         cols["label"] += [label] * n
         truth.append(TrackTruth(tid, label, pace, stride if label != "car" else math.nan,

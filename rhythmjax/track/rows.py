@@ -22,7 +22,9 @@ class TrackRow(NamedTuple):
     intensity: the rhythm signal I(k) in window B (NaN: no sample); (x_est, y_est): the filter's
     ground estimate m; state: `status.TrackState` as an int; v_top: the top row px of the
     measured moving region (the head; NaN when not measured or clipped by the detection
-    window), an optional column of the tracks format."""
+    window), an optional column of the tracks format; u_top: the head's column px at v_top
+    (`count` writes u + the silhouette's lean, `count.widths.measured_lean`; NaN where not
+    measured), optional likewise."""
 
     frame: int
     t: float
@@ -34,6 +36,7 @@ class TrackRow(NamedTuple):
     y_est: float
     state: int
     v_top: float = math.nan
+    u_top: float = math.nan
 
 
 class Velocity(NamedTuple):
