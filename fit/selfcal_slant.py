@@ -13,8 +13,9 @@ columns; `rhythmjax count` writes both): the walker's height H from v_top (`heig
 (H1), the same `depth_m`), then the column of the point H m above the foot point's ground point
 (`rhythmjax.model.camera.project_3d`, roll included): the predicted head column. The residual is
 u_top - that column (px); per track its median over the rows, in units of its own standard
-error: 1.2533 x 1.4826 x the rows' MAD / sqrt(n) (the median's, from the data, held constant in
-the fit), floored at `SLANT_FLOOR_PX`.
+error: 1.2533 x 1.4826 x the rows' MAD / sqrt(n) (the median's, from the data), floored at
+`SLANT_FLOOR_PX`; the error is part of the residual's function of the camera (its gradient
+included, so the least squares' Jacobian is exact).
 
 Walkers lean into their stride: a silhouette's head may lie ahead of its feet in the walking
 direction (the two rendered walkers of tests/test_count_top_row.py fall short of the pin-hole's
@@ -63,7 +64,7 @@ LEAN_STEP_M = 0.1  # m: the forward step of the head column's change with the le
 
 def slant_cue(camera: Camera, u, v, v_top, u_top, use, depth_m=0.0, heading=None):
     """Per track (B,): (the median of u_top - `head_column` over the rows `use` (B, T) with a
-    finite head, px; its standard error px (module doc, no gradient); usable: at least
+    finite head, px; its standard error px (module doc); usable: at least
     `MIN_TOP_ROWS` such rows; g: the median change of the head column per metre of lean along
     `heading` (B, 2), the track's unit ground direction (x, y), px/m; 0 without a heading)."""
     uh, ok = head_column(camera, u, v, v_top, depth_m)
@@ -80,8 +81,7 @@ def slant_cue(camera: Camera, u, v, v_top, u_top, use, depth_m=0.0, heading=None
         g = jax.vmap(masked_median)(g_row, ok)
     n = jnp.sum(ok, 1)
     enough = n >= MIN_TOP_ROWS
-    dev = jnp.abs(r - jax.lax.stop_gradient(med)[:, None])
-    mad = jax.vmap(masked_median)(jax.lax.stop_gradient(dev), ok)
+    mad = jax.vmap(masked_median)(jnp.abs(r - med[:, None]), ok)
     se = MEDIAN_SE * MAD_SD * mad / jnp.sqrt(jnp.maximum(n, 1))
     se = jnp.maximum(jnp.where(enough, se, 1.0), SLANT_FLOOR_PX)
     return jnp.where(enough, med, 0.0), se, enough, jnp.where(enough, g, 0.0)

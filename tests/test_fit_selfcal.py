@@ -271,11 +271,13 @@ def test_height_inverts_the_projection_of_a_tilted_rolled_camera():
 
 @pytest.fixture(scope="module")
 def with_tops(mixed):
-    """The `mixed` scene's batch with its top rows (v_top: 1.5 px noise, heights N(1.7, 0.07))."""
+    """The `mixed` scene's batch with its top rows and head columns (v_top, u_top: 1.5 px noise,
+    heights N(1.7, 0.07))."""
     return scene_batch(mixed[0], START)
 
 
-@pytest.mark.parametrize("cues", [("height",), ("gait", "speed", "width", "height")])
+@pytest.mark.parametrize("cues", [("height",), ("gait", "speed", "width", "height"),
+                                  ("height", "slant")])
 def test_height_gradient_matches_finite_differences(with_tops, cues):
     used, pace = select(START, with_tops)
     with jax.enable_x64(True):
