@@ -17,9 +17,11 @@ default cues apply (`--cues` to change). This runs the counting tracker and the 
         [--only pets,dev,rendered] [--rounds 4] [--seeds 3800-3807] [--clips 3] \\
         [--cues gait,speed,width,height] [--top-depth M]
 
-`--top-depth` is `rhythmjax-fit selfcal --top-depth` for every fit. Counted tracks are kept in
-`--work` and reused. Results in docs/selfcal.md, "From the counting tracker's tracks" and
-"Count's top rows and the top row's depth".
+`--top-depth` is `rhythmjax-fit selfcal --top-depth` for every fit; `--cues ...,slant` adds the
+head columns count writes (`u_top`). Counted tracks are kept in `--work` and reused (tracks
+counted before `u_top` existed lack it: use a fresh `--work` for the slant). Results in
+docs/selfcal.md, "From the counting tracker's tracks", "Count's top rows and the top row's
+depth" and "Heads over feet".
 """
 
 from __future__ import annotations
