@@ -265,7 +265,7 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     spec = param_spec(fitted)
     f = float(cam0.f)
     with jax.enable_x64(True):
-        data = make_data(batch, used, pace, top_depth_m)
+        data = make_data(batch, used, pace, top_depth_m, head_columns="slant" in cues)
         starts = _starts(cam0, values0, data, cfg, cues, spec, n_starts, width_scale,
                          stride_model, height_mean_sd, stride_mean_sd)
 

@@ -94,9 +94,14 @@ def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
     vh = horizon_v(camera) + jnp.tan(camera.roll) * (u - camera.uc)
     hinge = jnp.max(jnp.where(data.obs, vh + HORIZON_MARGIN_PX - v, -jnp.inf), 1)
     height, dlogh, hok = height_cues(camera, u, v, data.v_top, use, tn, data.top_depth)
-    heading = vel / jnp.maximum(jnp.linalg.norm(vel, axis=-1, keepdims=True), 1e-9)
-    slant, slant_se, sok, lean_g = slant_cue(camera, u, v, data.v_top, data.u_top, use,
-                                             data.top_depth, heading)
+    if data.u_top is None:  # the slant cue off: nothing computed
+        slant, lean_g, slant_se = jnp.zeros_like(height), jnp.zeros_like(height), jnp.ones_like(
+            height)
+        sok = jnp.zeros(height.shape, bool)
+    else:
+        heading = vel / jnp.maximum(jnp.linalg.norm(vel, axis=-1, keepdims=True), 1e-9)
+        slant, slant_se, sok, lean_g = slant_cue(camera, u, v, data.v_top, data.u_top, use,
+                                                 data.top_depth, heading)
     return {"stride": speed / data.pace, "dspeed": dspeed, "width": wmean,
             "dlogw": cw[:, 1, 0], "height": height, "dlogh": dlogh, "hok": hok,
             "slant": slant, "slant_se": slant_se, "sok": sok, "lean_g": lean_g,

@@ -115,7 +115,8 @@ class Data(eqx.Module):
     widths (px, NaN missing), times (s from the track's middle), pace F (Hz), top rows v_top
     (px, NaN missing) and top_depth (m, a scalar): how much farther from the camera, along the
     ground, the point a top row images lies than the foot point's (`fit.selfcal_height`); the
-    head's columns u_top at the top rows (px, NaN missing; `fit.selfcal_slant`)."""
+    head's columns u_top at the top rows (px, NaN missing; `fit.selfcal_slant`), None when the
+    slant cue is off (its terms are then not computed at all)."""
 
     z: jax.Array
     width: jax.Array
@@ -125,7 +126,7 @@ class Data(eqx.Module):
     valid: jax.Array  # False on the padding (copies of the first track, weight 0)
     v_top: jax.Array
     top_depth: jax.Array
-    u_top: jax.Array
+    u_top: jax.Array | None
 
 
 def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
@@ -140,9 +141,11 @@ def select(cfg: Config, batch) -> tuple[np.ndarray, np.ndarray]:
     return peaks.clear & ok, peaks.pace_hz
 
 
-def make_data(batch, used: np.ndarray, pace: np.ndarray, top_depth_m: float = 0.0) -> Data:
+def make_data(batch, used: np.ndarray, pace: np.ndarray, top_depth_m: float = 0.0,
+              head_columns: bool = False) -> Data:
     """`Data` of the used tracks of a batch, float64 (call inside ``jax.enable_x64``);
-    `top_depth_m` the top rows' depth offset (m, `Data`)."""
+    `top_depth_m` the top rows' depth offset (m, `Data`); `head_columns`: carry u_top (the
+    slant cue is on), else None."""
     z = np.asarray(batch.z, np.float64)[used]
     obs = batch.present[used] & np.all(np.isfinite(z), -1)
     t = np.asarray(batch.t, np.float64)[used]
@@ -165,7 +168,7 @@ def make_data(batch, used: np.ndarray, pace: np.ndarray, top_depth_m: float = 0.
         wide(obs, False), pace[used])), jnp.asarray(np.arange(pad.size) < B),
         jnp.asarray(wide(head("v_top"), np.nan)[pad]), jnp.asarray(float(top_depth_m),
                                                                     jnp.float64),
-        jnp.asarray(wide(head("u_top"), np.nan)[pad]))
+        jnp.asarray(wide(head("u_top"), np.nan)[pad]) if head_columns else None)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -58,6 +58,12 @@ def height_from_top(camera: Camera, u, v, v_top, depth_m=0.0):
     (`ground_from_image`), v_top is not finite, or the top lies at or beyond the vertical
     vanishing point (denominator <= 0); H is 0 there (finite, so gradients stay finite).
     Differentiable in the camera."""
+    return head_from_top(camera, u, v, v_top, depth_m)[2:]
+
+
+def head_from_top(camera: Camera, u, v, v_top, depth_m=0.0):
+    """(x, y, H, ok): `height_from_top`'s H and ok with the ground point (x, y) m of the head,
+    `depth_m` m beyond the foot point's along the ground."""
     k = terms(camera)
     x, y, ok = ground_from_image(camera, u, v)
     y = y + depth_m
@@ -70,7 +76,7 @@ def height_from_top(camera: Camera, u, v, v_top, depth_m=0.0):
     n0 = k.cos_roll * bf * (y * k.sin_theta - k.h * k.cos_theta) - k.sin_roll * af * x
     ok = ok & (den > 1e-6 * bf)
     H = (q * d0 - n0) / jnp.where(ok, den, 1.0)
-    return jnp.where(ok, H, 0.0), ok
+    return x, y, jnp.where(ok, H, 0.0), ok
 
 
 def crowd_height(height, usable, prior_mean, sd_mean):

@@ -36,8 +36,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from fit.selfcal_crowd import masked_median
-from fit.selfcal_height import MIN_TOP_ROWS, height_from_top
-from rhythmjax.model.camera import ground_from_image, project_3d
+from fit.selfcal_height import MIN_TOP_ROWS, head_from_top
+from rhythmjax.model.camera import project_3d
 from rhythmjax.model.params import Camera
 
 
@@ -47,14 +47,20 @@ MEDIAN_SE = 1.2533  # the median's standard error over the mean's for normal noi
 MAD_SD = 1.4826  # a normal spread over its MAD
 
 
+def head_point(camera: Camera, u, v, v_top, depth_m=0.0):
+    """(x, y, H m, ok): the head point over the foot point (u, v) px: its ground point `depth_m`
+    m beyond the foot point's along the ground, H the height whose top projects to the row
+    v_top (`fit.selfcal_height.head_from_top`); ok as there, and H > 0."""
+    x, y, H, ok = head_from_top(camera, u, v, v_top, depth_m)
+    return x, y, H, ok & (H > 0)
+
+
 def head_column(camera: Camera, u, v, v_top, depth_m=0.0):
-    """(u_head px, ok): the column of the point H m above the ground point `depth_m` m beyond
-    the foot point (u, v) px, H the height whose top projects to the row v_top
-    (`height_from_top`); ok as there. Differentiable in the camera."""
-    H, ok = height_from_top(camera, u, v, v_top, depth_m)
-    x, y, ok_g = ground_from_image(camera, u, v)
-    uh, _ = project_3d(camera, x, y + depth_m, H)
-    ok = ok & ok_g & (H > 0) & jnp.isfinite(uh)
+    """(u_head px, ok): the column of the head point (`head_point`) over the foot point (u, v)
+    px whose top row is v_top px. Differentiable in the camera."""
+    x, y, H, ok = head_point(camera, u, v, v_top, depth_m)
+    uh, _ = project_3d(camera, x, y, H)
+    ok = ok & jnp.isfinite(uh)
     return jnp.where(ok, uh, u), ok
 
 
@@ -67,16 +73,16 @@ def slant_cue(camera: Camera, u, v, v_top, u_top, use, depth_m=0.0, heading=None
     finite head, px; its standard error px (module doc); usable: at least
     `MIN_TOP_ROWS` such rows; g: the median change of the head column per metre of lean along
     `heading` (B, 2), the track's unit ground direction (x, y), px/m; 0 without a heading)."""
-    uh, ok = head_column(camera, u, v, v_top, depth_m)
-    ok = ok & use & jnp.isfinite(u_top)
+    x, y, H, ok = head_point(camera, u, v, v_top, depth_m)
+    uh, _ = project_3d(camera, x, y, H)
+    ok = ok & jnp.isfinite(uh) & use & jnp.isfinite(u_top)
+    uh = jnp.where(ok, uh, u)
     r = jnp.where(ok, u_top, uh) - uh
     med = jax.vmap(masked_median)(r, ok)
     g = jnp.zeros(med.shape, uh.dtype)
     if heading is not None:
-        H, _ = height_from_top(camera, u, v, v_top, depth_m)
-        x, y, _ = ground_from_image(camera, u, v)
         step = LEAN_STEP_M * heading
-        ahead, _ = project_3d(camera, x + step[:, None, 0], y + depth_m + step[:, None, 1], H)
+        ahead, _ = project_3d(camera, x + step[:, None, 0], y + step[:, None, 1], H)
         g_row = jnp.where(ok, (ahead - uh) / LEAN_STEP_M, 0.0)
         g = jax.vmap(masked_median)(g_row, ok)
     n = jnp.sum(ok, 1)

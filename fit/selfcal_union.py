@@ -79,11 +79,13 @@ def undo_union_track(t, u, v, width, top, fps: float,
 
 def undo_union(batch, fps: float, half_window_s: float = HALF_WINDOW_S):
     """(a `rhythmjax.io.TrackBatch` with every track's foot points z, widths and top rows
-    corrected (`undo_union_track`, rows whose foot point is measured), the number of rows
-    whose foot point moved). The intensity and times are kept."""
+    corrected (`undo_union_track`, rows whose foot point is measured; the head columns u_top,
+    the foot column plus the silhouette's lean, move with u), the number of rows whose foot
+    point moved). The intensity and times are kept."""
     z = np.array(batch.z, np.float64)
     width = np.array(batch.width, np.float64)
     top = None if batch.v_top is None else np.array(batch.v_top, np.float64)
+    head = None if batch.u_top is None else np.array(batch.u_top, np.float64)
     t = np.asarray(batch.t, np.float64)
     seen = np.asarray(batch.present) & np.all(np.isfinite(z), -1)
     moved = 0
@@ -95,10 +97,13 @@ def undo_union(batch, fps: float, half_window_s: float = HALF_WINDOW_S):
                                           None if top is None else top[b, i], fps,
                                           half_window_s)
         moved += int(np.sum((u2 != z[b, i, 0]) | (v2 != z[b, i, 1])))
+        if head is not None:  # u_top is u plus the lean: it moves with u
+            head[b, i] += u2 - z[b, i, 0]
         z[b, i, 0], z[b, i, 1], width[b, i] = u2, v2, w2
         if top is not None:
             top[b, i] = t2
     cast = lambda a, like: a.astype(np.asarray(like).dtype)  # noqa: E731
     return dataclasses.replace(
         batch, z=cast(z, batch.z), width=cast(width, batch.width),
-        v_top=None if top is None else cast(top, batch.v_top)), moved
+        v_top=None if top is None else cast(top, batch.v_top),
+        u_top=None if head is None else cast(head, batch.u_top)), moved

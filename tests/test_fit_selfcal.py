@@ -281,7 +281,7 @@ def with_tops(mixed):
 def test_height_gradient_matches_finite_differences(with_tops, cues):
     used, pace = select(START, with_tops)
     with jax.enable_x64(True):
-        data = make_data(with_tops, used, pace)
+        data = make_data(with_tops, used, pace, head_columns="slant" in cues)
         assert np.isfinite(np.asarray(data.v_top)).sum() > 500
         g, fd = gradient_and_differences(data, cue_weights(cues, 0.05, 0.03, sd_hshape=0.03))
     assert np.max(np.abs(fd)) > 1.0  # the cue moves the cost

@@ -96,9 +96,12 @@ def test_the_batch_is_corrected_track_by_track_and_keeps_its_rhythm():
                     intensity=np.ones((1, T), np.float32), t=pad(t, 0.0)[None].astype(np.float32),
                     dt=np.full((1, T), 1 / FPS, np.float32),
                     present=(np.arange(T) < n)[None], length=np.array([n], np.int32),
-                    v_top=pad(np.minimum(top, top0))[None].astype(np.float32))
+                    v_top=pad(np.minimum(top, top0))[None].astype(np.float32),
+                    u_top=pad(0.5 * (u + u0) + 3.0)[None].astype(np.float32))  # a lean of 3 px
     out, moved = undo_union(tb, FPS)
     assert moved == n
+    # the head column moves with the foot column: the lean stays 3 px
+    np.testing.assert_allclose(out.u_top[0, :n] - out.z[0, :n, 0], 3.0, atol=1e-4)
     assert np.max(np.abs(out.z[0, :n, 1] - v)) < TOL_PX
     assert np.max(np.abs(out.z[0, :n, 0] - u)) < TOL_PX
     assert np.max(np.abs(out.v_top[0, :n] - top)) < TOL_PX

@@ -45,16 +45,12 @@ HEIGHT_M = {"pedestrian": (1.70, 0.07), "bicycle": (1.75, 0.05), "dog": (0.50, 0
             "car": (1.50, 0.10)}
 
 
-def top_rows(camera: Camera, x, y, height_m: float, noise) -> np.ndarray:
-    """Image row v_top (px) of the point `height_m` m above the ground point (x, y) m (the head
-    over the foot point; equation (3) with z), plus `noise` px."""
-    return np.asarray(project_3d(camera, x, y, np.full(np.shape(x), height_m))[1]) + noise
-
-
-def head_columns(camera: Camera, x, y, height_m: float, noise) -> np.ndarray:
-    """Image column u_top (px) of the point `height_m` m above the ground point (x, y) m (the
-    head, slanted towards the vertical vanishing point; (3) with z), plus `noise` px."""
-    return np.asarray(project_3d(camera, x, y, np.full(np.shape(x), height_m))[0]) + noise
+def heads(camera: Camera, x, y, height_m: float, noise_v, noise_u) -> tuple[np.ndarray, ...]:
+    """(v_top, u_top) px: the image row and column of the point `height_m` m above the ground
+    point (x, y) m (the head over the foot point, slanted towards the vertical vanishing point;
+    equation (3) with z), plus `noise_v` and `noise_u` px."""
+    u, v = project_3d(camera, x, y, np.full(np.shape(x), height_m))
+    return np.asarray(v) + noise_v, np.asarray(u) + noise_u
 
 
 @dataclass(frozen=True)
@@ -197,9 +193,9 @@ def make_tracks(
     `n_short` extra walkers are tracked for fewer than 64 frames (expected `too-short`). Columns:
     track_id, frame, t, u, v, width_px, intensity, label, x, y (true ground position, m).
     Measurements are missing (empty u, v, width) at `gap_rate` of frames. v_top: the image row
-    of the object's top (`top_rows`: a height per object from `HEIGHT_M`, noise as the foot
+    of the object's top (`heads`: a height per object from `HEIGHT_M`, noise as the foot
     point's), drawn from a generator of its own (seed (seed, 19)) so that the other columns
-    are those of earlier versions; u_top: the head's column at that height (`head_columns`,
+    are those of earlier versions; u_top: the head's column at that height (`heads`,
     noise as the foot point's from a generator (seed, 23)), where v_top is given."""
     camera = camera or Camera()
     rng = np.random.default_rng(seed)
@@ -244,9 +240,9 @@ def make_tracks(
         gaps = rng.random(n) < gap_rate
         u[gaps], v[gaps], w_px[gaps] = np.nan, np.nan, np.nan
         height = rng_top.normal(*HEIGHT_M[label])
-        top = top_rows(camera, x, y, height, rng_top.normal(0, r_std_px, n))
+        top, head = heads(camera, x, y, height, rng_top.normal(0, r_std_px, n),
+                          rng_head.normal(0, r_std_px, n))
         top[gaps | ~(top >= 0)] = np.nan  # a head above the image is not measured
-        head = head_columns(camera, x, y, height, rng_head.normal(0, r_std_px, n))
         head[~np.isfinite(top)] = np.nan
         tid = f"{label[:3]}{i:03d}" if kind != "short" else f"sho{i:03d}"
         frames = frame0 + np.arange(n)
