@@ -9,7 +9,7 @@ set is fitted (`fit.selfcal.fit_selfcal`, the CLI's function) and compared with 
 
     python benchmarks/eval_selfcal.py [n_scenes=20] [first_seed=0] [--mix] [--sets A+B,C]
         [--outliers] [--frame-union] [--stride-model walk-ratio] [--height-mean-sd M]
-        [--stride-mean-sd M]
+        [--stride-mean-sd M] [--cue-spreads data]
     python benchmarks/eval_selfcal.py --tracks T.parquet [T2.parquet ...] --image-size WxH
         --fps F --truth H_M,TILT_DEG[,AF_PX]
 
@@ -75,7 +75,8 @@ def start_config(cam: Camera) -> Config:
 
 def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool = False,
         frame_union: bool = False, stride_model: str = "table1",
-        height_mean_sd: float = HEIGHT_MEAN_SD_M, stride_mean_sd: float = 0.0) -> dict:
+        height_mean_sd: float = HEIGHT_MEAN_SD_M, stride_mean_sd: float = 0.0,
+        cue_spreads: str = "model") -> dict:
     rows = {c: [] for c in cue_sets}
     for seed in range(seed0, seed0 + n_scenes):
         rng = np.random.default_rng(seed)
@@ -88,7 +89,7 @@ def run(n_scenes: int, seed0: int, mix: bool, cue_sets=CUE_SETS, outliers: bool 
             t0 = time.perf_counter()
             r = fit_selfcal(cfg, b, cues=cues, outliers=outliers, frame_union=frame_union,
                             stride_model=stride_model, height_mean_sd=height_mean_sd,
-                            stride_mean_sd=stride_mean_sd)
+                            stride_mean_sd=stride_mean_sd, cue_spreads=cue_spreads)
             dt = time.perf_counter() - t0
             if r.camera is None:
                 rows[cues].append(None)
@@ -177,8 +178,10 @@ if __name__ == "__main__":
            else None)
     tsd = (sys.argv[sys.argv.index("--stride-mean-sd") + 1] if "--stride-mean-sd" in sys.argv
            else None)
+    spreads = (sys.argv[sys.argv.index("--cue-spreads") + 1] if "--cue-spreads" in sys.argv
+               else "model")
     args = [a for a in sys.argv[1:] if not a.startswith("--")
-            and a not in (sets_arg, model, hsd, tsd)]
+            and a not in (sets_arg, model, hsd, tsd, spreads)]
     n = int(args[0]) if args else 20
     s0 = int(args[1]) if len(args) > 1 else 0
     mix = "--mix" in sys.argv
@@ -190,7 +193,7 @@ if __name__ == "__main__":
     title = f"{n} scenes (seeds {s0}-{s0 + n - 1}), 20 "
     sd = HEIGHT_MEAN_SD_M if hsd is None else float(hsd)
     ssd = 0.0 if tsd is None else float(tsd)
-    table(run(n, s0, mix, sets, on, fu, model, sd, ssd), title +
+    table(run(n, s0, mix, sets, on, fu, model, sd, ssd, spreads), title +
           "walkers" + (" + 4 bicycles + 4 dogs" if mix else "") + (", outlier rule on" if on
                                                                   else "")
           + (", frame union undone" if fu else "") + f", stride model {model}"

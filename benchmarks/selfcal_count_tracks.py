@@ -171,10 +171,12 @@ def main(argv=None) -> int:
     a.add_argument("--rounds", type=int, default=4)
     a.add_argument("--cues", default=",".join(CUES))
     a.add_argument("--top-depth", type=float, default=0.0, help="m (fit.selfcal_height)")
+    a.add_argument("--cue-spreads", default="model", choices=("model", "data"))
     a.add_argument("--seeds", default="3800-3807", help="rendered: first-last")
     a.add_argument("--clips", type=int, default=3, help="rendered: clips per camera")
     args = a.parse_args(argv)
-    fit_kw = {"cues": tuple(args.cues.split(",")), "top_depth_m": args.top_depth}
+    fit_kw = {"cues": tuple(args.cues.split(",")), "top_depth_m": args.top_depth,
+              "cue_spreads": args.cue_spreads}
     lo, _, hi = args.seeds.partition("-")
     data, work = Path(args.data), Path(args.work)
     work.mkdir(parents=True, exist_ok=True)

@@ -22,6 +22,7 @@ the classical approach), gait+height and gait+speed+width+height. Rows:
     python benchmarks/selfcal_real.py [--data ../shared/data] [--work /tmp/selfcal_real]
         [-o docs/data/selfcal_real.csv] [--only pets,dev,casia] [--outliers] [--observed-only]
         [--frame-union] [--stride-model walk-ratio] [--height-mean-sd M] [--stride-mean-sd M]
+        [--cue-spreads data]
         [--sets gait+speed+width+height,...]
 
 `--outliers` turns on the fit's foot-point outlier rule (`fit.selfcal_outliers`, off by default)
@@ -70,6 +71,7 @@ OBSERVED = [False]  # the observed-rows rule of the fits (`--observed-only` sets
 SETS = [CUE_SETS]  # the cue sets fitted (`--sets A+B,C` chooses)
 UNION = [False]  # the frame-union correction of the fits (`--frame-union` sets it on)
 STRIDE = ["table1"]  # the gait cue's stride model (`--stride-model`)
+SPREADS = ["model"]  # the gait's and heights' spreads (`--cue-spreads`)
 HEIGHT_MEAN_SD = [None]  # the crowd's mean height's prior spread (m; `--height-mean-sd`;
 # None: fit_selfcal's default)
 STRIDE_MEAN_SD = [None]  # the crowd's mean stride's prior spread (m; `--stride-mean-sd`)
@@ -157,7 +159,7 @@ def fit_rows(source: str, how: str, paths: list[Path], size, fps, truth,
         if STRIDE_MEAN_SD[0] is not None:
             hsd["stride_mean_sd"] = STRIDE_MEAN_SD[0]
         r = fit_selfcal(cfg, batch, cues=cues, outliers=OUTLIERS[0], frame_union=UNION[0],
-                        stride_model=STRIDE[0], **hsd)
+                        stride_model=STRIDE[0], cue_spreads=SPREADS[0], **hsd)
         fits[cues] = r
         v, se = (r.values, r.se) if r.camera is not None else ({}, {})
         get = lambda d, k: f"{d[k]:.5g}" if k in d and math.isfinite(d[k]) else ""
@@ -251,6 +253,7 @@ def main(argv=None) -> int:
     a.add_argument("--observed-only", action="store_true")
     a.add_argument("--frame-union", action="store_true")
     a.add_argument("--stride-model", default="table1", choices=("table1", "walk-ratio"))
+    a.add_argument("--cue-spreads", default="model", choices=("model", "data"))
     a.add_argument("--height-mean-sd", type=float,
                    help="the command's --height-mean-sd (default the command's; 0 holds it)")
     a.add_argument("--stride-mean-sd", type=float,
@@ -261,6 +264,7 @@ def main(argv=None) -> int:
     OBSERVED[0] = args.observed_only
     UNION[0] = args.frame_union
     STRIDE[0] = args.stride_model
+    SPREADS[0] = args.cue_spreads
     HEIGHT_MEAN_SD[0] = args.height_mean_sd
     STRIDE_MEAN_SD[0] = args.stride_mean_sd
     if args.sets:

@@ -81,6 +81,7 @@ from fit.selfcal_cost import (
     crowd_mean_height,
     crowd_mean_stride,
     cue_weights,
+    model_spreads,
     raw_cues,
     residuals,
     standardised,
@@ -105,6 +106,7 @@ from rhythmjax.model.params import Camera, Config
 
 CUES = ("gait", "speed", "width", "height", "slant")
 DEFAULT_CUES = CUES[:4]  # the height cue is dropped (a note) where the tracks have no top rows
+CUE_SPREADS = ("model", "data")  # `fit_selfcal(cue_spreads=)`
 SHAPE_FLOOR = 0.02  # their spread is never below this (set a priori; seeds 0-5 checked)
 MIN_WALKERS = 5  # fewer tracks with a clear gait peak: refused
 MIN_ROW_SPREAD = 0.02  # walkers' median foot rows (10-90 %) span less of the image: refused
@@ -200,7 +202,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                 width_scale: bool | None = None, outliers: bool = False,
                 frame_union: bool = False, stride_model: str = "table1",
                 height_mean_sd: float = HEIGHT_MEAN_SD_M,
-                stride_mean_sd: float = 0.0, top_depth_m: float = 0.0) -> SelfcalFit:
+                stride_mean_sd: float = 0.0, top_depth_m: float = 0.0,
+                cue_spreads: str = "model") -> SelfcalFit:
     """Self-calibrate the camera of `cfg` (the start; its image size, fps, f, b/a and whatever
     is not in `fit` are held) from the tracks of a `rhythmjax.io.TrackBatch` (padded from each
     track's first frame), with the `cues` (a subset of `CUES`). `fit` is a subset
@@ -219,7 +222,12 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
     `stride_mean_sd` (m) does the same for the crowd's mean stride against the walking model's
     (`fit.selfcal_cost.crowd_stride`; 0, the default, holds it). `top_depth_m` (m): the top
     rows image a point that far beyond the foot point along the ground (`fit.selfcal_height`;
-    0, the default: the vertical segment on the foot point)."""
+    0, the default: the vertical segment on the foot point). `cue_spreads` (`CUE_SPREADS`):
+    "model" (the default) takes the gait residuals' and the heights' spreads from the walking
+    model and the height prior; "data" estimates both after the first fit as the shape
+    residuals' are (1.4826 MAD), floored at the model's (docs/selfcal.md: measured, off)."""
+    if cue_spreads not in CUE_SPREADS:
+        raise ValueError(f"cue spreads {cue_spreads!r}: choose from {', '.join(CUE_SPREADS)}")
     for name, sd in (("height_mean_sd", height_mean_sd), ("stride_mean_sd", stride_mean_sd),
                      ("top_depth_m", top_depth_m)):
         if not (sd >= 0 and math.isfinite(sd)):
@@ -289,8 +297,10 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         sok = np.asarray(raw["sok"])[:n_used]
         sd_h = max(mad(np.asarray(raw["dlogh"])[:n_used][hok]) if hok.any() else 0.0,
                    SHAPE_FLOOR)
+        sd_g, sd_l = model_spreads(standardised(eqx.combine(best[1], best[2]).camera(cam0, f),
+                                                data, cfg, wt), n_used, hok, cue_spreads)
         wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h, stride_model, height_mean_sd,
-                         stride_mean_sd)
+                         stride_mean_sd, sd_g, sd_l)
         best = run(_values(best[1], best[2]), wt)
         cost, val, static, args, res, steps = best
         J, G, r = jacobians(residuals, val, static, args, fitted)
@@ -324,7 +334,8 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
                      "" if res == optx.RESULTS.successful else msg, bool(success), steps,
                      False, [], n_tracks, n_used, ids,
                      {"speed_change": sd_s, "log_width_change": sd_w,
-                      "log_height_change": sd_h}, cue_rms, notes)
+                      "log_height_change": sd_h, "stride_in_model": sd_g,
+                      "height_in_prior": sd_l}, cue_rms, notes)
     det = out.determination()
     if not success:
         out.reasons.append(f"solver: {msg}")

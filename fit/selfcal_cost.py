@@ -11,6 +11,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from fit.camera import CameraParams
 from fit.selfcal_checks import HORIZON_MARGIN_PX
@@ -44,6 +45,8 @@ class Weights(eqx.Module):
     sd_hmean: jax.Array  # the crowd's mean height's prior spread (m; 0: the config's, held)
     sd_tmean: jax.Array  # the crowd's mean stride's prior spread (m; 0: the model's, held)
     slant: jax.Array  # the slant cue (`fit.selfcal_slant`): heads over feet
+    sd_gait: jax.Array  # the gait residuals' spread in the walking model's (1: the model's)
+    sd_hlevel: jax.Array  # the heights' spread in HEIGHT_STD_M (1: the prior's 0.07 m)
 
 
 def cauchy(r):
@@ -111,7 +114,8 @@ def raw_cues(camera: Camera, data: Data, cfg: Config) -> dict[str, jax.Array]:
 def _crowd(r: dict, data: Data, cfg: Config, wt: Weights) -> tuple[jax.Array, jax.Array]:
     """`crowd_height` of the tracks that carry heights, when the height cue is on."""
     hok = r["hok"] & data.valid & (wt.height > 0)
-    return crowd_height(r["height"], hok, cfg.width.height, wt.sd_hmean)
+    return crowd_height(r["height"], hok, cfg.width.height, wt.sd_hmean,
+                        HEIGHT_STD_M * wt.sd_hlevel)
 
 
 def crowd_stride(r: dict, data: Data, cfg: Config, wt: Weights):
@@ -125,7 +129,7 @@ def crowd_stride(r: dict, data: Data, cfg: Config, wt: Weights):
     ok = data.valid & jnp.isfinite(ratio) & (wt.gait > 0)
     sd_mean = wt.sd_tmean / cfg.walking.stride_mean
     mean, prior = crowd_mean(jnp.where(ok, ratio, 1.0), ok, 1.0, sd_mean,
-                             relative_spread(cfg.walking, wt.stride_power))
+                             relative_spread(cfg.walking, wt.stride_power) * wt.sd_gait)
     return ratio, mean, prior
 
 
@@ -151,12 +155,12 @@ def _blocks(r: dict, data: Data, cfg: Config, wt: Weights):
     # a cue that is off gives 0, even where a degenerate camera makes its value NaN
     weighted = lambda w, x: jnp.where(w > 0, w * x, 0.0)
     return valid * jnp.concatenate([
-        weighted(wt.gait, gait),
+        weighted(wt.gait, gait / wt.sd_gait),
         weighted(wt.speed, r["dspeed"] / wt.sd_speed),
         weighted(wt.width_scale, (r["width"] - wm.mean) / wm.std),
         weighted(wt.width, r["dlogw"] / wt.sd_wshape),
         weighted(wh, jnp.where(wt.sd_hmean > 0, (r["height"] / mean_h - 1.0) * wm.height,
-                               r["height"] - wm.height) / HEIGHT_STD_M),
+                               r["height"] - wm.height) / (HEIGHT_STD_M * wt.sd_hlevel)),
         weighted(wh, r["dlogh"] / wt.sd_hshape),
         weighted(ws, slant / r["slant_se"])]), jnp.stack([prior_h, prior_t])
 
@@ -192,15 +196,35 @@ def residuals(dynamic: CameraParams, args) -> jax.Array:
 
 def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=None,
                 sd_hshape=SHAPE_START, stride_model: str = "table1",
-                height_mean_sd: float = 0.0, stride_mean_sd: float = 0.0) -> Weights:
+                height_mean_sd: float = 0.0, stride_mean_sd: float = 0.0,
+                sd_gait: float = 1.0, sd_hlevel: float = 1.0) -> Weights:
     """`Weights` of a cue set; the width's scale term is on with the width cue when
     `width_scale` is True, or (None) only without gait (module doc); the gait cue's stride
     model by name (`STRIDE_MODELS`); the crowd's mean height's and mean stride's prior spreads
-    (m, 0: held)."""
+    (m, 0: held); the gait residuals' and the heights' spreads in the model's (1: the
+    model's, Table 1's stride spread and 0.07 m; `fit.selfcal` estimates them with
+    `cue_spreads="data"`)."""
     on = lambda c: jnp.float64(1.0 if c in cues else 0.0)
     ws = "gait" not in cues if width_scale is None else width_scale
     scale = jnp.float64(1.0 if "width" in cues and ws else 0.0)
     return Weights(on("gait"), on("speed"), on("width"), scale, jnp.float64(sd_speed),
                    jnp.float64(sd_wshape), on("height"), jnp.float64(sd_hshape),
                    jnp.float64(STRIDE_MODELS[stride_model]), jnp.float64(height_mean_sd),
-                   jnp.float64(stride_mean_sd), on("slant"))
+                   jnp.float64(stride_mean_sd), on("slant"), jnp.float64(sd_gait),
+                   jnp.float64(sd_hlevel))
+
+
+def model_spreads(std, n_used: int, hok, how: str) -> tuple[float, float]:
+    """(gait, height level) spreads in the model's units from the standardised residuals `std`
+    of a first fit (`standardised`, model spreads): 1.4826 x the MAD over the `n_used` walkers
+    (heights: those with `hok`), floored at 1, the walking model's stride spread and the
+    height prior's 0.07 m (never more weight than the model gives). `how` "model": (1, 1);
+    "data": both from `std`."""
+    blk = np.asarray(std).reshape(N_BLOCKS, -1)[:, :n_used]
+
+    def spread(a):
+        return max(1.0, 1.4826 * float(np.median(np.abs(a - np.median(a))))) if a.size else 1.0
+
+    if how == "model":
+        return 1.0, 1.0
+    return spread(blk[0]), spread(blk[4][np.asarray(hok, bool)])

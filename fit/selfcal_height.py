@@ -79,14 +79,15 @@ def head_from_top(camera: Camera, u, v, v_top, depth_m=0.0):
     return x, y, jnp.where(ok, H, 0.0), ok
 
 
-def crowd_height(height, usable, prior_mean, sd_mean):
+def crowd_height(height, usable, prior_mean, sd_mean, sd_each=HEIGHT_STD_M):
     """(mean height m, its prior residual) of the crowd whose walkers' median heights are
     `height` (B,) where `usable` (`fit.selfcal_crowd.crowd_mean` with each walker's height
-    N(mean, HEIGHT_STD_M^2) about the crowd's mean): the crowd's mean is unknown,
-    N(prior_mean, sd_mean^2) a priori, profiled out of the least squares. `sd_mean` 0: the mean
-    is the prior's (residual 0), as without this rule; also with no usable walker.
+    N(mean, sd_each^2) about the crowd's mean, sd_each HEIGHT_STD_M by default): the crowd's
+    mean is unknown, N(prior_mean, sd_mean^2) a priori, profiled out of the least squares.
+    `sd_mean` 0: the mean is the prior's (residual 0), as without this rule; also with no
+    usable walker.
     Differentiable in `height`."""
-    return crowd_mean(height, usable, prior_mean, sd_mean, HEIGHT_STD_M)
+    return crowd_mean(height, usable, prior_mean, sd_mean, sd_each)
 
 
 def _slope(t, y, w):

@@ -44,6 +44,7 @@ def spread_m(text: str) -> float:
 
 def add_parser(sub, size_type, at_least) -> None:
     """The `selfcal` subcommand's arguments (`size_type`, `at_least`: fit.cli's parsers)."""
+    from fit.selfcal import CUE_SPREADS
     from fit.selfcal_gait import STRIDE_MEAN_SD_M
     from fit.selfcal_height import HEIGHT_MEAN_SD_M
     from rhythmjax.track.options import TrackerOptions
@@ -95,6 +96,11 @@ def add_parser(sub, size_type, at_least) -> None:
                    "edge, its bottom the feet's near edge (fit.selfcal_height); default 0, "
                    "the plain vertical segment; 0.23 (half a head and half a foot long, set "
                    "a priori) is measured in docs/selfcal.md")
+    s.add_argument("--cue-spreads", choices=CUE_SPREADS, default="model",
+                   help="the gait residuals' and the heights' spreads: model (the walking "
+                   "model's stride spread and 0.07 m), data (both estimated from the walkers "
+                   "after a first fit, never below the model's); default model "
+                   "(docs/selfcal.md)")
     s.add_argument("--cues", default="gait,speed,width,height", help=CUE_HELP)
     s.add_argument("--image-size", type=size_type, metavar="WxH",
                    help="the image size (px; wins over the config's); needed when the config "
@@ -199,7 +205,8 @@ def fit_tracks(args, tr, d: dict, source: str, notes: list[str] | None = None):
                     stride_model=getattr(args, "stride_model", "table1"),
                     height_mean_sd=getattr(args, "height_mean_sd", HEIGHT_MEAN_SD_M),
                     stride_mean_sd=getattr(args, "stride_mean_sd", 0.0),
-                    top_depth_m=getattr(args, "top_depth", 0.0))
+                    top_depth_m=getattr(args, "top_depth", 0.0),
+                    cue_spreads=getattr(args, "cue_spreads", "model"))
     r.notes = more + r.notes
     if notes is not None:
         notes += more
