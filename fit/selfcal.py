@@ -47,7 +47,9 @@ cues, each a residual per track in units of its spread (`CUES`):
 
 The spreads of the three shape residuals (speed, width, height change) are measurement noise, not
 a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
-`SHAPE_FLOOR`. Every residual goes through Cauchy's loss (c = 2.385 spreads): bicycles and dogs
+`SHAPE_FLOOR`. The gait residual's and the height level's spreads are the model's (Table 1's,
+0.07 m); `cue_spreads="data"` estimates them the same way, floored at the model's
+(`fit.selfcal_cost.model_spreads`; off by default). Every residual goes through Cauchy's loss (c = 2.385 spreads): bicycles and dogs
 that slip through the gait selection (a bicycle's stride is 1.4-1.9 m: 8-13 spreads) do not pull
 the scale. Rows used: every cue but the pace reads every row with a foot point (a `predict` row
 of the tracker's holds the detection its gates refused); `rhythmjax-fit selfcal --observed-only`
