@@ -45,20 +45,20 @@ cues, each a residual per track in units of its spread (`CUES`):
   delta m ahead of the feet along the track's ground direction (walkers lean into their
   stride), delta one unknown for the crowd, profiled out (`fit.selfcal_slant.profile_lean`).
 
-The spreads of the three shape residuals (speed, width, height change) are measurement noise, not
-a model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
-`SHAPE_FLOOR`. The gait residual's and the height level's spreads are the model's (Table 1's,
-0.07 m); `cue_spreads="data"` estimates them the same way, floored at the model's
-(`fit.selfcal_cost.model_spreads`; off by default). Every residual goes through Cauchy's loss (c = 2.385 spreads): bicycles and dogs
-that slip through the gait selection (a bicycle's stride is 1.4-1.9 m: 8-13 spreads) do not pull
-the scale. Rows used: every cue but the pace reads every row with a foot point (a `predict` row
-of the tracker's holds the detection its gates refused); `rhythmjax-fit selfcal --observed-only`
-keeps only the `observe` rows' foot points, widths and top rows where the tracks give the state
-(`fit.selfcal_rows`, off by default), the rhythm signal on every row. A hinge keeps every used
-foot point below the horizon; foot points far from their track's image path can be left out
-first (`fit.selfcal_outliers`, off by default), and before that the frame-difference detector's
-union of two frames can be undone in the foot points, widths and top rows (`fit.selfcal_union`,
-off by default). The fit is
+The spreads of the three shape residuals (speed, width, height change) are measurement noise, not a
+model's: they are estimated from the data (1.4826 x MAD after a first fit), floored at
+`SHAPE_FLOOR`. The gait residual's and the height level's spreads are the model's (Table 1's, 0.07
+m); `cue_spreads="data"` estimates them the same way, floored at the model's
+(`fit.selfcal_cost.model_spreads`; off by default). Every residual goes through Cauchy's loss (c =
+2.385 spreads): bicycles and dogs that slip through the gait selection (a bicycle's stride is
+1.4-1.9 m: 8-13 spreads) do not pull the scale. Rows used: every cue but the pace reads every row
+with a foot point (a `predict` row of the tracker's holds the detection its gates refused);
+`rhythmjax-fit selfcal --observed-only` keeps only the `observe` rows' foot points, widths and top
+rows where the tracks give the state (`fit.selfcal_rows`, off by default), the rhythm signal on
+every row. A hinge keeps every used foot point below the horizon; foot points far from their
+track's image path can be left out first (`fit.selfcal_outliers`, off by default), and before that
+the frame-difference detector's union of two frames can be undone in the foot points, widths and
+top rows (`fit.selfcal_union`, off by default). The fit is
 Levenberg-Marquardt (optimistix) over log a f, log h and the tilt (and the roll, the principal
 point when asked), in float64, from the best points of a grid over tilt and a f with h set by
 the median stride. ``speed`` alone leaves h free; ``gait`` or ``width`` fix it. Standard errors
@@ -299,8 +299,9 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         sok = np.asarray(raw["sok"])[:n_used]
         sd_h = max(mad(np.asarray(raw["dlogh"])[:n_used][hok]) if hok.any() else 0.0,
                    SHAPE_FLOOR)
-        sd_g, sd_l = model_spreads(standardised(eqx.combine(best[1], best[2]).camera(cam0, f),
-                                                data, cfg, wt), n_used, hok, cue_spreads)
+        sd_g, sd_l = (1.0, 1.0) if cue_spreads == "model" else model_spreads(
+            standardised(eqx.combine(best[1], best[2]).camera(cam0, f), data, cfg, wt), n_used,
+            hok)
         wt = cue_weights(cues, sd_s, sd_w, width_scale, sd_h, stride_model, height_mean_sd,
                          stride_mean_sd, sd_g, sd_l)
         best = run(_values(best[1], best[2]), wt)

@@ -214,17 +214,15 @@ def cue_weights(cues, sd_speed=SHAPE_START, sd_wshape=SHAPE_START, width_scale=N
                    jnp.float64(sd_hlevel))
 
 
-def model_spreads(std, n_used: int, hok, how: str) -> tuple[float, float]:
+def model_spreads(std, n_used: int, hok) -> tuple[float, float]:
     """(gait, height level) spreads in the model's units from the standardised residuals `std`
-    of a first fit (`standardised`, model spreads): 1.4826 x the MAD over the `n_used` walkers
-    (heights: those with `hok`), floored at 1, the walking model's stride spread and the
-    height prior's 0.07 m (never more weight than the model gives). `how` "model": (1, 1);
-    "data": both from `std`."""
+    of a first fit (`standardised` with the model's spreads): 1.4826 x the MAD over the
+    `n_used` walkers (heights: those with `hok`), floored at 1, the walking model's stride
+    spread and the height prior's 0.07 m (never more weight than the model gives); 1 where no
+    walker has the cue."""
     blk = np.asarray(std).reshape(N_BLOCKS, -1)[:, :n_used]
 
     def spread(a):
         return max(1.0, 1.4826 * float(np.median(np.abs(a - np.median(a))))) if a.size else 1.0
 
-    if how == "model":
-        return 1.0, 1.0
     return spread(blk[0]), spread(blk[4][np.asarray(hok, bool)])

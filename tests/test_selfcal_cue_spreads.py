@@ -45,12 +45,11 @@ def test_model_spreads_by_hand():
     std[0, n:] = 1e3
     std[4, :n] = [0, 0.3, 0.6, 0.9, 50]
     hok = np.array([True, True, True, True, False])
-    assert model_spreads(std.ravel(), n, hok, "model") == (1.0, 1.0)
-    g, h = model_spreads(std.ravel(), n, hok, "data")
+    g, h = model_spreads(std.ravel(), n, hok)
     assert g == pytest.approx(1.4826, abs=1e-12) and h == 1.0
     std[4, :n] = [0, 3, 6, 9, 50]  # MAD 3 over the four with heights: 4.4478
-    assert model_spreads(std.ravel(), n, hok, "data")[1] == pytest.approx(4.4478, abs=1e-12)
-    assert model_spreads(std.ravel(), n, np.zeros(n, bool), "data")[1] == 1.0  # no heights
+    assert model_spreads(std.ravel(), n, hok)[1] == pytest.approx(4.4478, abs=1e-12)
+    assert model_spreads(std.ravel(), n, np.zeros(n, bool))[1] == 1.0  # no heights
 
 
 @pytest.fixture(scope="module")
