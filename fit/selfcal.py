@@ -98,7 +98,7 @@ from fit.selfcal_data import (
     select,
 )
 from fit.selfcal_gait import STRIDE_MODELS, expected_stride
-from fit.selfcal_height import HEIGHT_MEAN_SD_M, MIN_TOP_ROWS, top_walkers
+from fit.selfcal_height import HEIGHT_MEAN_SD_M, HEIGHT_STD_M, MIN_TOP_ROWS, top_walkers
 from fit.selfcal_outliers import without_outliers
 from fit.selfcal_report import STATIONARY_COS, SelfcalFit, jacobians, report, stationarity
 from fit.selfcal_slant import slant_walkers
@@ -317,6 +317,9 @@ def fit_selfcal(cfg: Config, batch, *, cues=DEFAULT_CUES,
         if height_mean_sd > 0 and "height" in cues:
             notes.append(f"the walkers' mean height {crowd_mean_height(cam_fit, data, cfg, wt):.3f}"
                          f" m (prior {float(cfg.width.height):.2f} +- {height_mean_sd:g} m)")
+        if cue_spreads == "data":
+            notes.append(f"spreads from the walkers (--cue-spreads data): strides {sd_g:.2f} x "
+                         f"the walking model's, heights {sd_l:.2f} x {HEIGHT_STD_M:g} m")
         if stride_mean_sd > 0 and "gait" in cues:
             ratio = crowd_mean_stride(cam_fit, data, cfg, wt)
             notes.append(f"the walkers' mean stride {ratio:.3f} x the walking model's (prior 1 +- "

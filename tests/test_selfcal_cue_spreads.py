@@ -95,7 +95,8 @@ def test_estimated_spreads_find_a_wide_crowd(crowds):
     relative error at 1 sigma). The heights are the simulator's N(1.70, 0.07^2), so their spread
     stays at most 1.35 on both. Held (the default "model"): 1 and 1, reported likewise.
     Measured: 1.00 and 1.83 (heights 1.19 and 1.00); on the wide crowd h -6.98 % held and
-    -3.99 % estimated (tilt +0.60 and +0.37 deg): asserted at least 1.5 points closer."""
+    -3.99 % estimated (tilt +0.60 and +0.37 deg): asserted at least 1.5 points closer. The
+    estimates are in the fit's notes with "data", not with "model"."""
     fits = {(k, how): fit_selfcal(START, b, cue_spreads=how)
             for k, b in enumerate(crowds) for how in ("model", "data")}
     for r in fits.values():
@@ -107,6 +108,11 @@ def test_estimated_spreads_find_a_wide_crowd(crowds):
     assert 1.5 <= fits[1, "data"].spreads["stride_in_model"] <= 2.8
     for k in (0, 1):
         assert 1.0 <= fits[k, "data"].spreads["height_in_prior"] <= 1.35
+    note = [q for q in fits[1, "data"].notes if q.startswith("spreads from the walkers")]
+    assert note == [f"spreads from the walkers (--cue-spreads data): strides "
+                    f"{fits[1, 'data'].spreads['stride_in_model']:.2f} x the walking model's, "
+                    f"heights {fits[1, 'data'].spreads['height_in_prior']:.2f} x 0.07 m"]
+    assert not any(q.startswith("spreads from") for q in fits[1, "model"].notes)
     h_err = lambda r: abs(r.values["h"] / 5.5 - 1)
     assert h_err(fits[1, "data"]) < h_err(fits[1, "model"]) - 0.015
 
