@@ -19,7 +19,7 @@ import pytest
 import rhythmjax.sim.tracks as sim_tracks
 from fit.cli import main as fit_main
 from fit.selfcal import CUE_SPREADS, DEFAULT_CUES, fit_selfcal
-from fit.selfcal_cost import N_BLOCKS, cue_weights, model_spreads, standardised
+from fit.selfcal_cost import N_BLOCKS, cue_weights, model_spreads, raw_cues, standardised
 from fit.selfcal_data import make_data, scene_batch, select
 from fit.selfcal_height import HEIGHT_STD_M
 from rhythmjax.model.params import Camera, Config
@@ -89,11 +89,26 @@ def test_blocks_divided_by_the_spreads(crowds):
     assert np.allclose(two[rest], one[rest], rtol=1e-12, atol=1e-12)
 
 
+def _true_camera_spreads(batch) -> tuple[float, float]:
+    """The reference: 1.4826 x MAD, in NumPy, of the gait residuals (T - 0.72) / 0.09 and of
+    the heights about their median (in 0.07 m at 1.70 m) of the walkers used, through the TRUE
+    camera, floored at 1. Measured: Table 1's crowd 0.94 -> 1 and 1.16; the wide one 2.00 and
+    0.78 -> 1."""
+    with jax.enable_x64(True):
+        used, pace = select(START, batch)
+        n = int(used.sum())
+        r = raw_cues(TRUE, make_data(batch, used, pace), START)
+        gait = (np.asarray(r["stride"])[:n] - 0.72) / 0.09
+        heights = np.asarray(r["height"])[:n][np.asarray(r["hok"])[:n]]
+    mad = lambda a: 1.4826 * float(np.median(np.abs(a - np.median(a))))
+    return max(1.0, mad(gait)), max(1.0, mad(heights / np.median(heights) * 1.70 / 0.07))
+
+
 def test_estimated_spreads_find_a_wide_crowd(crowds):
-    """On Table 1's crowd the gait spread stays near the model's (1, at most 1.35); on the crowd
-    with twice the stride spread it is found at 1.5-2.8 (the MAD of 30 walkers: about 20 %
-    relative error at 1 sigma). The heights are the simulator's N(1.70, 0.07^2), so their spread
-    stays at most 1.35 on both. Held (the default "model"): 1 and 1, reported likewise.
+    """The spreads the fit estimates (through its first fit's camera) against the same
+    spreads through the true camera (`_true_camera_spreads`), within 12 % (the first fit's h
+    is 1-7 % off); the crowd with twice Table 1's stride spread is found (> 1.5). Held (the
+    default "model"): 1 and 1, reported likewise.
     Measured: 1.00 and 1.83 (heights 1.19 and 1.00); on the wide crowd h -6.98 % held and
     -3.99 % estimated (tilt +0.60 and +0.37 deg): asserted at least 1.5 points closer. The
     estimates are in the fit's notes with "data", not with "model"."""
@@ -104,10 +119,12 @@ def test_estimated_spreads_find_a_wide_crowd(crowds):
     for k in (0, 1):
         held = fits[k, "model"].spreads
         assert held["stride_in_model"] == 1.0 and held["height_in_prior"] == 1.0
-    assert 1.0 <= fits[0, "data"].spreads["stride_in_model"] <= 1.35
-    assert 1.5 <= fits[1, "data"].spreads["stride_in_model"] <= 2.8
-    for k in (0, 1):
-        assert 1.0 <= fits[k, "data"].spreads["height_in_prior"] <= 1.35
+    for k, batch in enumerate(crowds):
+        gait, heights = _true_camera_spreads(batch)
+        got = fits[k, "data"].spreads
+        assert got["stride_in_model"] == pytest.approx(gait, rel=0.12)
+        assert got["height_in_prior"] == pytest.approx(heights, rel=0.12)
+    assert fits[1, "data"].spreads["stride_in_model"] > 1.5  # the wide crowd found
     note = [q for q in fits[1, "data"].notes if q.startswith("spreads from the walkers")]
     assert note == [f"spreads from the walkers (--cue-spreads data): strides "
                     f"{fits[1, 'data'].spreads['stride_in_model']:.2f} x the walking model's, "
