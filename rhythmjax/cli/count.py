@@ -55,9 +55,10 @@ def cmd_count(args) -> int:
     unless it moves faster than the walking model accepts for any rhythm (too_fast: 2.6 m/s
     with the paper's Table 1). So walkers = judged pedestrian + unjudged_plausible, within the
     range walkers_low (judged pedestrian only) to walkers_high (+ every unjudged track). The
-    background starts from the median of the first 3 s; a track whose foot point stays put
-    for 5 s ends there (its patch becomes background) and one that never moved is dropped (a
-    ghost of something present when the background was learnt).
+    background starts from the first frame (--set blobs.bg_init_s=S: from the median of the
+    first S s; off, docs/rules.md); a track whose foot point stays put for 5 s ends there (its
+    patch becomes background) and one that never moved is dropped (a ghost of something
+    present when the background was learnt).
 
     Writes DIR/mot.txt (MOTChallenge: frame (1-based), id, bb_left, bb_top, bb_width,
     bb_height, conf (1 measured, 0.5 predicted), x, y (ground, m), z (0; -1 -1 -1 where the

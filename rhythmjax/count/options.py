@@ -38,7 +38,8 @@ class BlobOptions:
     crowd_fraction: float = 0.5  # one blob box covering this fraction: no detection that frame
     bg_init_s: float = 0.0  # > 0: background from the temporal median of the first seconds
     bg_init_frames: int = 31  # ... of at most this many frames, evenly spaced (0 s: frame 0;
-    # `still.peek_background`)
+    # `still.peek_background`, which holds every frame of those seconds in memory until the
+    # count has read them again: 0.3 MB a second at 640x480 and 1 fps, so 7.7 MB at 25 fps)
     # noise-adaptive threshold (`vision.fg_threshold`, docs/rules.md "Noise-adaptive foreground
     # threshold"): noise_k > 0 replaces bg_threshold by max(noise_floor, noise_k x sigma), sigma
     # the frame's robust (MAD) noise of frame - background, grey levels; 0: fixed bg_threshold
