@@ -124,7 +124,7 @@ def test_a_track_left_without_measured_rows_is_not_kept():
 
     level = PedestrianLevel(CFG, CountOptions(verdicts=QUIET))
     p = Pedestrian(slot=0, born=0, track_id=1)
-    level._end(p)
+    level._end(p, "still")
     assert level.finished == []
 
 
@@ -133,7 +133,12 @@ def test_the_default_drops_the_ghost_by_the_still_rule(walk_away):
     the project's own seeds: 55 -> 65 of 58) and ends the ghost it leaves by the still rule: the
     spot where the walker stood in frame 0 never moves, so no ghost track is output."""
     assert CountOptions().blobs.bg_init_s == 0.0 and CountOptions().life.still_s > 0
-    tracks = _tracks(count_frames(CFG, iter(_items(list(walk_away))),
-                                  options=CountOptions(verdicts=QUIET)))
+    res = count_frames(CFG, iter(_items(list(walk_away))), options=CountOptions(verdicts=QUIET))
+    tracks = _tracks(res)
     assert not any(ghost for _, ghost in tracks.values()), tracks
     assert any(moved for moved, _ in tracks.values())
+    # the ends by reason (before stitching): the ghost's piece by the still rule, the walker's
+    # when its patch leaves the image (frame 77 of 90); no piece runs to the clip's end
+    ends = res.summary["ends"]
+    assert ends["still"] == 1 and ends["left-image"] == 1 and ends["clip-end"] == 0, ends
+    assert res.mot["frame"].max() < len(walk_away) - 1

@@ -12,6 +12,7 @@ import pytest
 
 from rhythmjax.count import CountOptions, count_frames
 from rhythmjax.count.options import NewPedestrianOptions, VerdictOptions
+from rhythmjax.count.pedestrian_level import END_REASONS
 from rhythmjax.count.patches import (
     ShapeModel,
     SlotFilter,
@@ -214,6 +215,9 @@ def test_two_walkers_crossing_keep_their_ids(dynamics):
     assert s0 == 0 and s1 == 0
     assert f0 > 0.9 and f1 > 0.9
     assert ids0.isdisjoint(ids1)
+    # both walk on to the clip's last frame: each piece ends there, none for another reason
+    ends = res.summary["ends"]
+    assert set(ends) == set(END_REASONS) and ends["clip-end"] == 2 and sum(ends.values()) == 2
 
 
 def test_a_group_splitting_gives_two_pedestrians():

@@ -72,7 +72,8 @@ def cmd_count(args) -> int:
     measured width at the foot point), width_ok (inside the width gate (10)), and counted) and
     DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
     unjudged_plausible, walkers, walkers_low, walkers_high; the rule in words; the run summary
-    with ghosts_dropped), DIR/spectra.pdf (every judged track's spectrum: the window the
+    with ghosts_dropped and ends: the tracked pieces ended, before stitching, by reason:
+    timeout, velocity-jump, still, left-image, duplicate, clip-end), DIR/spectra.pdf (every judged track's spectrum: the window the
     classifier decided on; DIR/spectra.png its first page) and DIR/report.html (the counts,
     the verdict table, the spectra, the overlay and the config on one page; --no-report skips
     it). The files (and --overlay) replace the previous set together, only when the run

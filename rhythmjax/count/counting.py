@@ -64,7 +64,7 @@ from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
 from .explain import explain_tracks, measured_points
 from .options import SPEED_FITS, CountOptions
-from .pedestrian_level import Pedestrian, PedestrianLevel
+from .pedestrian_level import END_REASONS, Pedestrian, PedestrianLevel
 from .rows import BlobRow, BoxRow, GroundRow
 from .still import never_moved, peek_background
 from .stitch import stitch_level
@@ -316,7 +316,9 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
     summary = {"n_frames": level.n_frames, "dynamics": level.opt.dynamics,
                "count_rule": COUNT_RULE, "stitched": level.stitched,
                "ghosts_dropped": level.ghosts, "crowd_frames": len(level.crowd_frames),
-               "missing_frames": len(level.missing_frames), "notes": []}
+               "missing_frames": len(level.missing_frames),
+               "ends": {r: sum(q.end_reason == r for q in level.finished) for r in END_REASONS},
+               "notes": []}
     if level.crowd_frames:
         summary["notes"].append(
             f"{len(level.crowd_frames)} frame(s) had one blob covering >= "

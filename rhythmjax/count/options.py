@@ -74,6 +74,8 @@ class PlacementOptions:
     lift_heights: float = 0.0  # (b) > 0: the blob bottom under the patch this many H above the
     # predicted foot row (legs not visible)
     lift_keep_u: bool = False  # (b) ... then measured across only, at the predicted foot row
+    outlier_gate: bool = False  # "3d": the rhythm paper's outlier gate (11) (thresholds.
+    # k_sigma2) on every measurement; a refused one is not used, the pedestrian predicts
 
 
 @dataclass(frozen=True)

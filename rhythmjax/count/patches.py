@@ -53,6 +53,7 @@ from ..model.camera_np import (
 )
 from ..model.ekf import Carry, FromAnnotations, Gaussian, empty_carry, inverse_2x2, select
 from ..model.ekf_fused import predict, step
+from ..model.gates import OutlierGate
 from ..model.params import Camera, Config, Noise, host_float
 from ..track.rows import Layout
 from ..track.toolkit import SlotSteps
@@ -228,7 +229,7 @@ def _linear_step(noise: Noise, carry: Carry, z, dt, present) -> Carry:
 
 
 class FilterOut(NamedTuple):
-    """A frame's results per slot of `SlotFilter`, packed (`FILTER_OUT`) in one (S, 9) array."""
+    """A frame's results per slot of `SlotFilter`, packed (`FILTER_OUT`) in one (S, 12) array."""
 
     started: np.ndarray  # (S,) 1: the filter has started (the first measurement was usable)
     est_uv: np.ndarray  # (S, 2) estimated foot point (u, v) px
@@ -236,9 +237,11 @@ class FilterOut(NamedTuple):
     ground: np.ndarray  # (S, 2) state position: ground (x, y) m for "3d", else (u, v) px
     velocity: np.ndarray  # (S, 2) state velocity: (vx, vy) m/s for "3d", else (du, dv) px/s
     image_velocity: np.ndarray  # (S, 2) d(u, v)/dt px/s of the estimated foot point
+    used: np.ndarray  # (S,) 1: this frame's measurement started or updated the filter; 0: none
+    # was given, or the outlier gate (11) refused it (`SlotFilter`'s outlier_gate)
 
 
-FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2))
+FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2, 1))
 
 
 def image_velocity(camera: Camera, mean):
@@ -248,15 +251,20 @@ def image_velocity(camera: Camera, mean):
     return jax.jvp(lambda m: measure(camera, m), (mean,), (rate,))[1]
 
 
-def _advance(dynamics: str, params, carry, reset, z, dt, dt_next, present):
-    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 11)."""
+def _advance(dynamics: str, outlier_gate: bool, params, carry, reset, z, dt, dt_next, present):
+    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 12). "3d" with
+    `outlier_gate`: a measurement the paper's (11) refuses is not used (the slot predicts);
+    otherwise every given measurement is (`ekf.FromAnnotations`)."""
     cfg, noise_img = params
     empty = empty_carry(z.dtype)
     carry = jax.vmap(lambda r, c: select(r, empty, c))(reset, carry)
+    was_started = carry.started
     if dynamics == "3d":
         width = jnp.full(z.shape[:1], jnp.nan, z.dtype)
         run = jax.vmap(step, in_axes=(None, None, None, 0, 0, 0, None, 0))
-        carry, _ = run(cfg.camera, cfg.noise, FromAnnotations(), carry, z, width, dt, present)
+        valid = OutlierGate(cfg.thresholds) if outlier_gate else FromAnnotations()
+        carry, out = run(cfg.camera, cfg.noise, valid, carry, z, width, dt, present)
+        used = out.valid | (carry.started & ~was_started)
         nxt = jax.vmap(lambda s: predict(cfg.noise, s, dt_next))(carry.state)
         est_uv = jax.vmap(lambda m: measure(cfg.camera, m))(carry.state.mean)
         next_uv = jax.vmap(lambda m: measure(cfg.camera, m))(nxt.mean)
@@ -264,6 +272,7 @@ def _advance(dynamics: str, params, carry, reset, z, dt, dt_next, present):
     else:
         run = jax.vmap(_linear_step, in_axes=(None, 0, 0, None, 0))
         carry = run(noise_img, carry, z, dt, present)
+        used = present & jnp.all(jnp.isfinite(z), axis=1)
         nxt = jax.vmap(lambda s: predict(noise_img, s, dt_next))(carry.state)
         est_uv = carry.state.mean[:, jnp.array([0, 2])]
         next_uv = nxt.mean[:, jnp.array([0, 2])]
@@ -271,18 +280,21 @@ def _advance(dynamics: str, params, carry, reset, z, dt, dt_next, present):
     mean = carry.state.mean
     return carry, FILTER_OUT.pack(z.dtype, started=carry.started, est_uv=est_uv,
                                   next_uv=next_uv, ground=mean[:, jnp.array([0, 2])],
-                                  velocity=mean[:, jnp.array([1, 3])], image_velocity=duv)
+                                  velocity=mean[:, jnp.array([1, 3])], image_velocity=duv,
+                                  used=used)
 
 
 class SlotFilter:
     """`slots` pedestrian filters advanced together by one jitted call per frame
     (`track.toolkit.SlotSteps`)."""
 
-    def __init__(self, cfg: Config, dynamics: str = "3d", slots: int = 32):
+    def __init__(self, cfg: Config, dynamics: str = "3d", slots: int = 32,
+                 outlier_gate: bool = False):
         if dynamics not in DYNAMICS:
             raise ValueError(f"dynamics must be one of {DYNAMICS}, got {dynamics!r}")
         self.dynamics, self.slots = dynamics, int(slots)
-        self._steps = SlotSteps(_advance, (cfg, image_noise(cfg)), self.slots, (dynamics,))
+        self._steps = SlotSteps(_advance, (cfg, image_noise(cfg)), self.slots,
+                                (dynamics, bool(outlier_gate)))
         self.dt_nominal = float(cfg.camera.dt)
 
     def step(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,

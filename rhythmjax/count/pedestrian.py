@@ -35,6 +35,7 @@ class Pedestrian:
     windows_done: int = 0
     result: dict | None = None
     decided: bool = False
+    end_reason: str = ""  # why it ended (`pedestrian_level.END_REASONS`); "" while it runs
     z: tuple = (math.nan, math.nan)  # this frame's measurement
     z_width: float = math.nan  # its measured width px (`widths.measured_width`), gate (10)
     z_top: float = math.nan  # its measured top row px (`widths.measured_top`; its blobs unshared)

@@ -78,6 +78,11 @@ from .window_candidates import sample_candidates
 if TYPE_CHECKING:
     from .options import CountOptions
 
+END_REASONS = ("timeout", "velocity-jump", "still", "left-image", "duplicate", "clip-end")
+# why a pedestrian ended (`Pedestrian.end_reason`): predicted for predict_timeout_s, its ground
+# velocity jumped (`life.max_dv_mps`), it stayed put (`life.still_s`), its patch left the
+# image, it was the younger of a duplicate pair, or the frames ran out; the CountResult's
+# summary counts the confirmed tracks' ends by reason (before stitching)
 TOP_REACH = 3.0  # patch heights above the feet searched for the top row (`widths.measured_top`):
 # a camera whose patch is a third of the walker's image height still finds the head; set a priori
 
@@ -95,7 +100,8 @@ class PedestrianLevel:
         fps = float(cfg.camera.fps)  # `still.is_still` over still_s s in 1 s blocks
         self.still_rows, self.block = round(opt.life.still_s * fps), max(1, round(fps))
         self.shape = ShapeModel.from_config(cfg, opt.dynamics)
-        self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians)
+        self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians,
+                                 outlier_gate=opt.placement.outlier_gate)
         self.coast_s = float(cfg.thresholds.predict_timeout)
         self.peds: list[Pedestrian] = []
         self.finished: list[Pedestrian] = []
@@ -290,6 +296,8 @@ class PedestrianLevel:
             self.peds.remove(p)
             return
         measured = finite_uv(p.z)
+        if measured and self.opt.placement.outlier_gate and out.used[s] < 0.5:
+            p.z, measured = (math.nan, math.nan), False  # refused by (11): it predicts
         p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
         p.coast = 0.0 if measured else p.coast + dt
         (eu, ev), (nu, nv) = out.est_uv[s], out.next_uv[s]
@@ -335,7 +343,8 @@ class PedestrianLevel:
         if still:
             self.absorb.append((u - w, v - 1.2 * h, u + w, v + 0.1 * h))
         if p.coast > self.coast_s or outside or jump:
-            self._end(p)
+            self._end(p, "still" if still else "velocity-jump" if jump else
+                      "left-image" if outside else "timeout")
 
     def _still(self, p: Pedestrian) -> bool:
         """Its measured foot points stayed put for `life.still_s` s (`still.is_still`)."""
@@ -358,11 +367,14 @@ class PedestrianLevel:
     def _duplicates(self) -> None:
         life = self.opt.life
         for p in duplicates(self.peds, life.duplicate_widths, life.duplicate_frames):
-            self._end(p)
+            self._end(p, "duplicate")
 
-    def _end(self, p: Pedestrian) -> None:
+    def _end(self, p: Pedestrian, reason: str) -> None:
+        """End `p` for `reason` (one of `END_REASONS`): its trailing predicted rows go; a
+        confirmed one with a measured row left joins `finished`."""
         if p in self.peds:
             self.peds.remove(p)
+        p.end_reason = reason
         last = max((i for i, r in enumerate(p.rows) if r.state == TrackState.OBSERVE),
                    default=-1)
         if p.track_id == 0 or last < 0:  # tentative, or no measured row left (still_s)
@@ -391,5 +403,5 @@ class PedestrianLevel:
         and judges them)."""
         self._flush()
         for p in list(self.peds):
-            self._end(p)
+            self._end(p, "clip-end")
         return sorted(self.finished, key=lambda q: q.track_id)

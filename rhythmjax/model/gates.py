@@ -84,3 +84,18 @@ class PaperGates(AbstractValidity):
     def __call__(self, camera: Camera, prior: Gaussian, cand: Update, z, width) -> Bool[Array, ""]:
         return (width_ok(camera, self.width_model, self.thresholds.k_sigma1, z, width)
                 & (outlier_distance2_of_update(cand) <= self.thresholds.k_sigma2**2))
+
+
+class OutlierGate(AbstractValidity):
+    """The outlier gate (11) alone, for a tracker that measures its own objects' widths apart
+    (the counting tracker, `count.options.PlacementOptions.outlier_gate`): a measurement is
+    used when the temporary update it makes lies within k_sigma2 of the prediction; any first
+    measurement may start a track (the counting tracker checks its detection range itself)."""
+
+    thresholds: Thresholds
+
+    def accept_initial(self, camera: Camera, z, width, ground_xy) -> Bool[Array, ""]:
+        return jnp.asarray(True)
+
+    def __call__(self, camera: Camera, prior: Gaussian, cand: Update, z, width) -> Bool[Array, ""]:
+        return outlier_distance2_of_update(cand) <= self.thresholds.k_sigma2**2

@@ -1,0 +1,127 @@
+"""Why the counting tracker's pedestrians end, and what the walkers do afterwards: every
+confirmed piece `PedestrianLevel` ends (before stitching) with its `end_reason`, the walker
+it follows (IoU >= 0.3 with the walker's truth box in at least half its frames, as
+`eval_count.owner_of_tracks`), whether that walker stays in view for at least `--after` s more
+and how long until another piece follows it again. A diagnostic (issue 16, counting): a piece
+that ends on a walker who walks on is a fragment the count must stitch or double-counts.
+
+    python benchmarks/study_track_ends.py count --seed 150001,... --scenes 10 \\
+        [--clothing any] [--focal-px 500] [--set KEY=JSON ...] [--detail]
+
+SOURCE as `count_dump.py` (pets, count, dev_count).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections import Counter
+
+import numpy as np
+
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+
+def piece_owner(boxes, truth, offset: int, kinds: dict, min_iou: float = 0.3):
+    """The truth id a piece's boxes (BoxRow list) overlap with IoU >= min_iou in at least half
+    of its frames, else None; and its kind."""
+    from eval_count import iou_matrix
+
+    votes: Counter = Counter()
+    tb = np.stack([truth[c] for c in ("bb_left", "bb_top", "bb_width", "bb_height")], 1)
+    for b in boxes:
+        k = np.flatnonzero(truth["frame"] == b.frame + offset)
+        if not len(k):
+            continue
+        iou = iou_matrix(np.array([[b.left, b.top, b.w, b.h]]), tb[k])[0]
+        if iou.max() >= min_iou:
+            votes[int(truth["id"][k[int(np.argmax(iou))]])] += 1
+    if not votes:
+        return None, None
+    best, n = votes.most_common(1)[0]
+    return (best, kinds[best]) if n >= 0.5 * len(boxes) else (None, None)
+
+
+def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
+    """Per ended piece: [clip, id, first, last, reason, owner, kind, walker_goes_on, gap_s,
+    y_m]; gap_s: from its last frame to the next piece on the same walker's first (NaN: none);
+    y_m: its last ground distance (the filter's)."""
+    from rhythmjax.count.counting import finish_count
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+    from rhythmjax.count.still import peek_background
+    from rhythmjax.vision.frames import drive_frames
+
+    b = opt.blobs
+    background, it = peek_background(iter(frames), b.bg_init_s, b.bg_init_frames)
+    level = PedestrianLevel(cfg, opt, defer=True, background=background)
+    drive_frames(it, level.update, None, n_frames=len(frames), progress=False, desc="count")
+    pieces = level.end_all()
+    fps = float(cfg.camera.fps)
+    rows = []
+    for p in pieces:
+        own, kind = piece_owner(p.boxes, truth, offset, kinds)
+        first, last = p.boxes[0].frame, p.boxes[-1].frame
+        goes_on = False
+        if own is not None:
+            tf = truth["frame"][truth["id"] == own] - offset
+            goes_on = bool(np.sum(tf > last) >= after_s * fps)
+        rows.append([name, p.track_id, first, last, p.end_reason, own, kind, goes_on, np.nan,
+                     round(float(p.boxes[-1].y), 1)])
+    for r in rows:
+        if r[5] is None:
+            continue
+        later = [q[2] for q in rows if q[5] == r[5] and q[2] > r[2] and q is not r]
+        if later:
+            r[8] = (min(later) - r[3]) / fps
+    res = finish_count(level)
+    return rows, res
+
+
+def main(argv=None) -> int:
+    from count_dump import clips_of
+
+    from rhythmjax.count import CountOptions
+    from rhythmjax.track.options import with_changes
+
+    p = argparse.ArgumentParser()
+    p.add_argument("source")
+    p.add_argument("--seed", default="42024", help="one seed or a comma list")
+    p.add_argument("--scenes", type=int, default=10)
+    p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
+    p.add_argument("--focal-px", type=float, default=0.0)
+    p.add_argument("--set", action="append", default=[])
+    p.add_argument("--after", type=float, default=1.0, help="s the walker must stay in view")
+    p.add_argument("--detail", action="store_true", help="one line per piece")
+    a = p.parse_args(argv)
+    opt = with_changes(CountOptions(),
+                       {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
+    allrows, counted, true = [], 0, 0
+    for seed in a.seed.split(","):
+        for name, cfg, frames, truth, kinds, off, n_true in clips_of(
+                a.source, int(seed), a.scenes, a.clothing, a.focal_px):
+            rows, res = study_clip(name, cfg, frames, truth, kinds, off, opt, a.after)
+            allrows += rows
+            counted, true = counted + res.counts["walkers"], true + n_true
+    print(f"pieces {len(allrows)}; walkers counted {counted} of {true}")
+    print(f"{'end reason':14s} {'all':>5s} {'on walker':>9s} {'walker goes on':>14s} "
+          f"{'re-found':>8s} {'gap median s':>12s} {'non-walker':>10s} {'nothing':>7s}")
+    for reason in sorted({r[4] for r in allrows}):
+        rs = [r for r in allrows if r[4] == reason]
+        wk = [r for r in rs if r[6] == "pedestrian"]
+        on = [r for r in wk if r[7]]
+        gaps = [r[8] for r in on if np.isfinite(r[8])]
+        print(f"{reason:14s} {len(rs):5d} {len(wk):9d} {len(on):14d} {len(gaps):8d} "
+              f"{np.median(gaps) if gaps else np.nan:12.2f} "
+              f"{sum(r[6] not in (None, 'pedestrian') for r in rs):10d} "
+              f"{sum(r[5] is None for r in rs):7d}")
+    if a.detail:
+        for r in allrows:
+            print(*r)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
