@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from ..track.options import with_changes
 from ..vision.fg_threshold import check_noise_options
-from .patches import DYNAMICS
+from .patches import DYNAMICS, OUTLIER_GATES
 
 
 __all__ = ["AppearanceOptions", "BlobOptions", "CountOptions", "ExplainOptions", "LifeOptions",
@@ -74,8 +74,9 @@ class PlacementOptions:
     lift_heights: float = 0.0  # (b) > 0: the blob bottom under the patch this many H above the
     # predicted foot row (legs not visible)
     lift_keep_u: bool = False  # (b) ... then measured across only, at the predicted foot row
-    outlier_gate: bool = False  # "3d": the rhythm paper's outlier gate (11) (thresholds.
-    # k_sigma2) on every measurement; a refused one is not used, the pedestrian predicts
+    outlier_gate: str = "none"  # "3d": a gate on every measurement (`OUTLIER_GATES`): "paper",
+    # the rhythm paper's (11); "innovation", nu^T S^-1 nu; both at thresholds.k_sigma2; a
+    # refused measurement is not used, the pedestrian predicts
 
 
 @dataclass(frozen=True)
@@ -223,3 +224,6 @@ class CountOptions:
                              f"got {self.verdicts.speed_fit!r}")
         if self.dynamics not in DYNAMICS:
             raise ValueError(f"dynamics must be one of {DYNAMICS}, got {self.dynamics!r}")
+        if self.placement.outlier_gate not in OUTLIER_GATES:
+            raise ValueError(f"placement.outlier_gate must be one of {OUTLIER_GATES}, "
+                             f"got {self.placement.outlier_gate!r}")

@@ -53,13 +53,14 @@ from ..model.camera_np import (
 )
 from ..model.ekf import Carry, FromAnnotations, Gaussian, empty_carry, inverse_2x2, select
 from ..model.ekf_fused import predict, step
-from ..model.gates import OutlierGate
+from ..model.gates import InnovationGate, OutlierGate
 from ..model.params import Camera, Config, Noise, host_float
 from ..track.rows import Layout
 from ..track.toolkit import SlotSteps
 
 
 DYNAMICS = ("2d", "3d-shape", "3d")
+OUTLIER_GATES = ("none", "paper", "innovation")  # `SlotFilter`'s gate on the "3d" measurements
 _SCALARS = (float, int, np.float64)  # ShapeModel.size: types taken as scalars without np.ndim
 
 
@@ -238,7 +239,7 @@ class FilterOut(NamedTuple):
     velocity: np.ndarray  # (S, 2) state velocity: (vx, vy) m/s for "3d", else (du, dv) px/s
     image_velocity: np.ndarray  # (S, 2) d(u, v)/dt px/s of the estimated foot point
     used: np.ndarray  # (S,) 1: this frame's measurement started or updated the filter; 0: none
-    # was given, or the outlier gate (11) refused it (`SlotFilter`'s outlier_gate)
+    # was given, or `SlotFilter`'s outlier_gate refused it
 
 
 FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2, 1))
@@ -251,10 +252,10 @@ def image_velocity(camera: Camera, mean):
     return jax.jvp(lambda m: measure(camera, m), (mean,), (rate,))[1]
 
 
-def _advance(dynamics: str, outlier_gate: bool, params, carry, reset, z, dt, dt_next, present):
+def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_next, present):
     """Every slot one frame; returns the carry and the packed `FilterOut` (S, 12). "3d" with
-    `outlier_gate`: a measurement the paper's (11) refuses is not used (the slot predicts);
-    otherwise every given measurement is (`ekf.FromAnnotations`)."""
+    `outlier_gate` "paper" / "innovation": a measurement (11) / the innovation gate refuses is
+    not used (the slot predicts); "none": every given measurement is (`ekf.FromAnnotations`)."""
     cfg, noise_img = params
     empty = empty_carry(z.dtype)
     carry = jax.vmap(lambda r, c: select(r, empty, c))(reset, carry)
@@ -262,7 +263,8 @@ def _advance(dynamics: str, outlier_gate: bool, params, carry, reset, z, dt, dt_
     if dynamics == "3d":
         width = jnp.full(z.shape[:1], jnp.nan, z.dtype)
         run = jax.vmap(step, in_axes=(None, None, None, 0, 0, 0, None, 0))
-        valid = OutlierGate(cfg.thresholds) if outlier_gate else FromAnnotations()
+        valid = {"none": FromAnnotations, "paper": lambda: OutlierGate(cfg.thresholds),
+                 "innovation": lambda: InnovationGate(cfg.thresholds)}[outlier_gate]()
         carry, out = run(cfg.camera, cfg.noise, valid, carry, z, width, dt, present)
         used = out.valid | (carry.started & ~was_started)
         nxt = jax.vmap(lambda s: predict(cfg.noise, s, dt_next))(carry.state)
@@ -289,12 +291,14 @@ class SlotFilter:
     (`track.toolkit.SlotSteps`)."""
 
     def __init__(self, cfg: Config, dynamics: str = "3d", slots: int = 32,
-                 outlier_gate: bool = False):
+                 outlier_gate: str = "none"):
         if dynamics not in DYNAMICS:
             raise ValueError(f"dynamics must be one of {DYNAMICS}, got {dynamics!r}")
+        if outlier_gate not in OUTLIER_GATES:
+            raise ValueError(f"outlier_gate must be one of {OUTLIER_GATES}, got {outlier_gate!r}")
         self.dynamics, self.slots = dynamics, int(slots)
         self._steps = SlotSteps(_advance, (cfg, image_noise(cfg)), self.slots,
-                                (dynamics, bool(outlier_gate)))
+                                (dynamics, outlier_gate))
         self.dt_nominal = float(cfg.camera.dt)
 
     def step(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,

@@ -296,8 +296,8 @@ class PedestrianLevel:
             self.peds.remove(p)
             return
         measured = finite_uv(p.z)
-        if measured and self.opt.placement.outlier_gate and out.used[s] < 0.5:
-            p.z, measured = (math.nan, math.nan), False  # refused by (11): it predicts
+        if measured and self.opt.placement.outlier_gate != "none" and out.used[s] < 0.5:
+            p.z, measured = (math.nan, math.nan), False  # refused by the gate: it predicts
         p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
         p.coast = 0.0 if measured else p.coast + dt
         (eu, ev), (nu, nv) = out.est_uv[s], out.next_uv[s]
