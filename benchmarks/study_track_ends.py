@@ -47,8 +47,9 @@ def piece_owner(boxes, truth, offset: int, kinds: dict, min_iou: float = 0.3):
 
 def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
     """Per ended piece: [clip, id, first, last, reason, owner, kind, walker_goes_on, gap_s,
-    y_m]; gap_s: from its last frame to the next piece on the same walker's first (NaN: none);
-    y_m: its last ground distance (the filter's)."""
+    y_m, final, counted]; gap_s: from its last frame to the next piece on the same walker's
+    first (NaN: none); y_m: its last ground distance (the filter's); final: the output track
+    holding it (0: none), counted: whether that track is counted."""
     from rhythmjax.count.counting import finish_count
     from rhythmjax.count.pedestrian_level import PedestrianLevel
     from rhythmjax.count.still import peek_background
@@ -76,8 +77,26 @@ def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
         later = [q[2] for q in rows if q[5] == r[5] and q[2] > r[2] and q is not r]
         if later:
             r[8] = (min(later) - r[3]) / fps
+    keys = [(p.boxes[0].frame, p.boxes[0].left, p.boxes[0].top) for p in pieces]
     res = finish_count(level)
+    final = final_tracks(res, keys)
+    counted = {int(i): bool(c) for i, c in zip(res.verdicts["track_id"],
+                                                res.verdicts["counted"])}
+    for r, f in zip(rows, final):
+        r += [f, counted.get(f, False)]
     return rows, res
+
+
+def final_tracks(res, keys) -> list[int]:
+    """The output track id (0: dropped, too short or a ghost) holding each piece, found by its
+    first box (index frame, left, top; the MOT frame is the index + 1)."""
+    m = res.mot
+    out = []
+    for frame, left, top in keys:
+        k = np.flatnonzero((m["frame"] == frame + 1) & (np.abs(m["bb_left"] - left) < 1e-3)
+                           & (np.abs(m["bb_top"] - top) < 1e-3))
+        out.append(int(m["id"][k[0]]) if len(k) else 0)
+    return out
 
 
 def main(argv=None) -> int:
@@ -117,6 +136,20 @@ def main(argv=None) -> int:
               f"{np.median(gaps) if gaps else np.nan:12.2f} "
               f"{sum(r[6] not in (None, 'pedestrian') for r in rs):10d} "
               f"{sum(r[5] is None for r in rs):7d}")
+    # the pieces on a walker who walks on, and the walker's next piece: joined into one output
+    # track by the stitching, or two output tracks both counted (a second counted track)
+    nxt = {}
+    for r in allrows:
+        if r[6] == "pedestrian":
+            later = [q for q in allrows if q[0] == r[0] and q[5] == r[5] and q[2] > r[2]]
+            if later:
+                nxt[id(r)] = min(later, key=lambda q: q[2])
+    on = [r for r in allrows if r[6] == "pedestrian" and r[7] and id(r) in nxt]
+    joined = sum(r[10] != 0 and nxt[id(r)][10] == r[10] for r in on)
+    both = sum(r[10] != nxt[id(r)][10] and r[11] and nxt[id(r)][11] for r in on)
+    print(f"pieces on a walker who walks on, re-found: {len(on)}; joined by the stitching "
+          f"{joined}; two counted output tracks {both}; other (a piece dropped or not counted) "
+          f"{len(on) - joined - both}")
     if a.detail:
         for r in allrows:
             print(*r)
