@@ -12,7 +12,6 @@ import pytest
 
 from rhythmjax.count import CountOptions, count_frames
 from rhythmjax.count.options import NewPedestrianOptions, VerdictOptions
-from rhythmjax.count.pedestrian_level import END_REASONS
 from rhythmjax.count.patches import (
     ShapeModel,
     SlotFilter,
@@ -21,6 +20,7 @@ from rhythmjax.count.patches import (
     patch_size_3d,
     place_patch,
 )
+from rhythmjax.count.pedestrian_level import END_REASONS
 from rhythmjax.model import ekf
 from rhythmjax.model.params import config_from_dict
 from rhythmjax.sim.scene import SceneSpec, project_3d, render_scene, walker

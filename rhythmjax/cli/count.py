@@ -73,14 +73,14 @@ def cmd_count(args) -> int:
     DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
     unjudged_plausible, walkers, walkers_low, walkers_high; the rule in words; the run summary
     with ghosts_dropped and ends: the tracked pieces ended, before stitching, by reason:
-    timeout, velocity-jump, still, left-image, duplicate, clip-end), DIR/spectra.pdf (every judged track's spectrum: the window the
-    classifier decided on; DIR/spectra.png its first page) and DIR/report.html (the counts,
-    the verdict table, the spectra, the overlay and the config on one page; --no-report skips
-    it). The files (and --overlay) replace the previous set together, only when the run
-    succeeds. The overlay is drawn on the video's own colour frames where it has colour.
-    Tracks shorter than 10 frames are dropped. A frame where one blob covers half the image
-    (dense crowd, camera jump) is not used for detection (pedestrians predict) and the summary
-    says how many there were."""
+    timeout, velocity-jump, still, left-image, duplicate, clip-end), DIR/spectra.pdf (every
+    judged track's spectrum: the window the classifier decided on; DIR/spectra.png its first
+    page) and DIR/report.html (the counts, the verdict table, the spectra, the overlay and the
+    config on one page; --no-report skips it). The files (and --overlay) replace the previous
+    set together, only when the run succeeds. The overlay is drawn on the video's own colour
+    frames where it has colour. Tracks shorter than 10 frames are dropped. A frame where one
+    blob covers half the image (dense crowd, camera jump) is not used for detection
+    (pedestrians predict) and the summary says how many there were."""
     if args.min_frames < 1:  # checked here, not by argparse: one line naming the option
         raise ConfigError("--min-frames", f"must be >= 1, got {args.min_frames}")
     if args.max_pedestrians < 1:
