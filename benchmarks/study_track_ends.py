@@ -2,8 +2,10 @@
 confirmed piece `PedestrianLevel` ends (before stitching) with its `end_reason`, the walker
 it follows (IoU >= 0.3 with the walker's truth box in at least half its frames, as
 `eval_count.owner_of_tracks`), whether that walker stays in view for at least `--after` s more
-and how long until another piece follows it again. A diagnostic (issue 16, counting): a piece
-that ends on a walker who walks on is a fragment the count must stitch or double-counts.
+and how long until another piece follows it again; for a walker's consecutive pieces, whether
+the stitching joined them, why not (`walker_pairs`) and what covered the walker in between.
+A diagnostic (issue 16, counting): a piece that ends on a walker who walks on is a fragment
+the count must stitch or double-counts.
 
     python benchmarks/study_track_ends.py count --seed 150001,... --scenes 10 \\
         [--clothing any] [--focal-px 500] [--set KEY=JSON ...] [--detail]
@@ -78,13 +80,69 @@ def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
         if later:
             r[8] = (min(later) - r[3]) / fps
     keys = [(p.boxes[0].frame, p.boxes[0].left, p.boxes[0].top) for p in pieces]
+    pairs = walker_pairs(level, pieces, rows, truth, offset)  # before stitching joins pieces
     res = finish_count(level)
     final = final_tracks(res, keys)
     counted = {int(i): bool(c) for i, c in zip(res.verdicts["track_id"],
                                                 res.verdicts["counted"])}
     for r, f in zip(rows, final):
         r += [f, counted.get(f, False)]
-    return rows, res
+    for q in pairs:  # each ends as one output track, or two both counted, or else
+        fa, fb = final[q["a"]], final[q["b"]]
+        q["outcome"] = ("joined" if fa and fa == fb else "two counted"
+                        if counted.get(fa) and counted.get(fb) else "other")
+    return rows, res, pairs
+
+
+def walker_pairs(level, pieces, rows, truth, offset: int) -> list[dict]:
+    """Each piece on a walker and that walker's next piece (by first frame): why
+    `stitch.stitch_pieces` could not join them ("overlap": B starts before A ends; "gap" over
+    stitch.max_gap_s; "position" / "velocity": the halfway misfit d / dv over its gate; "in gate":
+    a candidate, so A or B was joined to another piece), and, over the frames between them, how
+    often the walker's truth box was covered (IoU >= 0.3) by a piece on another walker, on a
+    non-walker, on nothing, or not at all."""
+    from eval_count import iou_matrix
+
+    from rhythmjax.count.stitch import halfway_misfit, piece_of
+
+    st, kinds_of = level.opt.stitch, {i: r[6] for i, r in enumerate(rows)}
+    built = [piece_of(p, level.shape, level.opt.dynamics, st.fit_s) for p in pieces]
+    by_frame: dict[int, list] = {}
+    for j, p in enumerate(pieces):
+        for b in p.boxes:
+            by_frame.setdefault(b.frame, []).append((j, (b.left, b.top, b.w, b.h)))
+    out = []
+    for a, r in enumerate(rows):
+        if r[6] != "pedestrian":
+            continue
+        later = [j for j, q in enumerate(rows) if q[5] == r[5] and q[2] > r[2]]
+        if not later:
+            continue
+        b = min(later, key=lambda j: rows[j][2])
+        A, B = built[a], built[b]
+        gap = B.t_first - A.t_last
+        if B.first <= A.last:
+            why = "overlap"
+        elif gap > st.max_gap_s:
+            why = "gap"
+        else:
+            d, dv = halfway_misfit(A, B, level.shape.camera, gate_w=st.gate_w, gate_h=st.gate_h,
+                                   gate_per_s=st.gate_per_s, max_dv_w=st.max_dv_w)
+            why = "position" if not d <= 1 else "velocity" if not dv <= 1 else "in gate"
+        cover = {"other walker": 0, "non-walker": 0, "nothing": 0, "uncovered": 0}
+        for f in range(rows[a][3] + 1, rows[b][2]):
+            k = np.flatnonzero((truth["id"] == r[5]) & (truth["frame"] == f + offset))
+            if not len(k):
+                continue
+            tb = np.stack([truth[c][k] for c in ("bb_left", "bb_top", "bb_width", "bb_height")],
+                          1)
+            on = [j for j, box in by_frame.get(f, []) if iou_matrix(np.array([box]), tb)[0, 0]
+                  >= 0.3]
+            kind = kinds_of[on[0]] if on else "uncovered"
+            cover[{"pedestrian": "other walker", None: "nothing", "uncovered": "uncovered"}.get(
+                kind, "non-walker")] += 1
+        out.append({"a": a, "b": b, "gap_s": gap, "why": why, "cover": cover})
+    return out
 
 
 def final_tracks(res, keys) -> list[int]:
@@ -117,12 +175,13 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),
                        {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
-    allrows, counted, true = [], 0, 0
+    allrows, allpairs, counted, true = [], [], 0, 0
     for seed in a.seed.split(","):
         for name, cfg, frames, truth, kinds, off, n_true in clips_of(
                 a.source, int(seed), a.scenes, a.clothing, a.focal_px):
-            rows, res = study_clip(name, cfg, frames, truth, kinds, off, opt, a.after)
+            rows, res, pairs = study_clip(name, cfg, frames, truth, kinds, off, opt, a.after)
             allrows += rows
+            allpairs += pairs
             counted, true = counted + res.counts["walkers"], true + n_true
     print(f"pieces {len(allrows)}; walkers counted {counted} of {true}")
     print(f"{'end reason':14s} {'all':>5s} {'on walker':>9s} {'walker goes on':>14s} "
@@ -150,6 +209,16 @@ def main(argv=None) -> int:
     print(f"pieces on a walker who walks on, re-found: {len(on)}; joined by the stitching "
           f"{joined}; two counted output tracks {both}; other (a piece dropped or not counted) "
           f"{len(on) - joined - both}")
+    print("a walker's consecutive pieces: stitched / left as two counted tracks / other, by why "
+          "the stitching could not join them; frames between them covered by a piece on")
+    for why in ("overlap", "gap", "position", "velocity", "in gate"):
+        qs = [q for q in allpairs if q["why"] == why]
+        two = [q for q in qs if q["outcome"] == "two counted"]
+        cov = {k: sum(q["cover"][k] for q in two) for k in
+               ("other walker", "non-walker", "nothing", "uncovered")}
+        print(f"  {why:9s} {sum(q['outcome'] == 'joined' for q in qs):4d} / {len(two):4d} / "
+              f"{sum(q['outcome'] == 'other' for q in qs):4d}   two counted: " +
+              ", ".join(f"{k} {v}" for k, v in cov.items()))
     if a.detail:
         for r in allrows:
             print(*r)
