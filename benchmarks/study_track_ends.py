@@ -29,13 +29,14 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 def piece_owner(boxes, truth, offset: int, kinds: dict, min_iou: float = 0.3):
     """The truth id a piece's boxes (BoxRow list) overlap with IoU >= min_iou in at least half
-    of its frames, else None; and its kind."""
+    of its frames, else None; and its kind. A box of frame index k meets the truth rows of frame
+    k + 1 + offset (`truth_frame`)."""
     from eval_count import iou_matrix
 
     votes: Counter = Counter()
     tb = np.stack([truth[c] for c in ("bb_left", "bb_top", "bb_width", "bb_height")], 1)
     for b in boxes:
-        k = np.flatnonzero(truth["frame"] == b.frame + offset)
+        k = np.flatnonzero(truth["frame"] == truth_frame(b.frame, offset))
         if not len(k):
             continue
         iou = iou_matrix(np.array([[b.left, b.top, b.w, b.h]]), tb[k])[0]
@@ -45,6 +46,13 @@ def piece_owner(boxes, truth, offset: int, kinds: dict, min_iou: float = 0.3):
         return None, None
     best, n = votes.most_common(1)[0]
     return (best, kinds[best]) if n >= 0.5 * len(boxes) else (None, None)
+
+
+def truth_frame(index: int, offset: int) -> int:
+    """The truth's frame number of frame index `index`: the MOT frame (index + 1) plus the
+    clip's `offset`, as `eval_count.owner_of_tracks` reads them (own scenes: offset -1, truth
+    numbered from 0; dev clips: 0, from 1)."""
+    return index + 1 + offset
 
 
 def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
@@ -69,7 +77,7 @@ def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
         first, last = p.boxes[0].frame, p.boxes[-1].frame
         goes_on = False
         if own is not None:
-            tf = truth["frame"][truth["id"] == own] - offset
+            tf = truth["frame"][truth["id"] == own] - truth_frame(0, offset)  # as indices
             goes_on = bool(np.sum(tf > last) >= after_s * fps)
         rows.append([name, p.track_id, first, last, p.end_reason, own, kind, goes_on, np.nan,
                      round(float(p.boxes[-1].y), 1)])
@@ -131,7 +139,7 @@ def walker_pairs(level, pieces, rows, truth, offset: int) -> list[dict]:
             why = "position" if not d <= 1 else "velocity" if not dv <= 1 else "in gate"
         cover = {"other walker": 0, "non-walker": 0, "nothing": 0, "uncovered": 0}
         for f in range(rows[a][3] + 1, rows[b][2]):
-            k = np.flatnonzero((truth["id"] == r[5]) & (truth["frame"] == f + offset))
+            k = np.flatnonzero((truth["id"] == r[5]) & (truth["frame"] == truth_frame(f, offset)))
             if not len(k):
                 continue
             tb = np.stack([truth[c][k] for c in ("bb_left", "bb_top", "bb_width", "bb_height")],

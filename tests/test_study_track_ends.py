@@ -19,7 +19,8 @@ from rhythmjax.count.rows import BoxRow  # noqa: E402
 
 
 def _truth():
-    # walker 7 at left 100, top 50, 20 x 60 in frames 10-13 (truth frame = index + 1 here);
+    # walker 7 at left 100, top 50, 20 x 60 in frames 10-13 (truth frame = index + 1 + offset
+    # 0, the MOT numbering);
     # cyclist 8 far to the right
     f = np.array([11, 12, 13, 14, 11, 12, 13, 14])
     return {"frame": f, "id": np.array([7] * 4 + [8] * 4),
@@ -35,16 +36,25 @@ def test_piece_owner_by_majority_of_iou_03():
     kinds = {7: "pedestrian", 8: "bicycle"}
     # 3 of 4 boxes on walker 7: IoU 1, (20-5)/(20+5) = 0.6, 0.6; the 4th on nothing
     on = [_box(10, 100.0), _box(11, 105.0), _box(12, 95.0), _box(13, 200.0)]
-    assert ends.piece_owner(on, _truth(), 1, kinds) == (7, "pedestrian")
+    assert ends.piece_owner(on, _truth(), 0, kinds) == (7, "pedestrian")
     # shifted 14 px: IoU 6/34 = 0.18 < 0.3 in every frame: nobody
-    assert ends.piece_owner([_box(k, 114.0) for k in range(10, 14)], _truth(), 1,
+    assert ends.piece_owner([_box(k, 114.0) for k in range(10, 14)], _truth(), 0,
                             kinds) == (None, None)
     # 1 of 4 on the cyclist: under half: nobody
     half = [_box(10, 300.0), _box(11, 200.0), _box(12, 200.0), _box(13, 200.0)]
-    assert ends.piece_owner(half, _truth(), 1, kinds) == (None, None)
+    assert ends.piece_owner(half, _truth(), 0, kinds) == (None, None)
     # 2 of 4: half is enough
     half = [_box(10, 300.0), _box(11, 300.0), _box(12, 200.0), _box(13, 200.0)]
-    assert ends.piece_owner(half, _truth(), 1, kinds) == (8, "bicycle")
+    assert ends.piece_owner(half, _truth(), 0, kinds) == (8, "bicycle")
+
+
+def test_truth_frames_follow_owner_of_tracks():
+    # own scenes number the truth from 0 (offset -1), dev clips from 1 (offset 0)
+    assert ends.truth_frame(0, -1) == 0 and ends.truth_frame(0, 0) == 1
+    # a shifted numbering finds nobody: the boxes meet frames where walker 7 is absent
+    on = [_box(k, 100.0) for k in range(10, 14)]
+    assert ends.piece_owner(on, _truth(), 0, {7: "pedestrian", 8: "bicycle"})[0] == 7
+    assert ends.piece_owner(on, _truth(), 4, {7: "pedestrian", 8: "bicycle"})[0] is None
 
 
 def test_final_tracks_find_each_piece_by_its_first_box():
@@ -69,7 +79,8 @@ def test_study_on_one_scene_accounts_for_every_piece():
     scene = render_scene(1, SceneSpec(n_frames=72, actors=(a, b), camera=CFG.camera))
     truth = {"frame": [], "id": [], "bb_left": [], "bb_top": [], "bb_width": [],
              "bb_height": []}
-    for i, tr in enumerate(scene.truth):  # a box 0.5 m wide and 1.7 m tall at each foot point
+    for i, tr in enumerate(scene.truth):  # a box 0.5 m wide, 1.7 m tall at each foot point,
+        # numbered from 0 like the own counting scenes' truth (offset -1)
         for k in np.flatnonzero(tr.visible):
             w = 25000.0 * 0.008 * 0.5 / 7.0
             for key, val in zip(truth, (k, i, tr.u[k] - w / 2, tr.v[k] - 3.4 * w, w, 3.4 * w)):
@@ -77,7 +88,7 @@ def test_study_on_one_scene_accounts_for_every_piece():
     truth = {k: np.asarray(v) for k, v in truth.items()}
     frames = [(k, k / 15.0, f) for k, f in enumerate(scene.frames)]
     rows, res, pairs = ends.study_clip("scene", CFG, frames, truth, {0: "pedestrian",
-                                       1: "pedestrian"}, 0, CountOptions(verdicts=QUIET), 1.0)
+                                       1: "pedestrian"}, -1, CountOptions(verdicts=QUIET), 1.0)
     assert all(r[4] in END_REASONS for r in rows)
     assert sum(res.summary["ends"].values()) == len(rows) == 2
     assert sorted(r[5] for r in rows) == [0, 1]  # one piece on each walker, both to the end
