@@ -238,8 +238,7 @@ class FilterOut(NamedTuple):
     ground: np.ndarray  # (S, 2) state position: ground (x, y) m for "3d", else (u, v) px
     velocity: np.ndarray  # (S, 2) state velocity: (vx, vy) m/s for "3d", else (du, dv) px/s
     image_velocity: np.ndarray  # (S, 2) d(u, v)/dt px/s of the estimated foot point
-    used: np.ndarray  # (S,) 1: this frame's measurement started or updated the filter; 0: none
-    # was given, or `SlotFilter`'s outlier_gate refused it
+    used: np.ndarray  # (S,) 1: the measurement started or updated the filter (0: none, refused)
 
 
 FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2, 1))
@@ -253,9 +252,8 @@ def image_velocity(camera: Camera, mean):
 
 
 def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_next, present):
-    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 12). "3d" with
-    `outlier_gate` "paper" / "innovation": a measurement (11) / the innovation gate refuses is
-    not used (the slot predicts); "none": every given measurement is (`ekf.FromAnnotations`)."""
+    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 12). "3d": a
+    measurement `outlier_gate` refuses ("paper": (11), "innovation") is not used (it predicts)."""
     cfg, noise_img = params
     empty = empty_carry(z.dtype)
     carry = jax.vmap(lambda r, c: select(r, empty, c))(reset, carry)
@@ -263,8 +261,8 @@ def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_n
     if dynamics == "3d":
         width = jnp.full(z.shape[:1], jnp.nan, z.dtype)
         run = jax.vmap(step, in_axes=(None, None, None, 0, 0, 0, None, 0))
-        valid = {"none": FromAnnotations, "paper": lambda: OutlierGate(cfg.thresholds),
-                 "innovation": lambda: InnovationGate(cfg.thresholds)}[outlier_gate]()
+        valid = FromAnnotations() if outlier_gate == "none" else \
+            (OutlierGate if outlier_gate == "paper" else InnovationGate)(cfg.thresholds)
         carry, out = run(cfg.camera, cfg.noise, valid, carry, z, width, dt, present)
         used = out.valid | (carry.started & ~was_started)
         nxt = jax.vmap(lambda s: predict(cfg.noise, s, dt_next))(carry.state)
