@@ -57,9 +57,10 @@ def truth_frame(index: int, offset: int) -> int:
 
 def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
     """Per ended piece: [clip, id, first, last, reason, owner, kind, walker_goes_on, gap_s,
-    y_m, final, counted]; gap_s: from its last frame to the next piece on the same walker's
-    first (NaN: none); y_m: its last ground distance (the filter's); final: the output track
-    holding it (0: none), counted: whether that track is counted."""
+    y_m, final, counted]; gap_s: a piece on a walker, from its last frame to the first of the
+    walker's next piece (NaN: none, or not on a walker); y_m: its last ground distance (the
+    filter's); final: the output track holding it (0: none), counted: whether that track is
+    counted; and the `walker_pairs` of the clip, each with its outcome."""
     from rhythmjax.count.counting import finish_count
     from rhythmjax.count.pedestrian_level import PedestrianLevel
     from rhythmjax.count.still import peek_background
@@ -81,14 +82,10 @@ def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
             goes_on = bool(np.sum(tf > last) >= after_s * fps)
         rows.append([name, p.track_id, first, last, p.end_reason, own, kind, goes_on, np.nan,
                      round(float(p.boxes[-1].y), 1)])
-    for r in rows:
-        if r[5] is None:
-            continue
-        later = [q[2] for q in rows if q[5] == r[5] and q[2] > r[2] and q is not r]
-        if later:
-            r[8] = (min(later) - r[3]) / fps
     keys = [(p.boxes[0].frame, p.boxes[0].left, p.boxes[0].top) for p in pieces]
     pairs = walker_pairs(level, pieces, rows, truth, offset)  # before stitching joins pieces
+    for q in pairs:
+        rows[q["a"]][8] = (rows[q["b"]][2] - rows[q["a"]][3]) / fps
     res = finish_count(level)
     final = final_tracks(res, keys)
     counted = {int(i): bool(c) for i, c in zip(res.verdicts["track_id"],
@@ -149,7 +146,8 @@ def walker_pairs(level, pieces, rows, truth, offset: int) -> list[dict]:
             kind = kinds_of[on[0]] if on else "uncovered"
             cover[{"pedestrian": "other walker", None: "nothing", "uncovered": "uncovered"}.get(
                 kind, "non-walker")] += 1
-        out.append({"a": a, "b": b, "gap_s": gap, "why": why, "cover": cover})
+        out.append({"a": a, "b": b, "gap_s": gap, "why": why, "cover": cover,
+                    "goes_on": r[7]})
     return out
 
 
@@ -205,15 +203,8 @@ def main(argv=None) -> int:
               f"{sum(r[5] is None for r in rs):7d}")
     # the pieces on a walker who walks on, and the walker's next piece: joined into one output
     # track by the stitching, or two output tracks both counted (a second counted track)
-    nxt = {}
-    for r in allrows:
-        if r[6] == "pedestrian":
-            later = [q for q in allrows if q[0] == r[0] and q[5] == r[5] and q[2] > r[2]]
-            if later:
-                nxt[id(r)] = min(later, key=lambda q: q[2])
-    on = [r for r in allrows if r[6] == "pedestrian" and r[7] and id(r) in nxt]
-    joined = sum(r[10] != 0 and nxt[id(r)][10] == r[10] for r in on)
-    both = sum(r[10] != nxt[id(r)][10] and r[11] and nxt[id(r)][11] for r in on)
+    on = [q for q in allpairs if q["goes_on"]]
+    joined, both = (sum(q["outcome"] == k for q in on) for k in ("joined", "two counted"))
     print(f"pieces on a walker who walks on, re-found: {len(on)}; joined by the stitching "
           f"{joined}; two counted output tracks {both}; other (a piece dropped or not counted) "
           f"{len(on) - joined - both}")

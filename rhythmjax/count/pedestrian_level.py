@@ -295,9 +295,9 @@ class PedestrianLevel:
         if out.started[s] < 0.5:  # the first measurement had no ground point (above the horizon)
             self.peds.remove(p)
             return
-        measured = finite_uv(p.z)
-        if measured and self.opt.placement.outlier_gate != "none" and out.used[s] < 0.5:
-            p.z, measured = (math.nan, math.nan), False  # refused by the gate: it predicts
+        measured = finite_uv(p.z) and out.used[s] > 0.5  # the filter took it (`outlier_gate`)
+        if not measured:
+            p.z = (math.nan, math.nan)  # none, or refused: it predicts
         p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
         p.coast = 0.0 if measured else p.coast + dt
         (eu, ev), (nu, nv) = out.est_uv[s], out.next_uv[s]
