@@ -77,6 +77,8 @@ class PlacementOptions:
     outlier_gate: str = "none"  # "3d": a gate on every measurement (`OUTLIER_GATES`): "paper",
     # the rhythm paper's (11); "innovation", nu^T S^-1 nu; both at thresholds.k_sigma2; a
     # refused measurement is not used, the pedestrian predicts
+    depth_order: bool = False  # patches placed nearest first; a shared one whose feet stand on
+    # a nearer patch's claimed pixels measured across only (`count.occlusion`)
 
 
 @dataclass(frozen=True)

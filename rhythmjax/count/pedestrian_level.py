@@ -11,7 +11,8 @@ Per frame (`PedestrianLevel.update`):
    related to i's children; a shared blob that splits: its pedestrians go to its children by
    the Hungarian method on predicted foot point to bottom centre); one with no related blob
    takes the blobs its predicted patch overlaps (re-acquisition). Patches are placed
-   (`patches.place_patch`) older first, each claiming its pixels from those after it (groups).
+   (`patches.place_patch`) older first (nearest first with `placement.depth_order`,
+   `count.occlusion`), each claiming its pixels from those after it (groups).
    Pedestrians sharing a blob too narrow for them side by side (< `placement.merge_widths` x
    their summed widths: walking past each other) keep their predictions (identities survive
    the merge). One jitted call advances every filter (`patches.SlotFilter`).
@@ -58,6 +59,7 @@ from ..vision.blobs import box_table, meeting
 from ..vision.detect import window_b_intensity
 from .appearance import look_of_frame
 from .foot_gate import gated
+from .occlusion import feet_hidden, placement_order
 from .patches import (
     FILTER_OUT,
     FilterOut,
@@ -233,7 +235,7 @@ class PedestrianLevel:
             for j in rel[id(p)]:
                 users[j] = users.get(j, 0) + 1
         claimed = None  # pixels taken by shared placements, made on the first one
-        for p in sorted(self.peds, key=lambda q: (-q.hits, q.born)):
+        for p in placement_order(self.peds, opt.placement.depth_order):  # `count.occlusion`
             mine = rel[id(p)]
             if not mine or not finite_uv(p.next_uv):
                 continue
@@ -259,6 +261,9 @@ class PedestrianLevel:
                              v_max=v_max, min_cover=opt.placement.min_cover, bbox=bbox)
             if pl is None or (z := gated(self, p, pl)) is None:  # `count.foot_gate`
                 continue
+            if k > 1 and opt.placement.depth_order and feet_hidden(claimed, pl.u, pl.v, pl.w):
+                self.gated["hidden"] = self.gated.get("hidden", 0) + 1  # behind a nearer one:
+                z = (pl.u, float(p.next_uv[1]))  # measured across only
             p.z = z  # the object's width: its blob's run, a patch width around
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
             if k == 1:  # its blobs not shared: their top in its columns is its head
