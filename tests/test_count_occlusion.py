@@ -1,0 +1,121 @@
+"""`count.occlusion` (`placement.depth_order`): the placement order and the hidden-feet test on
+hand-worked cases, and one hand-made merged blob placed by `PedestrianLevel._place`: an older
+far walker whose blob a nearer walker's joins from below takes the nearer one's feet in the
+default order, its own with the depth order, and is measured across only when the nearer
+walker stands right under its feet."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from rhythmjax.count import CountOptions
+from rhythmjax.count.occlusion import HIDDEN_ROWS, feet_hidden, placement_order
+from rhythmjax.count.options import VerdictOptions, with_changes
+from rhythmjax.model.params import config_from_dict
+
+
+# a small camera (as tests/test_pedestrians.py): 256x192, 3 m high, 25 deg down, a f = b f =
+# 200 px/m
+CFG = config_from_dict({
+    "camera": {"f_m": 0.008, "h_m": 3.0, "theta_deg": 25.0, "a_px_per_m": 25000.0,
+               "b_px_per_m": 25000.0, "uc_px": 128.0, "vc_px": 96.0, "fps": 15.0,
+               "image_width_px": 256, "image_height_px": 192},
+    "thresholds": {"range_min_m": 3.0, "range_max_m": 15.0}})
+
+
+def _ped(name, hits, born, v):
+    return SimpleNamespace(name=name, hits=hits, born=born, next_uv=(50.0, v))
+
+
+def test_order_by_age_or_by_depth():
+    peds = [_ped("young near", 3, 9, 150.0), _ped("old far", 20, 0, 90.0),
+            _ped("old near", 20, 1, 150.0), _ped("lost", 30, 0, float("nan")),
+            _ped("young mid", 3, 5, 120.0)]
+    names = lambda order: [q.name for q in order]
+    assert names(placement_order(peds, False)) == [
+        "lost", "old far", "old near", "young mid", "young near"]
+    # nearest (largest foot row) first; equal rows older first; no prediction last
+    assert names(placement_order(peds, True)) == [
+        "old near", "young near", "young mid", "old far", "lost"]
+
+
+def test_feet_hidden_reads_the_rows_under_the_middle_half():
+    claimed = np.zeros((40, 60), bool)
+    assert not feet_hidden(None, 30.0, 20.0, 16.0)
+    assert not feet_hidden(claimed, 30.0, 20.0, 16.0)
+    claimed[21, 26] = True  # the row below, column u - w/4 = 26: hidden
+    assert feet_hidden(claimed, 30.0, 20.0, 16.0)
+    claimed[:] = False
+    claimed[20 + HIDDEN_ROWS, 34] = True  # the last row searched, column u + w/4 = 34
+    assert HIDDEN_ROWS == 2 and feet_hidden(claimed, 30.0, 20.0, 16.0)
+    claimed[:] = False
+    claimed[23, 30] = True  # three rows down: not under the feet
+    claimed[21, 25] = claimed[21, 35] = True  # beside the middle half
+    claimed[20, 30] = True  # the foot row itself
+    assert not feet_hidden(claimed, 30.0, 20.0, 16.0)
+    claimed[:] = False
+    claimed[39, 30] = True  # a foot row on the image's last row: nothing below it
+    assert not feet_hidden(claimed, 30.0, 39.0, 16.0)
+
+
+def _merged(level, du_w: float):
+    """One blob (label 1): a far walker's patch standing on (100, 100) and a nearer walker's
+    standing on (100 + du_w x the far W, 100 + a quarter of the far H), both full rectangles;
+    the far pedestrian older. Returns (far, near, blobs, labels, far W, far H, near row)."""
+    from rhythmjax.count.pedestrian_level import Pedestrian
+    from rhythmjax.vision.blobs import Blob
+
+    wf, hf = (float(q) for q in level.shape.size(100.0, 100.0))
+    vn = 100.0 + round(0.25 * hf)
+    un = 100.0 + du_w * wf
+    wn, hn = (float(q) for q in level.shape.size(un, vn))
+    lab = np.zeros((192, 256), np.int32)
+    lab[round(101 - hf):101, round(100 - wf / 2):round(100 + wf / 2)] = 1
+    lab[round(vn + 1 - hn):round(vn) + 1, round(un - wn / 2):round(un + wn / 2)] = 1
+    ys, xs = np.nonzero(lab)
+    blob = Blob((int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1),
+                int(ys.size), 0.0, (float(xs.mean()), float(ys.mean())), 0.5, 1)
+    far, near = Pedestrian(slot=0, born=0), Pedestrian(slot=1, born=5)
+    far.hits, far.track_id, far.next_uv = 30, 1, (100.0, 101.5)  # predicted 1.5 rows low
+    near.hits, near.track_id, near.next_uv = 10, 2, (un, vn)
+    level.peds = [far, near]
+    return far, near, [blob], lab, wf, hf, vn
+
+
+@pytest.mark.parametrize("depth_order", [False, True])
+def test_a_nearer_walker_joining_below_no_longer_lends_its_feet(depth_order):
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"placement.depth_order": depth_order})
+    level = PedestrianLevel(CFG, opt)
+    # the near walker one far W to the right: its patch covers the far patch's right edge
+    # only (not under the far walker's middle half), the merged blob wide enough to place both
+    far, near, blobs, lab, wf, hf, vn = _merged(level, 1.0)
+    assert vn - 100.0 < 0.35 * hf  # inside the band the far placement searches below
+    level._place({id(far): {0}, id(near): {0}}, blobs, lab)
+    assert near.z == pytest.approx((near.next_uv[0], vn), abs=1.0)
+    if depth_order:
+        assert far.z[1] == 100.0 and abs(far.z[0] - 100.0) <= 0.3 * wf
+        assert level.gated == {}
+    else:  # the older far walker placed first takes the nearer one's feet
+        assert far.z[1] == vn
+
+
+def test_feet_right_above_a_nearer_walker_are_measured_across_only():
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"placement.depth_order": True})
+    level = PedestrianLevel(CFG, opt)
+    # the near walker 0.7 far W to the right: its patch (wider than the far one) reaches under
+    # the far walker's middle half, whose lowest unclaimed pixels are its own feet at row 100
+    far, near, blobs, lab, wf, hf, vn = _merged(level, 0.7)
+    level._place({id(far): {0}, id(near): {0}}, blobs, lab)
+    assert near.z == pytest.approx((near.next_uv[0], vn), abs=1.0)
+    assert far.z[1] == far.next_uv[1] == 101.5  # the predicted row: not measured
+    assert abs(far.z[0] - 100.0) <= 0.3 * wf
+    assert level.gated == {"hidden": 1}
