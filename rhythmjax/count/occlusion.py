@@ -14,6 +14,13 @@ counting tracker's pieces end"). With `depth_order`:
    claimed (a claimed pixel in the `HIDDEN_ROWS` rows below it, within the middle half of its
    width) has its feet behind that walker; it is measured across only, its foot row kept at
    the prediction (as `placement.lift_keep_u` does for lifted legs).
+
+`placement.wide_widths` (> 0; default 0, off) is the same question for a pedestrian alone on its
+blobs when they are far wider than one walker (`is_wide`: their box wider than wide_widths W):
+they hold something else as well (a group, a vehicle in front), whose bottom may lie under the
+walker's columns. It is placed as a shared one is (the shared search radius), and its measured
+foot row is used only within `foot_row_tolerance` of the prediction: k_sigma2 (Table 1) times the
+foot row's noise std r_std_v (the config's R), px; beyond that it is measured across only.
 """
 
 from __future__ import annotations
@@ -22,8 +29,10 @@ import math
 
 import numpy as np
 
+from ..model.params import Config, host_float
 
-__all__ = ["HIDDEN_ROWS", "feet_hidden", "placement_order"]
+
+__all__ = ["HIDDEN_ROWS", "feet_hidden", "foot_row_tolerance", "is_wide", "placement_order"]
 
 HIDDEN_ROWS = 2  # rows below a foot row searched for a nearer patch's claimed pixels (a priori)
 
@@ -61,3 +70,16 @@ def feet_hidden(claimed: np.ndarray | None, u: float, v: float, w: float) -> boo
     if r0 >= r1 or c0 >= c1:
         return False
     return bool(claimed[r0:r1, c0:c1].any())
+
+
+def is_wide(box, w: float, widths: float) -> bool:
+    """Whether a blob box (x0, y0, x1, y1, half-open px) is wider than `widths` patch widths `w`
+    px; never when `widths` <= 0 (off) or `w` is not finite."""
+    return widths > 0 and math.isfinite(w) and (box[2] - box[0]) > widths * w
+
+
+def foot_row_tolerance(cfg: Config) -> float:
+    """k_sigma2 x r_std_v px: how far from its predicted row a pedestrian on wide blobs may
+    measure its foot row (Table 1's k_sigma2 = 3; r_std_v the config's foot-row noise std,
+    `noise.r_std_px[1]`)."""
+    return host_float(cfg.thresholds.k_sigma2) * float(np.asarray(cfg.noise.r_std())[1])

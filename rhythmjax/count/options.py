@@ -79,6 +79,8 @@ class PlacementOptions:
     # refused measurement is not used, the pedestrian predicts
     depth_order: bool = False  # patches placed nearest first; a shared one whose feet stand on
     # a nearer patch's claimed pixels measured across only (`count.occlusion`)
+    wide_widths: float = 0.0  # > 0: one alone on blobs wider than this many W is placed as a
+    # shared one, its foot row used only within k_sigma2 r_std_v of the prediction (occlusion)
 
 
 @dataclass(frozen=True)

@@ -59,7 +59,7 @@ from ..vision.blobs import box_table, meeting
 from ..vision.detect import window_b_intensity
 from .appearance import look_of_frame
 from .foot_gate import gated
-from .occlusion import feet_hidden, placement_order
+from .occlusion import feet_hidden, foot_row_tolerance, is_wide, placement_order
 from .patches import (
     FILTER_OUT,
     FilterOut,
@@ -117,6 +117,7 @@ class PedestrianLevel:
         self.stitched = self.ghosts = 0  # tracks joined (count.stitch_level), never moved
         self.detections: list[BlobRow] = []
         self.gated: dict[str, int] = {}  # placements gated by `count.foot_gate`, by reason
+        self.row_tolerance = foot_row_tolerance(cfg)  # `count.occlusion` (wide_widths), px
         self.image_shape: tuple[int, int] | None = None
         self._dv_frames = dv_frames(opt.life.dv_window_s, float(cfg.camera.fps))
         self.defer, self._pending = defer, PendingStep(FILTER_OUT, np.float64)
@@ -246,17 +247,19 @@ class PedestrianLevel:
                 width = max(b[2] for b in boxes) - min(b[0] for b in boxes)
                 if width < opt.placement.merge_widths * k * w0:
                     continue  # walking past each other: keep the prediction
-            radius = w0 * (opt.placement.shared_search_widths if k > 1
+            bx = [blobs[j].box for j in mine]
+            bbox = (min(b[0] for b in bx), min(b[1] for b in bx), max(b[2] for b in bx),
+                    max(b[3] for b in bx))
+            # alone on blobs far wider than a walker (`placement.wide_widths`): placed as shared
+            wide = k == 1 and is_wide(bbox, w0, opt.placement.wide_widths)
+            radius = w0 * (opt.placement.shared_search_widths if k > 1 or wide
                            else opt.placement.search_widths)
             lab = np.asarray([blobs[j].label for j in mine])
             # a new pedestrian alone on its blobs stands on their bottom, however far its first
             # prediction is; a confirmed one looks within `band` H of its prediction (so it does
             # not jump to a nearer person its blob has merged with)
-            v_max = None if k > 1 or p.track_id else float(max(blobs[j].box[3] - 1
-                                                                for j in mine))
-            bx = [blobs[j].box for j in mine]
-            bbox = (min(b[0] for b in bx), min(b[1] for b in bx), max(b[2] for b in bx),
-                    max(b[3] for b in bx))
+            v_max = None if k > 1 or wide or p.track_id else float(max(blobs[j].box[3] - 1
+                                                                        for j in mine))
             pl = place_patch(labels, lab, claimed, self.shape, *p.next_uv, radius_px=radius,
                              v_max=v_max, min_cover=opt.placement.min_cover, bbox=bbox)
             if pl is None or (z := gated(self, p, pl)) is None:  # `count.foot_gate`
@@ -264,6 +267,9 @@ class PedestrianLevel:
             if k > 1 and opt.placement.depth_order and feet_hidden(claimed, pl.u, pl.v, pl.w):
                 self.gated["hidden"] = self.gated.get("hidden", 0) + 1  # behind a nearer one:
                 z = (pl.u, float(p.next_uv[1]))  # measured across only
+            elif wide and abs(pl.v - p.next_uv[1]) > self.row_tolerance:
+                self.gated["wide"] = self.gated.get("wide", 0) + 1  # its row: another object's
+                z = (pl.u, float(p.next_uv[1]))
             p.z = z  # the object's width: its blob's run, a patch width around
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
             if k == 1:  # its blobs not shared: their top in its columns is its head
