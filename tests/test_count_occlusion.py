@@ -119,3 +119,75 @@ def test_feet_right_above_a_nearer_walker_are_measured_across_only():
     assert far.z[1] == far.next_uv[1] == 101.5  # the predicted row: not measured
     assert abs(far.z[0] - 100.0) <= 0.3 * wf
     assert level.gated == {"hidden": 1}
+
+
+def test_is_wide_and_the_row_tolerance():
+    from rhythmjax.count.occlusion import foot_row_tolerance, is_wide
+
+    box = (10, 0, 70, 40)  # 60 px wide
+    assert is_wide(box, 19.0, 3.0) and not is_wide(box, 20.0, 3.0)  # 60 > 57; 60 = 60 is not
+    assert not is_wide(box, 19.0, 0.0) and not is_wide(box, float("nan"), 3.0)
+    # k_sigma2 (Table 1: 3) x the foot row's noise std: 2 px by default, 4 px here
+    assert foot_row_tolerance(CFG) == 6.0
+    noisy = config_from_dict({"noise": {"r_std_px": [4.0, 4.0]}})
+    assert foot_row_tolerance(noisy) == 12.0
+
+
+def _alone_on(level, extra):
+    """One pedestrian (predicted at (100, 101.5), older than any) alone on one blob (label 1):
+    its own patch standing on (100, 100) plus the rectangles `extra` (x0, y0, x1, y1)."""
+    from rhythmjax.count.pedestrian_level import Pedestrian
+    from rhythmjax.vision.blobs import Blob
+
+    wf, hf = (float(q) for q in level.shape.size(100.0, 100.0))
+    lab = np.zeros((192, 256), np.int32)
+    lab[round(101 - hf):101, round(100 - wf / 2):round(100 + wf / 2)] = 1
+    for x0, y0, x1, y1 in extra(wf):
+        lab[y0:y1, x0:x1] = 1
+    ys, xs = np.nonzero(lab)
+    blob = Blob((int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1),
+                int(ys.size), 0.0, (float(xs.mean()), float(ys.mean())), 0.5, 1)
+    p = Pedestrian(slot=0, born=0)
+    p.hits, p.track_id, p.next_uv = 30, 1, (100.0, 101.5)
+    level.peds = [p]
+    level._place({id(p): {0}}, [blob], lab)
+    return p, wf
+
+
+@pytest.mark.parametrize("wide_widths", [0.0, 3.0])
+def test_a_walker_on_a_wide_blob_keeps_its_row(wide_widths):
+    """A wider object in front (100 px, ~6.8 W, bottom row 112: 10.5 px below the predicted
+    row, over the 6 px tolerance) merged into the walker's blob: in the default placement the
+    walker's foot row drops to that object's bottom; with `placement.wide_widths` 3 it is
+    measured across only, at its predicted row."""
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"placement.wide_widths": wide_widths})
+    level = PedestrianLevel(CFG, opt)
+    p, wf = _alone_on(level, lambda wf: [(60, 85, 160, 113)])
+    assert 100 / wf > 3.0
+    assert abs(p.z[0] - 100.0) <= 0.3 * wf
+    if wide_widths:
+        assert p.z[1] == 101.5 and level.gated == {"wide": 1}
+    else:
+        assert p.z[1] == 112.0 and level.gated == {}
+
+
+def test_a_walker_in_a_wide_group_still_measures_its_feet():
+    """Three walkers side by side (their rectangles 1.1 W apart: a box 3.2 W wide) on one blob:
+    the middle one is alone on a wide blob, its feet 1.5 px from the prediction: measured."""
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"placement.wide_widths": 3.0})
+    level = PedestrianLevel(CFG, opt)
+
+    def sides(wf):
+        h = round(float(level.shape.size(100.0, 100.0)[1]))
+        return [(round(100 + s * 1.1 * wf - wf / 2), 101 - h, round(100 + s * 1.1 * wf + wf / 2),
+                 101) for s in (-1, 1)]
+
+    p, wf = _alone_on(level, sides)
+    assert p.z[1] == 100.0 and abs(p.z[0] - 100.0) <= 1.0
+    assert level.gated == {}
