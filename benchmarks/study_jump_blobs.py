@@ -1,0 +1,158 @@
+"""What the counting tracker's pieces that end by the velocity jump were placed on (issue 16,
+counting; a diagnostic, nothing chosen): for every placement `PedestrianLevel._place` makes,
+the width of the box of the blobs it was placed on, in units of its patch width W at the
+prediction, and whether that blob was shared with another pedestrian; then, for every piece
+that ends by the velocity jump (`life.max_dv_mps`) on a walker (`study_track_ends.piece_owner`),
+the widest such box over the `--last` frames around its end (before it and the frames the
+jump rule dropped: the piece's rows stop before the jump) against all placements, and its
+worst placed foot point against the walker's truth box (bottom centre) over those frames, by
+the ground depth y where it ended.
+
+    python benchmarks/study_jump_blobs.py count --seed 150001 --scenes 10 \\
+        [--clothing any] [--focal-px 500] [--set KEY=JSON ...] [--last 8]
+
+SOURCE as `count_dump.py`. The placements are observed by wrapping `place_patch` and `gated`
+in `count.pedestrian_level`'s namespace for the run (restored after).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from contextlib import contextmanager
+
+import numpy as np
+
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+WIDTHS = (2.0, 3.0, 4.0, 6.0)  # blob box widths reported, W
+DEPTHS = ((0.0, 10.0), (10.0, 15.0), (15.0, 20.0), (20.0, 1e9))  # ground y bands, m
+
+
+@contextmanager
+def watched_placements(module, log: dict):
+    """Within the block, every placement `module` (count.pedestrian_level) gates is logged:
+    log[id(pedestrian)][frame index] = (blob box width / W, shared, placed u, placed v px)."""
+    place, gated = module.place_patch, module.gated
+    last: dict = {}
+    alive: list = []  # every pedestrian logged, kept so that no id is reused in the block
+
+    def place_logged(labels, related, claimed, shape, u, v, *, radius_px, bbox=None, **kw):
+        w0 = float(shape.size(u, v)[0])
+        last["ratio"] = (bbox[2] - bbox[0]) / w0 if bbox is not None else np.nan
+        last["shared"] = radius_px < 0.5 * w0  # the shared radius (0.3 W) against 0.75 W
+        return place(labels, related, claimed, shape, u, v, radius_px=radius_px, bbox=bbox,
+                     **kw)
+
+    def gated_logged(level, p, pl):
+        if id(p) not in log:
+            alive.append(p)
+        log.setdefault(id(p), {})[level.n_frames - 1] = (last["ratio"], last["shared"], pl.u,
+                                                          pl.v)
+        return gated(level, p, pl)
+
+    module.place_patch, module.gated = place_logged, gated_logged
+    try:
+        yield
+    finally:
+        module.place_patch, module.gated = place, gated
+
+
+def truth_foot(truth, walker: int, frame: int, offset: int):
+    """The walker's truth foot point (box bottom centre, px) in frame index `frame`, or None."""
+    from study_track_ends import truth_frame
+
+    k = np.flatnonzero((truth["id"] == walker) & (truth["frame"] == truth_frame(frame, offset)))
+    if not len(k):
+        return None
+    i = k[0]
+    return truth["bb_left"][i] + 0.5 * truth["bb_width"][i], truth["bb_top"][i] + truth[
+        "bb_height"][i]
+
+
+def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None) -> list[dict]:
+    """One record per piece ended by the velocity jump on a walker: the widest blob box (W) and
+    whether any placement was shared within `last` frames of its end (either side), the worst
+    |du|, |dv| px of its placed foot points there against the truth, and the ground y (m) where
+    it ended. `owner(boxes, truth, offset, kinds)` -> (walker id, kind): by default
+    `study_track_ends.piece_owner`."""
+    from study_track_ends import piece_owner
+
+    owner = owner or piece_owner
+    out = []
+    for p in pieces:
+        if p.end_reason != "velocity-jump":
+            continue
+        walker, kind = owner(p.boxes, truth, offset, kinds)
+        if kind != "pedestrian":
+            continue
+        end = p.boxes[-1].frame
+        seen = {f: v for f, v in log.get(id(p), {}).items() if abs(f - end) <= last}
+        du = dv = 0.0
+        for f, (_, _, u, v) in seen.items():
+            t = truth_foot(truth, walker, f, offset)
+            if t is not None:
+                du, dv = max(du, abs(u - t[0])), max(dv, abs(v - t[1]))
+        seen = list(seen.values())
+        out.append({"ratio": max((s[0] for s in seen), default=np.nan),
+                    "shared": any(s[1] for s in seen), "du": du, "dv": dv,
+                    "y": p.ground[-1].y})
+    return out
+
+
+def main(argv=None) -> int:
+    from count_dump import clips_of
+
+    import rhythmjax.count.pedestrian_level as level_module
+    from rhythmjax.count import CountOptions
+    from rhythmjax.track.options import with_changes
+    from rhythmjax.vision.frames import drive_frames
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("source")
+    ap.add_argument("--seed", default="150001")
+    ap.add_argument("--scenes", type=int, default=10)
+    ap.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
+    ap.add_argument("--focal-px", type=float, default=0.0)
+    ap.add_argument("--set", action="append", default=[])
+    ap.add_argument("--last", type=int, default=8, help="frames before the end looked at")
+    a = ap.parse_args(argv)
+    opt = with_changes(CountOptions(),
+                       {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
+    ratios, shared, jumps = [], [], []
+    for seed in a.seed.split(","):
+        for _name, cfg, frames, truth, kinds, off, _ in clips_of(a.source, int(seed), a.scenes,
+                                                                a.clothing, a.focal_px):
+            log: dict = {}
+            level = level_module.PedestrianLevel(cfg, opt, defer=True)
+            with watched_placements(level_module, log):
+                drive_frames(iter(frames), level.update, None, n_frames=len(frames),
+                             progress=False)
+                pieces = level.end_all()
+            ratios += [v[0] for per in log.values() for v in per.values()]
+            shared += [v[1] for per in log.values() for v in per.values()]
+            jumps += jump_pieces(pieces, log, truth, kinds, off, a.last)
+    ratios = np.asarray(ratios, np.float64)
+    widest = np.asarray([j["ratio"] for j in jumps], np.float64)
+    print(f"{len(ratios)} placements ({np.mean(shared):.2f} shared); {len(jumps)} pieces ended "
+          "by the velocity jump on a walker "
+          f"({sum(j['shared'] for j in jumps)} with a shared placement within {a.last} frames "
+          "of the end)")
+    for t in WIDTHS:
+        print(f"  blobs wider than {t:g} W: {np.nanmean(ratios > t):.2f} of all placements, "
+              f"{np.nanmean(widest > t):.2f} of the jump pieces (within {a.last} frames of "
+              "the end)")
+    for lo, hi in DEPTHS:
+        sel = [j for j in jumps if lo <= j["y"] < hi]
+        if sel:
+            print(f"  ended at y {lo:g}-{hi:g} m: {len(sel)} pieces, worst placed foot point "
+                  f"off the truth by |du| {np.median([j['du'] for j in sel]):.1f}, |dv| "
+                  f"{np.median([j['dv'] for j in sel]):.1f} px (medians)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
