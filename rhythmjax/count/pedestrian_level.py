@@ -26,7 +26,8 @@ Per frame (`PedestrianLevel.update`):
    `life.confirm_hits` measured frames (dropped at `life.tentative_misses` misses). One ends: after
    predicting for predict_timeout_s; ("3d") when its ground velocity changes by more than
    `life.max_dv_mps` within `life.dv_window_s` s (no walker or cyclist turns or brakes that fast: it
-   lost its walker and ends without those frames, `track.toolkit.velocity_jump`); when its foot
+   lost its walker and ends without those frames, `track.toolkit.velocity_jump`; with
+   `life.max_dv_w` the image velocity in W/s instead, `image_velocity_jump`, off); when its foot
    point stayed put for `life.still_s` s (`still.is_still`: a ghost or a stopped object, copied into
    the background under its patch); two within `life.duplicate_widths` W with the same image
    velocity for `life.duplicate_frames` frames are one: the younger ends. Relations for the next
@@ -54,7 +55,13 @@ import numpy as np
 from ..model.params import Config
 from ..model.status import TrackState
 from ..track.rows import TrackRow
-from ..track.toolkit import PendingStep, dv_frames, match_window, velocity_jump
+from ..track.toolkit import (
+    PendingStep,
+    dv_frames,
+    image_velocity_jump,
+    match_window,
+    velocity_jump,
+)
 from ..vision.blobs import box_table, meeting
 from ..vision.detect import window_b_intensity
 from .appearance import look_of_frame
@@ -365,9 +372,14 @@ class PedestrianLevel:
 
     def _velocity_jump(self, p: Pedestrian) -> int:
         """"3d": the rows to drop when its EKF ground velocity changed by more than
-        `life.max_dv_mps` within `life.dv_window_s` s (`track.toolkit.velocity_jump`), else 0."""
+        `life.max_dv_mps` within `life.dv_window_s` s (`track.toolkit.velocity_jump`), or with
+        `life.max_dv_w` > 0 its image velocity by more than that many W/s (W: its last box's
+        width; `image_velocity_jump`), else 0."""
         if self.opt.dynamics != "3d":
             return 0
+        if self.opt.life.max_dv_w > 0:
+            return image_velocity_jump(p.ground, p.boxes[-1].w if p.boxes else math.nan,
+                                       self._dv_frames, self.opt.life.max_dv_w)
         return velocity_jump(p.ground, self._dv_frames, self.opt.life.max_dv_mps)
 
     def _match(self, p: Pedestrian) -> None:

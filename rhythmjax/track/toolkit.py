@@ -118,6 +118,18 @@ def velocity_jump(velocities: Sequence, k: int, max_dv_mps: float) -> int:
     return k if math.hypot(a.vx - b.vx, a.vy - b.vy) > max_dv_mps else 0
 
 
+def image_velocity_jump(velocities: Sequence, width_px: float, k: int, max_dv_w: float) -> int:
+    """Rows to drop (k) when the foot point's image velocity (items with .du, .dv px/s) changed
+    by more than `max_dv_w` patch widths per second (`width_px`: the patch width W px at the
+    last row) between the last row and k rows before it, else 0; only once there are more than
+    2k rows. The image counterpart of `velocity_jump`: a pixel of foot-row noise far from the
+    camera is metres on the ground but a small fraction of W in the image."""
+    if len(velocities) <= 2 * k or not width_px > 0:
+        return 0
+    a, b = velocities[-1], velocities[-1 - k]
+    return k if math.hypot(a.du - b.du, a.dv - b.dv) > max_dv_w * width_px else 0
+
+
 @runtime_checkable
 class RhythmWindows(Protocol):
     """What `match_window` reads and updates on a tracked object."""
