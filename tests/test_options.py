@@ -112,6 +112,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "placement.outlier_gate", "none"),  # (11) / innovation, off
     ("(new: issue 16 counting)", "placement.depth_order", False),  # nearest placed first, off
     ("(new: issue 16 counting)", "placement.wide_widths", 0.0),  # wide blobs placed as shared, off
+    ("(new: issue 16 counting)", "life.max_dv_w", 0.0),  # the velocity jump in W/s, off
     # unjudged tracks explained by a counted one, and joins by appearance: both off (docs/rules.md)
     ("(new: issue 16 counting)", "explain.enabled", False),
     ("(new: issue 16 counting)", "explain.duplicate_widths", 1.0),
