@@ -21,6 +21,10 @@ they hold something else as well (a group, a vehicle in front), whose bottom may
 walker's columns. It is placed as a shared one is (the shared search radius), and its measured
 foot row is used only within `foot_row_tolerance` of the prediction: k_sigma2 (Table 1) times the
 foot row's noise std r_std_v (the config's R), px; beyond that it is measured across only.
+
+Both are off: measured against decision rules written first, neither passed the held-out pools,
+the dev crowds or PETS09 (docs/rules.md, "What the pieces that end by the velocity jump were
+placed on").
 """
 
 from __future__ import annotations
