@@ -112,10 +112,10 @@ class LifeOptions:
     duplicate_frames: int = 3
     max_dv_mps: float = 1.5  # "3d": a track whose ground velocity changes by more than this
     dv_window_s: float = 0.5  # ... within this long lost its object: it ends before the change
-    max_dv_w: float = 0.0  # > 0: the same test in the image instead, the foot point's image
-    # velocity changing by more than this many W/s (`track.toolkit.image_velocity_jump`; off)
     # (1.5 m/s in 0.5 s is 3 m/s^2: no walker turns or brakes that hard, while a patch moving
     # between two walkers crossing at right angles at 1.4 m/s changes by 2 m/s)
+    max_dv_w: float = 0.0  # > 0: the same test in the image instead, the foot point's image
+    # velocity changing by more than this many W/s (`track.toolkit.image_velocity_jump`; off)
     still_s: float = 5.0  # a pedestrian whose foot point stays put this long ends (0: never)
     still_widths: float = 0.15  # ... its 1 s block means within this many W across
     still_heights: float = 0.04  # ... and this many H up or down (`still.is_still`)
