@@ -191,3 +191,12 @@ def test_a_walker_in_a_wide_group_still_measures_its_feet():
     p, wf = _alone_on(level, sides)
     assert p.z[1] == 100.0 and abs(p.z[0] - 100.0) <= 1.0
     assert level.gated == {}
+
+
+@pytest.mark.parametrize("key", ["placement.wide_widths", "life.max_dv_w"])
+@pytest.mark.parametrize("value", [-1.0, float("nan"), float("inf")])
+def test_a_negative_or_nan_limit_is_refused(key, value):
+    with pytest.raises(ValueError, match=key.replace(".", r"\.")):
+        with_changes(CountOptions(), {key: value})
+    group, name = key.split(".")
+    assert getattr(getattr(with_changes(CountOptions(), {key: 3.0}), group), name) == 3.0

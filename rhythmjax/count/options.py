@@ -233,3 +233,7 @@ class CountOptions:
         if self.placement.outlier_gate not in OUTLIER_GATES:
             raise ValueError(f"placement.outlier_gate must be one of {OUTLIER_GATES}, "
                              f"got {self.placement.outlier_gate!r}")
+        for key, value in (("placement.wide_widths", self.placement.wide_widths),
+                           ("life.max_dv_w", self.life.max_dv_w)):
+            if not (value >= 0 and math.isfinite(value)):  # NaN too
+                raise ValueError(f"{key} must be >= 0 (0: off), got {value!r}")
