@@ -2,7 +2,7 @@
 image_velocity_jump`) on hand-worked velocities, and through the pedestrians level on a far
 walker whose ground velocity swings in depth (foot-row noise: metres on the ground, a fraction
 of W in the image) against one that turns across the image. Image velocities here come from a
-finite difference of the camera's projection (3), independent of `patches.image_velocity`."""
+finite difference of the camera's projection (3), independent of `slot_filter.image_velocity`."""
 
 from __future__ import annotations
 

@@ -15,8 +15,8 @@ import pytest
 
 from rhythmjax.count import CountOptions
 from rhythmjax.count.options import PlacementOptions
-from rhythmjax.count.patches import SlotFilter
 from rhythmjax.count.pedestrian_level import PedestrianLevel
+from rhythmjax.count.slot_filter import SlotFilter
 from rhythmjax.model import ekf
 from rhythmjax.model.camera import measure
 from rhythmjax.model.gates import InnovationGate, OutlierGate

@@ -1,5 +1,5 @@
 """Per-frame velocities of count's pedestrians (the tracking paper's velocity output) and the
-measured width of (10) in count's tracks: `patches.image_velocity` against finite differences of
+measured width of (10) in count's tracks: `slot_filter.image_velocity` against finite differences of
 a float64 projection, MOT extra columns round trip, and a walker's tracks."""
 
 from __future__ import annotations
@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from rhythmjax.count import CountOptions, count_frames
-from rhythmjax.count.patches import ShapeModel, image_velocity
+from rhythmjax.count.patches import ShapeModel
+from rhythmjax.count.slot_filter import image_velocity
 from rhythmjax.io import BadInput
 from rhythmjax.io.mot import MOT_COLUMNS, VELOCITY_COLUMNS, read_mot, write_mot
 from rhythmjax.model.camera_np import camera_tuple, project_3d

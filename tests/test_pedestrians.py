@@ -1,5 +1,5 @@
-"""The pedestrians level (rhythmjax.count.patches, count.PedestrianLevel): patch size, dynamics
-against independent filters, placement, and two constructed scenes (crossing, group split)."""
+"""The pedestrians level (rhythmjax.count.patches, count.slot_filter, count.PedestrianLevel):
+patch size, dynamics against independent filters, placement, and two constructed scenes (crossing, group split)."""
 
 from __future__ import annotations
 
@@ -12,15 +12,9 @@ import pytest
 
 from rhythmjax.count import CountOptions, count_frames
 from rhythmjax.count.options import NewPedestrianOptions, VerdictOptions
-from rhythmjax.count.patches import (
-    ShapeModel,
-    SlotFilter,
-    image_noise,
-    middle_foot_point,
-    patch_size_3d,
-    place_patch,
-)
+from rhythmjax.count.patches import ShapeModel, middle_foot_point, patch_size_3d, place_patch
 from rhythmjax.count.pedestrian_level import END_REASONS
+from rhythmjax.count.slot_filter import SlotFilter, image_noise
 from rhythmjax.model import ekf
 from rhythmjax.model.params import config_from_dict
 from rhythmjax.sim.scene import SceneSpec, project_3d, render_scene, walker

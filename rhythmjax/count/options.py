@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 
 from ..track.options import with_changes
 from ..vision.fg_threshold import check_noise_options
-from .patches import DYNAMICS, OUTLIER_GATES
+from .patches import DYNAMICS
+from .slot_filter import OUTLIER_GATES
 
 
 __all__ = ["AppearanceOptions", "BlobOptions", "CountOptions", "ExplainOptions", "LifeOptions",
@@ -116,6 +117,8 @@ class LifeOptions:
     # between two walkers crossing at right angles at 1.4 m/s changes by 2 m/s)
     max_dv_w: float = 0.0  # > 0: the same test in the image instead, the foot point's image
     # velocity changing by more than this many W/s (`track.toolkit.image_velocity_jump`; off)
+    jump_sigma: float = 0.0  # > 0 ("3d"): the m/s test fires only on a change also over this
+    # many standard deviations of the filter's own velocity noise (`velocity_jump`'s sigma; off)
     still_s: float = 5.0  # a pedestrian whose foot point stays put this long ends (0: never)
     still_widths: float = 0.15  # ... its 1 s block means within this many W across
     still_heights: float = 0.04  # ... and this many H up or down (`still.is_still`)
@@ -234,6 +237,7 @@ class CountOptions:
             raise ValueError(f"placement.outlier_gate must be one of {OUTLIER_GATES}, "
                              f"got {self.placement.outlier_gate!r}")
         for key, value in (("placement.wide_widths", self.placement.wide_widths),
-                           ("life.max_dv_w", self.life.max_dv_w)):
+                           ("life.max_dv_w", self.life.max_dv_w),
+                           ("life.jump_sigma", self.life.jump_sigma)):
             if not (value >= 0 and math.isfinite(value)):  # NaN too
                 raise ValueError(f"{key} must be >= 0 (0: off), got {value!r}")

@@ -1,4 +1,4 @@
-"""Pedestrians level of Masoud & Papanikolopoulos: the patch model, its dynamics and placement.
+"""Pedestrians level of Masoud & Papanikolopoulos: the patch model and its placement.
 
 Pedestrian model (PAPERS.md, "Multi-pedestrian paper", part 3): a rectangular patch standing on
 its foot point (u, v) px (bottom centre). Its size is the image of an average pedestrian
@@ -12,15 +12,8 @@ its foot point (u, v) px (bottom centre). Its size is the image of an average pe
     2-D shape ("2d"): one fixed size, that of the average pedestrian at x = 0 and the middle
         of the detection range (range_min + range_max) / 2 ("near the middle of the scene").
 
-Dynamics, equation (1) with zero-mean Gaussian acceleration noise, one of three variants:
-    "2d", "3d-shape": constant velocity in the image, state (u, du/dt, v, dv/dt) (px, px/s),
-        a linear Kalman filter: the core's `ekf_fused.predict` (F, Q of (1)) with a px/s noise and a
-        linear update (H picks u and v; Joseph form);
-    "3d" (default): constant velocity on the ground plane, state (x, vx, y, vy) (m, m/s), the
-        core's EKF (`ekf_fused.step`, measurement (3)) with `ekf.FromAnnotations` validity: the
-        pedestrians level does its own association, so every measurement it gives is used.
-All slots advance in ONE jitted, vmapped call per frame (`SlotFilter`), compiled once per
-(variant, slot count), through `track.toolkit.SlotSteps` as the online tracker's filters.
+Dynamics (equation (1); "2d" and "3d-shape" in the image, "3d" on the ground plane, the core's
+EKF) are in `slot_filter`; `DYNAMICS` names them here, where the shape model is chosen by them.
 
 Placement ("Calculating pedestrian positions"): `place_patch` moves the patch horizontally around
 its predicted foot point to cover as many pixels of its related blobs as it can (an integral
@@ -33,34 +26,24 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import cv2
-import jax
-import jax.numpy as jnp
 import numpy as np
 
-from ..model.camera import Terms, measure, upright_size_with
+from ..model.camera import Terms, upright_size_with
 from ..model.camera_np import (
     SCALAR,
     HostCamera,
     camera_tuple,
     ground_of_pixels,
     host_terms,
-    image_width_of,
     project_3d,
     upright_size,
 )
-from ..model.ekf import Carry, FromAnnotations, Gaussian, empty_carry, inverse_2x2, select
-from ..model.ekf_fused import predict, step
-from ..model.gates import InnovationGate, OutlierGate
-from ..model.params import Camera, Config, Noise, host_float
-from ..track.rows import Layout
-from ..track.toolkit import SlotSteps
+from ..model.params import Camera, Config, host_float
 
 
 DYNAMICS = ("2d", "3d-shape", "3d")
-OUTLIER_GATES = ("none", "paper", "innovation")  # `SlotFilter`'s gate on the "3d" measurements
 _SCALARS = (float, int, np.float64)  # ShapeModel.size: types taken as scalars without np.ndim
 
 
@@ -186,133 +169,6 @@ def _row_sizes(shape: ShapeModel, n_rows: int) -> tuple[np.ndarray, np.ndarray]:
 def patch_box(u: float, v: float, w: float, h: float) -> tuple[float, float, float, float]:
     """(x0, y0, x1, y1) px of the patch standing on (u, v), w wide and h tall."""
     return u - 0.5 * w, v - h, u + 0.5 * w, v
-
-
-# ----------------------------------------------------------------------------------------------
-# dynamics (JAX): one jitted call advances every slot
-
-
-def image_noise(cfg: Config) -> Noise:
-    """Image-plane noise for the 2-D dynamics: the ground q and initial speed spread times the
-    px per m at the middle of the detection range; R as the config's (px)."""
-    _, y, _ = ground_point(cfg.camera, *middle_foot_point(cfg))
-    px_per_m = float(image_width_of(cfg.camera, 1.0, float(y)))  # (3) with roll, px per m
-    R = np.asarray(cfg.noise.R(), np.float64)
-    r = np.sqrt(np.diag(R))
-    return Noise(q_std=tuple(np.asarray(cfg.noise.q_std(), np.float64) * px_per_m), r_std=r,
-                 r_corr=float(R[0, 1] / (r[0] * r[1])),
-                 init_speed_std=float(cfg.noise.init_speed_std()) * px_per_m)
-
-
-def _linear_step(noise: Noise, carry: Carry, z, dt, present) -> Carry:
-    """Constant-velocity Kalman step in the image: (1)-(2) prediction by `ekf_fused.predict`, linear
-    update with H = [[1,0,0,0],[0,0,1,0]] (Joseph form), start on the first measurement."""
-    available = present & jnp.all(jnp.isfinite(z))
-    zs = jnp.where(available, z, 0.0)
-    prior = predict(noise, carry.state, dt)
-    R = noise.R()
-    P, m = prior.cov, prior.mean
-    Hm = jnp.zeros((2, 4), m.dtype).at[0, 0].set(1.0).at[1, 2].set(1.0)
-    S = Hm @ P @ Hm.T + R
-    Sinv, _ = inverse_2x2(S)
-    K = P @ Hm.T @ Sinv
-    A = jnp.eye(4, dtype=m.dtype) - K @ Hm
-    post = Gaussian(m + K @ (zs - Hm @ m), A @ P @ A.T + K @ R @ K.T)
-    s2 = noise.init_speed_std() ** 2
-    init_cov = jnp.zeros((4, 4), m.dtype).at[0, 0].set(R[0, 0]).at[2, 2].set(R[1, 1])
-    init_cov = init_cov.at[0, 2].set(R[0, 1]).at[2, 0].set(R[1, 0])
-    init_cov = init_cov.at[1, 1].set(s2).at[3, 3].set(s2)
-    init = Gaussian(jnp.stack([zs[0], 0.0 * zs[0], zs[1], 0.0 * zs[1]]), init_cov)
-    tracked = select(available, post, prior)
-    start = ~carry.started & available
-    state = select(start, init, select(carry.started, tracked, carry.state))
-    return Carry(state, carry.started | start)
-
-
-class FilterOut(NamedTuple):
-    """A frame's results per slot of `SlotFilter`, packed (`FILTER_OUT`) in one (S, 12) array."""
-
-    started: np.ndarray  # (S,) 1: the filter has started (the first measurement was usable)
-    est_uv: np.ndarray  # (S, 2) estimated foot point (u, v) px
-    next_uv: np.ndarray  # (S, 2) predicted foot point for the next frame px
-    ground: np.ndarray  # (S, 2) state position: ground (x, y) m for "3d", else (u, v) px
-    velocity: np.ndarray  # (S, 2) state velocity: (vx, vy) m/s for "3d", else (du, dv) px/s
-    image_velocity: np.ndarray  # (S, 2) d(u, v)/dt px/s of the estimated foot point
-    used: np.ndarray  # (S,) 1: the measurement started or updated the filter (0: none, refused)
-
-
-FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2, 1))
-
-
-def image_velocity(camera: Camera, mean):
-    """d(u, v)/dt (px/s) of the foot point (3) of a ground state (x, vx, y, vy) moving at its
-    velocity: the Jacobian of `camera.measure` times (vx, 0, vy, 0) (`jax.jvp`, exact)."""
-    rate = jnp.stack([mean[1], jnp.zeros_like(mean[1]), mean[3], jnp.zeros_like(mean[3])])
-    return jax.jvp(lambda m: measure(camera, m), (mean,), (rate,))[1]
-
-
-def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_next, present):
-    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 12). "3d": a
-    measurement `outlier_gate` refuses ("paper": (11), "innovation") is not used (it predicts)."""
-    cfg, noise_img = params
-    empty = empty_carry(z.dtype)
-    carry = jax.vmap(lambda r, c: select(r, empty, c))(reset, carry)
-    was_started = carry.started
-    if dynamics == "3d":
-        width = jnp.full(z.shape[:1], jnp.nan, z.dtype)
-        run = jax.vmap(step, in_axes=(None, None, None, 0, 0, 0, None, 0))
-        valid = FromAnnotations() if outlier_gate == "none" else \
-            (OutlierGate if outlier_gate == "paper" else InnovationGate)(cfg.thresholds)
-        carry, out = run(cfg.camera, cfg.noise, valid, carry, z, width, dt, present)
-        used = out.valid | (carry.started & ~was_started)
-        nxt = jax.vmap(lambda s: predict(cfg.noise, s, dt_next))(carry.state)
-        est_uv = jax.vmap(lambda m: measure(cfg.camera, m))(carry.state.mean)
-        next_uv = jax.vmap(lambda m: measure(cfg.camera, m))(nxt.mean)
-        duv = jax.vmap(lambda m: image_velocity(cfg.camera, m))(carry.state.mean)
-    else:
-        run = jax.vmap(_linear_step, in_axes=(None, 0, 0, None, 0))
-        carry = run(noise_img, carry, z, dt, present)
-        used = present & jnp.all(jnp.isfinite(z), axis=1)
-        nxt = jax.vmap(lambda s: predict(noise_img, s, dt_next))(carry.state)
-        est_uv = carry.state.mean[:, jnp.array([0, 2])]
-        next_uv = nxt.mean[:, jnp.array([0, 2])]
-        duv = carry.state.mean[:, jnp.array([1, 3])]  # the state's own (du, dv)
-    mean = carry.state.mean
-    return carry, FILTER_OUT.pack(z.dtype, started=carry.started, est_uv=est_uv,
-                                  next_uv=next_uv, ground=mean[:, jnp.array([0, 2])],
-                                  velocity=mean[:, jnp.array([1, 3])], image_velocity=duv,
-                                  used=used)
-
-
-class SlotFilter:
-    """`slots` pedestrian filters advanced together by one jitted call per frame
-    (`track.toolkit.SlotSteps`)."""
-
-    def __init__(self, cfg: Config, dynamics: str = "3d", slots: int = 32,
-                 outlier_gate: str = "none"):
-        if dynamics not in DYNAMICS:
-            raise ValueError(f"dynamics must be one of {DYNAMICS}, got {dynamics!r}")
-        if outlier_gate not in OUTLIER_GATES:
-            raise ValueError(f"outlier_gate must be one of {OUTLIER_GATES}, got {outlier_gate!r}")
-        self.dynamics, self.slots = dynamics, int(slots)
-        self._steps = SlotSteps(_advance, (cfg, image_noise(cfg)), self.slots,
-                                (dynamics, outlier_gate))
-        self.dt_nominal = float(cfg.camera.dt)
-
-    def step(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
-             dt_next: float | None = None) -> FilterOut:
-        """Advance every slot by dt s (reset slots start afresh from their measurement z, NaN =
-        none); returns the `FilterOut` of float64 host arrays."""
-        return FILTER_OUT.unpack(np.asarray(self.dispatch(reset, z, present, dt, dt_next),
-                                            np.float64))
-
-    def dispatch(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
-                 dt_next: float | None = None) -> jax.Array:
-        """`step` without waiting: the packed `FilterOut` (float32) as the jitted call returns
-        it."""
-        dt_next = self.dt_nominal if dt_next is None else dt_next
-        return self._steps(np.asarray(reset, bool), np.asarray(z, np.float32), np.float32(dt),
-                           np.float32(dt_next), np.asarray(present, bool))
 
 
 # ----------------------------------------------------------------------------------------------

@@ -15,7 +15,7 @@ Per frame (`PedestrianLevel.update`):
    `count.occlusion`), each claiming its pixels from those after it (groups).
    Pedestrians sharing a blob too narrow for them side by side (< `placement.merge_widths` x
    their summed widths: walking past each other) keep their predictions (identities survive
-   the merge). One jitted call advances every filter (`patches.SlotFilter`).
+   the merge). One jitted call advances every filter (`slot_filter.SlotFilter`).
 4. Refinement: blob columns no pedestrian explains (`new.walker_widths` W around each foot point: a
    walker's blob spans its stance foot to its leading arm), at least `new.min_widths` W wide, full
    enough and reaching the blob's bottom (feet, not arms) or, lifted above it, `new.lifted_height`
@@ -27,7 +27,8 @@ Per frame (`PedestrianLevel.update`):
    predicting for predict_timeout_s; ("3d") when its ground velocity changes by more than
    `life.max_dv_mps` within `life.dv_window_s` s (no walker or cyclist turns or brakes that fast: it
    lost its walker and ends without those frames, `track.toolkit.velocity_jump`; with
-   `life.max_dv_w` the image velocity in W/s instead, `image_velocity_jump`, off); when its foot
+   `life.max_dv_w` the image velocity in W/s instead, `image_velocity_jump`, off; with
+   `life.jump_sigma` only a change the filter's own velocity noise does not explain); when its foot
    point stayed put for `life.still_s` s (`still.is_still`: a ghost or a stopped object, copied into
    the background under its patch); two within `life.duplicate_widths` W with the same image
    velocity for `life.duplicate_frames` frames are one: the younger ends. Relations for the next
@@ -67,18 +68,11 @@ from ..vision.detect import window_b_intensity
 from .appearance import look_of_frame
 from .foot_gate import gated
 from .occlusion import feet_hidden, foot_row_tolerance, is_wide, placement_order
-from .patches import (
-    FILTER_OUT,
-    FilterOut,
-    ShapeModel,
-    SlotFilter,
-    ground_point,
-    patch_box,
-    place_patch,
-)
+from .patches import ShapeModel, ground_point, patch_box, place_patch
 from .pedestrian import Pedestrian as Pedestrian, finite_uv
 from .refinement import in_range, new_pedestrians
 from .rows import BlobRow, BoxRow, GroundRow
+from .slot_filter import FILTER_OUT, FilterOut, SlotFilter
 from .still import duplicates, is_still
 from .widths import measured_lean, measured_top, measured_width
 from .window_candidates import sample_candidates
@@ -339,7 +333,8 @@ class PedestrianLevel:
         p.boxes.append(BoxRow(index, eu - w / 2, ev - h, w, h, 1.0 if measured else 0.5, gx,
                               gy, bool(ok)))
         vx, vy = out.velocity[s] if self.opt.dynamics == "3d" else (math.nan, math.nan)
-        p.ground.append(GroundRow(gx, gy, vx, vy, *out.image_velocity[s]))
+        p.ground.append(GroundRow(gx, gy, vx, vy, *out.image_velocity[s], *(
+            out.velocity_cov[s] if self.opt.dynamics == "3d" else (math.nan,) * 3)))
         p.blobs = meeting(self.patch_at(p.est_uv), boxes, 0.1)
         if p.track_id == 0:
             if p.hits >= self.opt.life.confirm_hits:
@@ -374,13 +369,15 @@ class PedestrianLevel:
         """"3d": the rows to drop when its EKF ground velocity changed by more than
         `life.max_dv_mps` within `life.dv_window_s` s (`track.toolkit.velocity_jump`), or with
         `life.max_dv_w` > 0 its image velocity by more than that many W/s (W: its last box's
-        width; `image_velocity_jump`), else 0."""
+        width; `image_velocity_jump`), else 0. `life.jump_sigma` > 0: the m/s change must also
+        exceed that many standard deviations of the filter's velocity noise."""
         if self.opt.dynamics != "3d":
             return 0
         if self.opt.life.max_dv_w > 0:
             return image_velocity_jump(p.ground, p.boxes[-1].w if p.boxes else math.nan,
                                        self._dv_frames, self.opt.life.max_dv_w)
-        return velocity_jump(p.ground, self._dv_frames, self.opt.life.max_dv_mps)
+        return velocity_jump(p.ground, self._dv_frames, self.opt.life.max_dv_mps,
+                             self.opt.life.jump_sigma)
 
     def _match(self, p: Pedestrian) -> None:
         """Online verdict (drawn on the overlay): `track.toolkit.match_window` on its windows

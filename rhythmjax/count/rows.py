@@ -3,6 +3,7 @@ each per tracked frame besides its `track.rows.TrackRow`), read by `stitch` and 
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 
@@ -28,7 +29,9 @@ class GroundRow(NamedTuple):
     (the EKF state for "3d"; NaN for "2d" and "3d-shape", whose filters run in the image) and
     image velocity (du, dv) px/s of the estimated foot point (the state's own for "2d" and
     "3d-shape"; for "3d" the ground velocity through the Jacobian of (3):
-    `patches.image_velocity`). The tracking paper's per-pedestrian velocity output."""
+    `slot_filter.image_velocity`). The tracking paper's per-pedestrian velocity output; with
+    the ground velocity's posterior covariance (var vx, cov vx vy, var vy) (m/s)^2 ("3d"; NaN
+    otherwise or where not given)."""
 
     x: float
     y: float
@@ -36,6 +39,9 @@ class GroundRow(NamedTuple):
     vy: float
     du: float
     dv: float
+    var_vx: float = math.nan
+    cov_vxy: float = math.nan
+    var_vy: float = math.nan
 
 
 class BlobRow(NamedTuple):

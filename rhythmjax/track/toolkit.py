@@ -108,14 +108,30 @@ def dv_frames(dv_window_s: float, fps: float) -> int:
     return max(1, round(dv_window_s * float(fps)))
 
 
-def velocity_jump(velocities: Sequence, k: int, max_dv_mps: float) -> int:
+def velocity_jump(velocities: Sequence, k: int, max_dv_mps: float, sigma: float = 0.0) -> int:
     """Rows to drop (k) when the ground velocity (items with .vx, .vy m/s) changed by more than
     `max_dv_mps` between the last row and k rows before it, else 0. Only once there are more
-    than 2k rows (a filter starts at rest and takes time to reach its object's speed)."""
+    than 2k rows (a filter starts at rest and takes time to reach its object's speed).
+
+    `sigma` > 0: the change dv must also exceed `sigma` standard deviations of the two
+    estimates' own noise, dv^T (P_a + P_b)^-1 dv > sigma^2, P the velocity's posterior
+    covariance (items' .var_vx, .cov_vxy, .var_vy (m/s)^2; their correlation ignored, so the
+    noise is, if anything, overstated). Far from the camera a pixel of foot-row noise is metres
+    of depth: the filter's P says so, and a swing it does not trust ends nothing. A covariance
+    that is not finite or not positive definite leaves the m/s test alone."""
     if len(velocities) <= 2 * k:
         return 0
     a, b = velocities[-1], velocities[-1 - k]
-    return k if math.hypot(a.vx - b.vx, a.vy - b.vy) > max_dv_mps else 0
+    dx, dy = a.vx - b.vx, a.vy - b.vy
+    if not math.hypot(dx, dy) > max_dv_mps:
+        return 0
+    if sigma > 0:
+        sxx, sxy, syy = (a.var_vx + b.var_vx, a.cov_vxy + b.cov_vxy, a.var_vy + b.var_vy)
+        det = sxx * syy - sxy * sxy
+        if math.isfinite(det) and det > 0 and sxx > 0:  # dv^T S^-1 dv by the 2x2 inverse
+            if (syy * dx * dx - 2.0 * sxy * dx * dy + sxx * dy * dy) / det <= sigma * sigma:
+                return 0
+    return k
 
 
 def image_velocity_jump(velocities: Sequence, width_px: float, k: int, max_dv_w: float) -> int:
