@@ -114,6 +114,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "placement.wide_widths", 0.0),  # wide blobs placed as shared, off
     ("(new: issue 16 counting)", "life.max_dv_w", 0.0),  # the velocity jump in W/s, off
     ("(new: issue 16 counting)", "life.jump_sigma", 0.0),  # the jump over the filter's noise, off
+    ("(new: issue 16 counting)", "placement.noise", ()),  # the counting filter's own noise, off
     # unjudged tracks explained by a counted one, and joins by appearance: both off (docs/rules.md)
     ("(new: issue 16 counting)", "explain.enabled", False),
     ("(new: issue 16 counting)", "explain.duplicate_widths", 1.0),

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from ..track.options import with_changes
 from ..vision.fg_threshold import check_noise_options
 from .patches import DYNAMICS
-from .slot_filter import OUTLIER_GATES
+from .slot_filter import OUTLIER_GATES, check_noise
 
 
 __all__ = ["AppearanceOptions", "BlobOptions", "CountOptions", "ExplainOptions", "LifeOptions",
@@ -82,6 +82,11 @@ class PlacementOptions:
     # a nearer patch's claimed pixels measured across only (`count.occlusion`)
     wide_widths: float = 0.0  # > 0: one alone on blobs wider than this many W is placed as a
     # shared one, its foot row used only within k_sigma2 r_std_v of the prediction (occlusion)
+    noise: tuple = ()  # (q_x, q_y m/s/sqrt(s), r_u, r_v px, r_corr): the counting filter's
+    # noise instead of the config's (`slot_filter.filter_config`; () the config's)
+
+    def __post_init__(self):
+        object.__setattr__(self, "noise", tuple(float(x) for x in self.noise))  # JSON lists
 
 
 @dataclass(frozen=True)
@@ -236,6 +241,7 @@ class CountOptions:
         if self.placement.outlier_gate not in OUTLIER_GATES:
             raise ValueError(f"placement.outlier_gate must be one of {OUTLIER_GATES}, "
                              f"got {self.placement.outlier_gate!r}")
+        check_noise(self.placement.noise)
         for key, value in (("placement.wide_widths", self.placement.wide_widths),
                            ("life.max_dv_w", self.life.max_dv_w),
                            ("life.jump_sigma", self.life.jump_sigma)):

@@ -72,7 +72,7 @@ from .patches import ShapeModel, ground_point, patch_box, place_patch
 from .pedestrian import Pedestrian as Pedestrian, finite_uv
 from .refinement import in_range, new_pedestrians
 from .rows import BlobRow, BoxRow, GroundRow
-from .slot_filter import FILTER_OUT, FilterOut, SlotFilter
+from .slot_filter import FILTER_OUT, FilterOut, SlotFilter, filter_config
 from .still import duplicates, is_still
 from .widths import measured_lean, measured_top, measured_width
 from .window_candidates import sample_candidates
@@ -103,7 +103,8 @@ class PedestrianLevel:
         fps = float(cfg.camera.fps)  # `still.is_still` over still_s s in 1 s blocks
         self.still_rows, self.block = round(opt.life.still_s * fps), max(1, round(fps))
         self.shape = ShapeModel.from_config(cfg, opt.dynamics)
-        self.filter = SlotFilter(cfg, opt.dynamics, opt.max_pedestrians,
+        self.filter = SlotFilter(filter_config(cfg, opt.placement.noise), opt.dynamics,
+                                 opt.max_pedestrians,
                                  outlier_gate=opt.placement.outlier_gate)
         self.coast_s = float(cfg.thresholds.predict_timeout)
         self.peds: list[Pedestrian] = []

@@ -17,8 +17,10 @@ transfer per frame.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -34,10 +36,36 @@ from ..track.toolkit import SlotSteps
 from .patches import DYNAMICS, ground_point, middle_foot_point
 
 
-__all__ = ["FILTER_OUT", "OUTLIER_GATES", "FilterOut", "SlotFilter", "image_noise",
-           "image_velocity"]
+__all__ = ["FILTER_OUT", "OUTLIER_GATES", "FilterOut", "SlotFilter", "check_noise",
+           "filter_config", "image_noise", "image_velocity"]
 
 OUTLIER_GATES = ("none", "paper", "innovation")  # `SlotFilter`'s gate on the "3d" measurements
+
+
+def check_noise(values) -> None:
+    """`placement.noise` is () or (q_x, q_y, r_u, r_v, r_corr): q in m/s per sqrt(s) and r in
+    px finite and > 0, |r_corr| < 1; else ValueError naming the key."""
+    v = tuple(values)
+    if not v:
+        return
+    if (len(v) != 5 or not all(math.isfinite(x) for x in v) or min(v[:4]) <= 0
+            or not -1.0 < v[4] < 1.0):
+        raise ValueError("placement.noise must be [] or [q_x, q_y, r_u, r_v, r_corr] with q "
+                         f"(m/s/sqrt(s)) and r (px) > 0 and |r_corr| < 1, got {list(v)}")
+
+
+def filter_config(cfg: Config, values) -> Config:
+    """`cfg` with its noise replaced by `values` = (q_x, q_y, r_u, r_v, r_corr) (`check_noise`;
+    the initial speed spread kept), or `cfg` itself for (): the counting filter's own noise,
+    fitted from labelled tracks (`benchmarks/fit_count_noise.py`), apart from the config's,
+    which the rhythm tracker uses."""
+    check_noise(values)
+    if not values:
+        return cfg
+    q_x, q_y, r_u, r_v, r_corr = (float(x) for x in values)
+    noise = Noise(q_std=(q_x, q_y), r_std=(r_u, r_v), r_corr=r_corr,
+                  init_speed_std=float(cfg.noise.init_speed_std()))
+    return eqx.tree_at(lambda c: c.noise, cfg, noise)
 
 
 def image_noise(cfg: Config) -> Noise:
