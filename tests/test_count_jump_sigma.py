@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 
 from rhythmjax.count import CountOptions
-from rhythmjax.count.options import VerdictOptions, with_changes
+from rhythmjax.count.options import with_changes
 from rhythmjax.count.rows import GroundRow
 from rhythmjax.count.slot_filter import SlotFilter
 from rhythmjax.track.toolkit import velocity_jump
 
 from .helpers import cam_ref_of, ekf_reference
-from .test_pedestrians import CFG
+from .test_pedestrians import CFG, FAST
 
 
 def _v(vx, vy, sxx=math.nan, sxy=math.nan, syy=math.nan):
@@ -103,11 +103,8 @@ def test_the_sigma_test_against_a_solve():
 def test_the_option_reaches_the_level(sigma):
     from rhythmjax.count.pedestrian_level import Pedestrian, PedestrianLevel
 
-    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
-                       {"life.jump_sigma": sigma})
-    level = PedestrianLevel(CFG, opt)
-    k = round(0.5 * 15)
-    p = Pedestrian(slot=0, born=0)
+    level = PedestrianLevel(CFG, with_changes(FAST, {"life.jump_sigma": sigma}))
+    k, p = round(0.5 * 15), Pedestrian(slot=0, born=0)
     # a 2 m/s swing in depth where the filter's velocity variance in depth is 1 (m/s)^2:
     # 4 / 2 = 2 <= 9, noise; across, where it is 0.01: 4 / 0.02 = 200 > 9, a jump
     far = [GroundRow(0.0, 14.0, 1.4, 0.0, 0.0, 0.0, 0.01, 0.0, 1.0)] * 20

@@ -1,5 +1,6 @@
 """The pedestrians level (rhythmjax.count.patches, count.slot_filter, count.PedestrianLevel):
-patch size, dynamics against independent filters, placement, and two constructed scenes (crossing, group split)."""
+patch size, dynamics against independent filters, placement, and two constructed scenes
+(crossing, group split)."""
 
 from __future__ import annotations
 

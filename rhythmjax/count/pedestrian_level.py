@@ -104,8 +104,7 @@ class PedestrianLevel:
         self.still_rows, self.block = round(opt.life.still_s * fps), max(1, round(fps))
         self.shape = ShapeModel.from_config(cfg, opt.dynamics)
         self.filter = SlotFilter(filter_config(cfg, opt.placement.noise), opt.dynamics,
-                                 opt.max_pedestrians,
-                                 outlier_gate=opt.placement.outlier_gate)
+                                 opt.max_pedestrians, outlier_gate=opt.placement.outlier_gate)
         self.coast_s = float(cfg.thresholds.predict_timeout)
         self.peds: list[Pedestrian] = []
         self.finished: list[Pedestrian] = []
