@@ -117,3 +117,14 @@ def test_bad_noise_is_refused_naming_the_key(bad):
         with_changes(CountOptions(), {"placement.noise": bad})
     with pytest.raises(ValueError, match="placement.noise"):
         check_noise(bad)
+
+
+def test_set_on_the_command_line():
+    from rhythmjax.cli.option_changes import apply_option_changes
+    from rhythmjax.model.params import ConfigError
+
+    item = "placement.noise=[0.85,0.53,2.87,4.64,-0.39]"
+    opt, changes = apply_option_changes(CountOptions(), [item])
+    assert opt.placement.noise == VALUES and changes == {"placement.noise": VALUES}
+    with pytest.raises(ConfigError, match="placement.noise must be"):
+        apply_option_changes(CountOptions(), ["placement.noise=[1, 2]"])
