@@ -6,7 +6,9 @@ that ends by the velocity jump (`life.max_dv_mps`) on a walker (`study_track_end
 the widest such box over the `--last` frames around its end (before it and the frames the
 jump rule dropped: the piece's rows stop before the jump) against all placements, and its
 worst placed foot point against the walker's truth box (bottom centre) over those frames, by
-the ground depth y where it ended.
+the ground depth y where it ended; and what the patch stood on in the frames the jump rule
+dropped (`dropped_on`: its own walker, another walker, a non-walker or nothing, by the truth box
+it overlaps most, IoU >= 0.3, in most of those frames).
 
     python benchmarks/study_jump_blobs.py count --seed 150001 --scenes 10 \\
         [--clothing any] [--focal-px 500] [--set KEY=JSON ...] [--last 8]
@@ -35,7 +37,8 @@ DEPTHS = ((0.0, 10.0), (10.0, 15.0), (15.0, 20.0), (20.0, 1e9))  # ground y band
 @contextmanager
 def watched_placements(module, log: dict):
     """Within the block, every placement `module` (count.pedestrian_level) gates is logged:
-    log[id(pedestrian)][frame index] = (blob box width / W, shared, placed u, placed v px)."""
+    log[id(pedestrian)][frame index] = (blob box width / W, shared, placed u, placed v, the
+    patch's w, h px)."""
     place, gated = module.place_patch, module.gated
     last: dict = {}
     alive: list = []  # every pedestrian logged, kept so that no id is reused in the block
@@ -51,7 +54,7 @@ def watched_placements(module, log: dict):
         if id(p) not in log:
             alive.append(p)
         log.setdefault(id(p), {})[level.n_frames - 1] = (last["ratio"], last["shared"], pl.u,
-                                                          pl.v)
+                                                          pl.v, pl.w, pl.h)
         return gated(level, p, pl)
 
     module.place_patch, module.gated = place_logged, gated_logged
@@ -73,11 +76,40 @@ def truth_foot(truth, walker: int, frame: int, offset: int):
         "bb_height"][i]
 
 
+DROPPED_ON = ("own walker", "another walker", "non-walker", "nothing", "not placed")
+
+
+def dropped_on(placed: list[tuple], truth, kinds, walker: int, offset: int) -> str:
+    """What the patch stood on over `placed` ((frame index, u, v, w, h) px; the frames the jump
+    rule dropped): per frame the truth object whose box the patch box overlaps most (IoU >=
+    0.3), then the most frequent (ties in `DROPPED_ON` order); "not placed" for no frame."""
+    from study_track_ends import truth_frame
+
+    from rhythmjax.evaluation.motscore import iou_matrix
+
+    if not placed:
+        return "not placed"
+    votes = dict.fromkeys(DROPPED_ON, 0)
+    for f, u, v, w, h in placed:
+        k = np.flatnonzero(truth["frame"] == truth_frame(f, offset))
+        tb = np.stack([np.asarray(truth[c])[k] for c in ("bb_left", "bb_top", "bb_width",
+                                                          "bb_height")], 1)
+        iou = iou_matrix(np.array([[u - 0.5 * w, v - h, w, h]], np.float64), tb)[0]
+        if not len(k) or iou.max() < 0.3:
+            votes["nothing"] += 1
+            continue
+        t = int(truth["id"][k[int(np.argmax(iou))]])
+        votes["own walker" if t == walker else "another walker"
+              if kinds.get(t) == "pedestrian" else "non-walker"] += 1
+    return max(DROPPED_ON, key=lambda c: (votes[c], -DROPPED_ON.index(c)))
+
+
 def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None) -> list[dict]:
     """One record per piece ended by the velocity jump on a walker: the widest blob box (W) and
     whether any placement was shared within `last` frames of its end (either side), the worst
-    |du|, |dv| px of its placed foot points there against the truth, and the ground y (m) where
-    it ended. `owner(boxes, truth, offset, kinds)` -> (walker id, kind): by default
+    |du|, |dv| px of its placed foot points there against the truth, the ground y (m) where
+    it ended, and what its patch stood on in the frames after its last row (`dropped_on`,
+    within `last` frames). `owner(boxes, truth, offset, kinds)` -> (walker id, kind): by default
     `study_track_ends.piece_owner`."""
     from study_track_ends import piece_owner
 
@@ -91,15 +123,17 @@ def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None) -
             continue
         end = p.boxes[-1].frame
         seen = {f: v for f, v in log.get(id(p), {}).items() if abs(f - end) <= last}
+        after = [(f, *x[2:6]) for f, x in sorted(seen.items()) if f > end]
         du = dv = 0.0
-        for f, (_, _, u, v) in seen.items():
+        for f, (_, _, u, v, _, _) in seen.items():
             t = truth_foot(truth, walker, f, offset)
             if t is not None:
                 du, dv = max(du, abs(u - t[0])), max(dv, abs(v - t[1]))
         seen = list(seen.values())
         out.append({"ratio": max((s[0] for s in seen), default=np.nan),
                     "shared": any(s[1] for s in seen), "du": du, "dv": dv,
-                    "y": p.ground[-1].y})
+                    "y": p.ground[-1].y,
+                    "dropped_on": dropped_on(after, truth, kinds, walker, offset)})
     return out
 
 
@@ -151,6 +185,9 @@ def main(argv=None) -> int:
             print(f"  ended at y {lo:g}-{hi:g} m: {len(sel)} pieces, worst placed foot point "
                   f"off the truth by |du| {np.median([j['du'] for j in sel]):.1f}, |dv| "
                   f"{np.median([j['dv'] for j in sel]):.1f} px (medians)")
+    on = {c: sum(j["dropped_on"] == c for j in jumps) for c in DROPPED_ON}
+    print("  the patch in the frames the jump rule dropped stood on: "
+          + ", ".join(f"{c} {n}" for c, n in on.items()))
     return 0
 
 
