@@ -315,7 +315,8 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
                            verdicts["explained_by"] != 0)
     summary = {"n_frames": level.n_frames, "dynamics": level.opt.dynamics,
                "count_rule": COUNT_RULE, "stitched": level.stitched,
-               "ghosts_dropped": level.ghosts, "crowd_frames": len(level.crowd_frames),
+               "ghosts_dropped": level.ghosts, "rewinds": level.rewinds,
+               "crowd_frames": len(level.crowd_frames),
                "missing_frames": len(level.missing_frames),
                "ends": {r: sum(q.end_reason == r for q in level.finished) for r in END_REASONS},
                "notes": []}

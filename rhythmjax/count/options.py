@@ -124,6 +124,8 @@ class LifeOptions:
     # velocity changing by more than this many W/s (`track.toolkit.image_velocity_jump`; off)
     jump_sigma: float = 0.0  # > 0 ("3d"): the m/s test fires only on a change also over this
     # many standard deviations of the filter's own velocity noise (`velocity_jump`'s sigma; off)
+    jump_rewind: bool = False  # "3d": at a velocity jump the track does not end: its implausible
+    # rows go and its filter goes back to its state at the last kept row (`count.rewind`; off)
     still_s: float = 5.0  # a pedestrian whose foot point stays put this long ends (0: never)
     still_widths: float = 0.15  # ... its 1 s block means within this many W across
     still_heights: float = 0.04  # ... and this many H up or down (`still.is_still`)

@@ -4,6 +4,7 @@ per-frame records and the state the level carries between frames. Units: px, fra
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 
 from ..track.rows import TrackRow
@@ -44,6 +45,9 @@ class Pedestrian:
     candidate_rows: list[tuple[float, ...]] | None = None  # `verdicts.window_candidates`: per
     # row, I(k) of the candidate windows B (`io.files.WINDOW_CANDIDATES` order, grey levels; NaN
     # where the row's intensity is), read by `track.toolkit.match_window`; None: option off
+    states: deque | None = None  # `life.jump_rewind`: (t s, filter mean (4) + cov (16)) of its
+    # last rows (`rewind.keep_state`); None: option off
+    restore: tuple | None = None  # (state (20,), lead s): its slot goes back there next step
 
 
 def finite_uv(uv) -> bool:

@@ -28,7 +28,8 @@ Per frame (`PedestrianLevel.update`):
    `life.max_dv_mps` within `life.dv_window_s` s (no walker or cyclist turns or brakes that fast: it
    lost its walker and ends without those frames, `track.toolkit.velocity_jump`; with
    `life.max_dv_w` the image velocity in W/s instead, `image_velocity_jump`, off; with
-   `life.jump_sigma` only a change the filter's own velocity noise does not explain); when its foot
+   `life.jump_sigma` only a change the filter's own velocity noise does not explain; with
+   `life.jump_rewind` it goes on from its state before the change instead, `rewind`); when its foot
    point stayed put for `life.still_s` s (`still.is_still`: a ghost or a stopped object, copied into
    the background under its patch); two within `life.duplicate_widths` W with the same image
    velocity for `life.duplicate_frames` frames are one: the younger ends. Relations for the next
@@ -71,6 +72,7 @@ from .occlusion import feet_hidden, foot_row_tolerance, is_wide, placement_order
 from .patches import ShapeModel, ground_point, patch_box, place_patch
 from .pedestrian import Pedestrian as Pedestrian, finite_uv
 from .refinement import in_range, new_pedestrians
+from .rewind import keep_state, rewind, rewind_requests, state_store
 from .rows import BlobRow, BoxRow, GroundRow
 from .slot_filter import FILTER_OUT, FilterOut, SlotFilter, filter_config
 from .still import duplicates, is_still
@@ -116,6 +118,7 @@ class PedestrianLevel:
         self.missing_frames: list[int] = []
         self.full_frames: list[int] = []  # frames where a new pedestrian found no free slot
         self.stitched = self.ghosts = 0  # tracks joined (count.stitch_level), never moved
+        self.rewinds = 0  # velocity jumps gone on from before (`life.jump_rewind`)
         self.detections: list[BlobRow] = []
         self.gated: dict[str, int] = {}  # placements gated by `count.foot_gate`, by reason
         self.row_tolerance = foot_row_tolerance(cfg)  # `count.occlusion` (wide_widths), px
@@ -174,7 +177,9 @@ class PedestrianLevel:
             for p in self._new_pedestrians(blobs, labels):
                 present[p.slot] = reset[p.slot] = True
                 z[p.slot] = p.z
-        self._pending.hold(self.filter.dispatch(reset, z, present, dt), index, t, dt, boxes, D)
+        back = rewind_requests(self.peds, S)  # `life.jump_rewind`
+        self._pending.hold(self.filter.dispatch(reset, z, present, dt, restore=back), index, t,
+                           dt, boxes, D)
         if not self.defer:
             self._flush()
         self.prev_blobs = blobs
@@ -299,8 +304,10 @@ class PedestrianLevel:
     def new_pedestrian(self, slot: int) -> Pedestrian:
         """A pedestrian born this frame in filter slot `slot` (sampling the candidate windows B
         when `verdicts.window_candidates` is on)."""
+        rewinds = self.opt.life.jump_rewind and self.opt.dynamics == "3d"
         return Pedestrian(slot=slot, born=self.n_frames,
-                          candidate_rows=[] if self.opt.verdicts.window_candidates else None)
+                          candidate_rows=[] if self.opt.verdicts.window_candidates else None,
+                          states=state_store(self._dv_frames) if rewinds else None)
 
     def _after(self, p: Pedestrian, out: FilterOut, index, t, dt, boxes, D) -> None:
         s = p.slot
@@ -335,6 +342,7 @@ class PedestrianLevel:
         vx, vy = out.velocity[s] if self.opt.dynamics == "3d" else (math.nan, math.nan)
         p.ground.append(GroundRow(gx, gy, vx, vy, *out.image_velocity[s], *(
             out.velocity_cov[s] if self.opt.dynamics == "3d" else (math.nan,) * 3)))
+        keep_state(p, out, t)  # `life.jump_rewind`
         p.blobs = meeting(self.patch_at(p.est_uv), boxes, 0.1)
         if p.track_id == 0:
             if p.hits >= self.opt.life.confirm_hits:
@@ -344,15 +352,18 @@ class PedestrianLevel:
                 return
         elif self.opt.verdicts.online:
             self._match(p)
-        H, Wi = self.image_shape
-        u, v = p.est_uv
-        outside = not (math.isfinite(w) and -0.5 * w <= u <= Wi + 0.5 * w and 0 <= v <= H + h)
         still = self._still(p)  # a ghost or a stopped object: no walker's frames, its patch
         jump = self.still_rows if still else self._velocity_jump(p)  # into the background
         if jump:  # lost its object: the implausible frames go, the track ends before them
             p.rows, p.boxes, p.ground = p.rows[:-jump], p.boxes[:-jump], p.ground[:-jump]
             if p.candidate_rows is not None:
                 p.candidate_rows = p.candidate_rows[:-jump]
+            if not still and rewind(p, jump, t, self.shape.camera, self.filter.dt_nominal):
+                jump, self.rewinds = 0, self.rewinds + 1  # ... or goes on from before them
+                w, h = (float(q) for q in self.shape.size(*p.est_uv))
+        H, Wi = self.image_shape
+        u, v = p.est_uv
+        outside = not (math.isfinite(w) and -0.5 * w <= u <= Wi + 0.5 * w and 0 <= v <= H + h)
         if still:
             self.absorb.append((u - w, v - 1.2 * h, u + w, v + 0.1 * h))
         if p.coast > self.coast_s or outside or jump:

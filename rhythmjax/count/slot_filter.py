@@ -12,7 +12,9 @@ filters), compiled once per (variant, slot count, gate). Variants (`patches.DYNA
         as an option, a gate on each measurement (`OUTLIER_GATES`).
 
 Each frame's results come back packed in one array (`FilterOut`, `FILTER_OUT`): one host
-transfer per frame.
+transfer per frame. A slot can also be put back to an earlier state of its own (`restore`: the
+mean and covariance it had, predicted forward by the same `ekf_fused.predict`), which the
+pedestrians level does when a track's last rows were another object's (`life.jump_rewind`).
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from ..track.toolkit import SlotSteps
 from .patches import DYNAMICS, ground_point, middle_foot_point
 
 
-__all__ = ["FILTER_OUT", "OUTLIER_GATES", "FilterOut", "SlotFilter", "check_noise",
+__all__ = ["FILTER_OUT", "OUTLIER_GATES", "FilterOut", "Restore", "SlotFilter", "check_noise",
            "filter_config", "image_noise", "image_velocity"]
 
 OUTLIER_GATES = ("none", "paper", "innovation")  # `SlotFilter`'s gate on the "3d" measurements
@@ -106,7 +108,7 @@ def _linear_step(noise: Noise, carry: Carry, z, dt, present) -> Carry:
 
 
 class FilterOut(NamedTuple):
-    """A frame's results per slot of `SlotFilter`, packed (`FILTER_OUT`) in one (S, 15) array."""
+    """A frame's results per slot of `SlotFilter`, packed (`FILTER_OUT`) in one (S, 31) array."""
 
     started: np.ndarray  # (S,) 1: the filter has started (the first measurement was usable)
     est_uv: np.ndarray  # (S, 2) estimated foot point (u, v) px
@@ -117,9 +119,11 @@ class FilterOut(NamedTuple):
     used: np.ndarray  # (S,) 1: the measurement started or updated the filter (0: none, refused)
     velocity_cov: np.ndarray  # (S, 3) the state velocity's posterior covariance (var vx, cov,
     # var vy): (m/s)^2 for "3d", else (px/s)^2
+    mean: np.ndarray  # (S, 4) the state: (x, vx, y, vy) (m, m/s) for "3d", else (px, px/s)
+    cov: np.ndarray  # (S, 16) its posterior covariance, row-major 4 x 4 (`SlotFilter`'s restore)
 
 
-FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2, 1, 3))
+FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2, 1, 3, 4, 16))
 
 
 def image_velocity(camera: Camera, mean):
@@ -129,12 +133,26 @@ def image_velocity(camera: Camera, mean):
     return jax.jvp(lambda m: measure(camera, m), (mean,), (rate,))[1]
 
 
-def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_next, present):
-    """Every slot one frame; returns the carry and the packed `FilterOut` (S, 15). "3d": a
-    measurement `outlier_gate` refuses ("paper": (11), "innovation") is not used (it predicts)."""
+def _restored(noise: Noise, carry: Carry, restore, state, lead) -> Carry:
+    """Slots with `restore` put back to `state` (S, 20: the mean (4) and row-major covariance
+    (16) of a `FilterOut`) predicted `lead` s forward (`ekf_fused.predict`, (1)), started; the
+    others as they are."""
+    def one(r, s, tau, c):
+        back = Carry(predict(noise, Gaussian(s[:4], s[4:].reshape(4, 4)), tau), jnp.array(True))
+        return select(r, back, c)
+    return jax.vmap(one)(restore, state, lead, carry)
+
+
+def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_next, present,
+             restore, state, lead):
+    """Every slot one frame (restored slots first put back, `_restored`); returns the carry and
+    the packed `FilterOut` (S, 31). "3d": a measurement `outlier_gate` refuses ("paper": (11),
+    "innovation") is not used (it predicts)."""
     cfg, noise_img = params
     empty = empty_carry(z.dtype)
     carry = jax.vmap(lambda r, c: select(r, empty, c))(reset, carry)
+    carry = _restored(cfg.noise if dynamics == "3d" else noise_img, carry, restore,
+                      state.astype(z.dtype), lead.astype(z.dtype))
     was_started = carry.started
     if dynamics == "3d":
         width = jnp.full(z.shape[:1], jnp.nan, z.dtype)
@@ -160,7 +178,24 @@ def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_n
     return carry, FILTER_OUT.pack(z.dtype, started=carry.started, est_uv=est_uv,
                                   next_uv=next_uv, ground=mean[:, jnp.array([0, 2])],
                                   velocity=mean[:, jnp.array([1, 3])], image_velocity=duv,
-                                  used=used, velocity_cov=vcov)
+                                  used=used, velocity_cov=vcov, mean=mean,
+                                  cov=cov.reshape(cov.shape[0], 16))
+
+
+class Restore(NamedTuple):
+    """Slots to put back to an earlier state of theirs before a `SlotFilter` step: `slots` (S,)
+    bool, `state` (S, 20) the `FilterOut` mean (4) and cov (16) they had, `lead` (S,) s from
+    that state's frame to the frame before the step (it is predicted that far, then the step's
+    dt as every slot)."""
+
+    slots: np.ndarray
+    state: np.ndarray
+    lead: np.ndarray
+
+    @classmethod
+    def none(cls, slots: int) -> Restore:
+        """No slot restored."""
+        return cls(np.zeros(slots, bool), np.zeros((slots, 20)), np.zeros(slots))
 
 
 class SlotFilter:
@@ -179,16 +214,20 @@ class SlotFilter:
         self.dt_nominal = float(cfg.camera.dt)
 
     def step(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
-             dt_next: float | None = None) -> FilterOut:
+             dt_next: float | None = None, restore: Restore | None = None) -> FilterOut:
         """Advance every slot by dt s (reset slots start afresh from their measurement z, NaN =
-        none); returns the `FilterOut` of float64 host arrays."""
-        return FILTER_OUT.unpack(np.asarray(self.dispatch(reset, z, present, dt, dt_next),
-                                            np.float64))
+        none; `restore`'s slots first go back to its states); returns the `FilterOut` of
+        float64 host arrays."""
+        return FILTER_OUT.unpack(np.asarray(self.dispatch(reset, z, present, dt, dt_next,
+                                                          restore), np.float64))
 
     def dispatch(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
-                 dt_next: float | None = None) -> jax.Array:
+                 dt_next: float | None = None, restore: Restore | None = None) -> jax.Array:
         """`step` without waiting: the packed `FilterOut` (float32) as the jitted call returns
         it."""
         dt_next = self.dt_nominal if dt_next is None else dt_next
+        r = Restore.none(self.slots) if restore is None else restore
         return self._steps(np.asarray(reset, bool), np.asarray(z, np.float32), np.float32(dt),
-                           np.float32(dt_next), np.asarray(present, bool))
+                           np.float32(dt_next), np.asarray(present, bool),
+                           np.asarray(r.slots, bool), np.asarray(r.state, np.float32),
+                           np.asarray(r.lead, np.float32))

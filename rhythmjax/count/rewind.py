@@ -1,0 +1,89 @@
+"""A pedestrian that goes on after a velocity jump (`life.jump_rewind`, "3d" only; off by default).
+
+The pedestrians level ends a track whose EKF ground velocity changed by more than
+`life.max_dv_mps` within `life.dv_window_s` s (`track.toolkit.velocity_jump`) and drops the k
+rows of that window: no walker turns or brakes that hard, so the patch lost its walker. Measured
+on the synthetic pools (docs/rules.md, twentieth round), in two of three such ends the patch was
+still on its own walker and only its foot row was off for a few frames (a merged blob): the end
+then splits one walker into two pieces. With the option the k rows still go, but the track does
+not end: its filter slot goes back to the state it had at the last kept row (mean and covariance,
+kept per row in `Pedestrian.states`) and predicts on from there (`slot_filter.Restore`, the one
+EKF's `ekf_fused.predict`); its coast counts from its last measured kept row, so one that keeps
+jumping times out after `thresholds.predict_timeout_s` like any other. The states of the last
+2k + 1 rows are kept; a jump with fewer than k + 1 of them (a track younger than that) ends the
+track as without the option.
+
+Units: s, m, m/s, px.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+
+from ..model.camera_np import project_3d
+from ..model.status import TrackState
+from .pedestrian import Pedestrian
+from .slot_filter import FilterOut, Restore
+
+
+__all__ = ["keep_state", "rewind", "rewind_requests", "state_store"]
+
+
+def state_store(k: int) -> deque:
+    """The per-row filter states a pedestrian keeps with the option on: the last 2k + 1 rows
+    (k: the rows of `life.dv_window_s`), enough to go back k rows once."""
+    return deque(maxlen=2 * int(k) + 1)
+
+
+def keep_state(p: Pedestrian, out: FilterOut, t: float) -> None:
+    """Store slot `p.slot`'s state of this frame (t s; mean (4) and covariance (16) of `out`)
+    with the row just appended; nothing when `p.states` is None (option off)."""
+    if p.states is not None:
+        s = p.slot
+        p.states.append((float(t), np.concatenate([out.mean[s], out.cov[s]])))
+
+
+def rewind(p: Pedestrian, k: int, t: float, camera, dt_next: float) -> bool:
+    """After its last k rows were dropped at time t s (the jump frame): ask for its slot to go
+    back to its state at the row now last (`p.restore`: that state and the lead t - t_then s),
+    move its estimated and next foot points (`p.est_uv`, `p.next_uv`, px) to that state's
+    prediction for t and t + dt_next (ground point moved at its velocity, projected by (3)),
+    and count its coast from its last measured row. False (nothing changed but the states
+    dropped) when no such state is kept or no measured row is left: the track ends."""
+    states = p.states
+    if states is None or len(states) < k + 1:
+        return False
+    for _ in range(k):
+        states.pop()
+    measured = [r.t for r in p.rows if r.state == TrackState.OBSERVE]
+    if not measured:
+        return False
+    t_then, state = states[-1]
+    lead = t - t_then
+    x, vx, y, vy = (float(q) for q in state[:4])
+    p.restore = (state, lead)
+    p.est_uv = tuple(project_3d(camera, x + vx * lead, y + vy * lead, 0.0))
+    ahead = lead + dt_next
+    p.next_uv = tuple(project_3d(camera, x + vx * ahead, y + vy * ahead, 0.0))
+    p.step_uv = (p.next_uv[0] - p.est_uv[0], p.next_uv[1] - p.est_uv[1])
+    p.coast = t - measured[-1]
+    p.z = (math.nan, math.nan)
+    p.win_start = min(p.win_start, len(p.rows))
+    return True
+
+
+def rewind_requests(peds: list[Pedestrian], slots: int) -> Restore | None:
+    """The `slot_filter.Restore` of the pedestrians that asked to go back (`rewind`), their
+    requests cleared; None when none did."""
+    asking = [p for p in peds if p.restore is not None]
+    if not asking:
+        return None
+    r = Restore.none(slots)
+    for p in asking:
+        state, lead = p.restore
+        r.slots[p.slot], r.state[p.slot], r.lead[p.slot] = True, state, lead
+        p.restore = None
+    return r
