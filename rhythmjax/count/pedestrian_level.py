@@ -359,8 +359,9 @@ class PedestrianLevel:
             if p.candidate_rows is not None:
                 p.candidate_rows = p.candidate_rows[:-jump]
             if not still and rewind(p, jump, t, self.shape.camera, self.filter.dt_nominal):
-                jump, self.rewinds = 0, self.rewinds + 1  # ... or goes on from before them
-                w, h = (float(q) for q in self.shape.size(*p.est_uv))
+                jump, self.rewinds = 0, self.rewinds + 1  # ... or goes on from before them:
+                w, h = p.size = tuple(float(q) for q in self.shape.size(*p.est_uv))  # there,
+                p.blobs = meeting(self.patch_at(p.est_uv), boxes, 0.1)  # related to its blobs
         H, Wi = self.image_shape
         u, v = p.est_uv
         outside = not (math.isfinite(w) and -0.5 * w <= u <= Wi + 0.5 * w and 0 <= v <= H + h)
