@@ -22,6 +22,7 @@ from rhythmjax.track.rows import TrackRow
 from .helpers import cam_ref_of, ekf_reference
 from .test_pedestrians import CFG, FAST
 
+
 DT = 1 / 15
 
 

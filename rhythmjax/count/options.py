@@ -126,6 +126,8 @@ class LifeOptions:
     # many standard deviations of the filter's own velocity noise (`velocity_jump`'s sigma; off)
     jump_rewind: bool = False  # "3d": at a velocity jump the track does not end: its implausible
     # rows go and its filter goes back to its state at the last kept row (`count.rewind`; off)
+    rewind_across: bool = False  # ... and it is then measured across only (u placed, v its
+    # predicted row) while its placed foot row is beyond `occlusion.foot_row_tolerance` (off)
     still_s: float = 5.0  # a pedestrian whose foot point stays put this long ends (0: never)
     still_widths: float = 0.15  # ... its 1 s block means within this many W across
     still_heights: float = 0.04  # ... and this many H up or down (`still.is_still`)

@@ -48,6 +48,8 @@ class Pedestrian:
     states: deque | None = None  # `life.jump_rewind`: (t s, filter mean (4) + cov (16)) of its
     # last rows (`rewind.keep_state`); None: option off
     restore: tuple | None = None  # (state (20,), lead s): its slot goes back there next step
+    rewound: bool = False  # `life.rewind_across`: rewound, measured across only while the placed
+    # foot row lies beyond the level's row tolerance from its predicted row
 
 
 def finite_uv(uv) -> bool:

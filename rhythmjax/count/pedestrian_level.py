@@ -276,6 +276,10 @@ class PedestrianLevel:
             elif wide and abs(pl.v - p.next_uv[1]) > self.row_tolerance:
                 self.gated["wide"] = self.gated.get("wide", 0) + 1  # its row: another object's
                 z = (pl.u, float(p.next_uv[1]))
+            elif p.rewound and abs(pl.v - p.next_uv[1]) > self.row_tolerance:  # `count.rewind`
+                self.gated["rewound"] = self.gated.get("rewound", 0) + 1  # its row still off:
+                z = (pl.u, float(p.next_uv[1]))  # across only (`life.rewind_across`)
+            p.rewound = p.rewound and z[1] != pl.v  # ... until a row within the tolerance
             p.z = z  # the object's width: its blob's run, a patch width around
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
             if k == 1:  # its blobs not shared: their top in its columns is its head
@@ -360,6 +364,7 @@ class PedestrianLevel:
                 p.candidate_rows = p.candidate_rows[:-jump]
             if not still and rewind(p, jump, t, self.shape.camera, self.filter.dt_nominal):
                 jump, self.rewinds = 0, self.rewinds + 1  # ... or goes on from before them:
+                p.rewound = self.opt.life.rewind_across
                 w, h = p.size = tuple(float(q) for q in self.shape.size(*p.est_uv))  # there,
                 p.blobs = meeting(self.patch_at(p.est_uv), boxes, 0.1)  # related to its blobs
         H, Wi = self.image_shape
