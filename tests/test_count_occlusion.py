@@ -133,9 +133,10 @@ def test_is_wide_and_the_row_tolerance():
     assert foot_row_tolerance(noisy) == 12.0
 
 
-def _alone_on(level, extra):
-    """One pedestrian (predicted at (100, 101.5), older than any) alone on one blob (label 1):
-    its own patch standing on (100, 100) plus the rectangles `extra` (x0, y0, x1, y1)."""
+def alone_on(level, extra, **fields):
+    """One pedestrian (predicted at (100, 101.5), older than any; `fields` set on it) alone on
+    one blob (label 1): its own patch standing on (100, 100) plus the rectangles `extra` (x0,
+    y0, x1, y1)."""
     from rhythmjax.count.pedestrian_level import Pedestrian
     from rhythmjax.vision.blobs import Blob
 
@@ -149,6 +150,8 @@ def _alone_on(level, extra):
                 int(ys.size), 0.0, (float(xs.mean()), float(ys.mean())), 0.5, 1)
     p = Pedestrian(slot=0, born=0)
     p.hits, p.track_id, p.next_uv = 30, 1, (100.0, 101.5)
+    for name, value in fields.items():
+        setattr(p, name, value)
     level.peds = [p]
     level._place({id(p): {0}}, [blob], lab)
     return p, wf
@@ -165,7 +168,7 @@ def test_a_walker_on_a_wide_blob_keeps_its_row(wide_widths):
     opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
                        {"placement.wide_widths": wide_widths})
     level = PedestrianLevel(CFG, opt)
-    p, wf = _alone_on(level, lambda wf: [(60, 85, 160, 113)])
+    p, wf = alone_on(level, lambda wf: [(60, 85, 160, 113)])
     assert 100 / wf > 3.0
     assert abs(p.z[0] - 100.0) <= 0.3 * wf
     if wide_widths:
@@ -188,7 +191,7 @@ def test_a_walker_in_a_wide_group_still_measures_its_feet():
         return [(round(100 + s * 1.1 * wf - wf / 2), 101 - h, round(100 + s * 1.1 * wf + wf / 2),
                  101) for s in (-1, 1)]
 
-    p, wf = _alone_on(level, sides)
+    p, wf = alone_on(level, sides)
     assert p.z[1] == 100.0 and abs(p.z[0] - 100.0) <= 1.0
     assert level.gated == {}
 

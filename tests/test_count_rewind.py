@@ -148,7 +148,8 @@ def _out(slots, x, vx, y, vy, uv, uv_next):
 def test_the_option_through_the_level(on):
     from rhythmjax.count.pedestrian_level import PedestrianLevel
 
-    level = PedestrianLevel(CFG, with_changes(FAST, {"life.jump_rewind": on}))
+    level = PedestrianLevel(CFG, with_changes(FAST, {"life.jump_rewind": on,
+                                                     "life.rewind_across": on}))
     level.image_shape = (192, 256)
     p = level.new_pedestrian(0)
     assert (p.states is not None) == on
@@ -167,7 +168,7 @@ def test_the_option_through_the_level(on):
         assert p not in level.peds and p.end_reason == "velocity-jump"
         assert len(level.finished[0].rows) == n + 1 - k and level.rewinds == 0
         return
-    assert p in level.peds and p.end_reason == "" and level.rewinds == 1
+    assert p in level.peds and p.end_reason == "" and level.rewinds == 1 and p.rewound
     assert len(p.rows) == n + 1 - k and len(p.ground) == n + 1 - k
     state, lead = p.restore
     assert lead == pytest.approx(k * DT)  # back to row n - k, the last kept
@@ -192,8 +193,9 @@ def test_keep_state_only_with_the_option():
     np.testing.assert_array_equal(p.states[-1][1][:4], [1.0, 1.2, 8.0, 0.0])
 
 
-def test_the_option_is_off_by_default():
+def test_the_options_are_off_by_default():
     assert CountOptions().life.jump_rewind is False
+    assert CountOptions().life.rewind_across is False
 
 
 def test_a_crossing_counted_with_rewinds():
@@ -218,3 +220,26 @@ def test_a_crossing_counted_with_rewinds():
     for tid in np.unique(tr["track_id"]):
         frames_of = np.asarray(tr["frame"])[np.asarray(tr["track_id"]) == tid]
         assert np.all(np.diff(frames_of) > 0)
+
+
+@pytest.mark.parametrize("across", [False, True])
+def test_a_rewound_walker_is_measured_across_only_until_its_row_agrees(across):
+    """The merged blob of tests/test_count_occlusion.py (a wider object in front, its bottom
+    10.5 px below the predicted row, over the 6 px tolerance): a rewound walker with
+    `life.rewind_across` keeps its predicted row and stays rewound; alone on its own blob (feet
+    1.5 px off) it is measured fully and no longer rewound. Without the option: measured."""
+    from rhythmjax.count.options import VerdictOptions
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    from .test_count_occlusion import CFG as SMALL_CFG, alone_on
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"life.jump_rewind": True, "life.rewind_across": across})
+    level = PedestrianLevel(SMALL_CFG, opt)
+    p, _ = alone_on(level, lambda wf: [(60, 85, 160, 113)], rewound=across)
+    if across:
+        assert p.z[1] == 101.5 and p.rewound and level.gated == {"rewound": 1}
+    else:
+        assert p.z[1] == 112.0 and not p.rewound and level.gated == {}
+    p, _ = alone_on(level, lambda wf: [], rewound=across)
+    assert p.z[1] == 100.0 and not p.rewound
