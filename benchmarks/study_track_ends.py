@@ -5,7 +5,8 @@ it follows (IoU >= 0.3 with the walker's truth box in at least half its frames, 
 and how long until another piece follows it again; for a walker's consecutive pieces, whether
 the stitching joined them, why not (`walker_pairs`) and what covered the walker in between.
 A diagnostic (issue 16, counting): a piece that ends on a walker who walks on is a fragment
-the count must stitch or double-counts.
+the count must stitch or double-counts. With `--set life.jump_rewind=true` also the pieces that
+went back at a velocity jump instead of ending, and how they ended (`rewind_summary`).
 
     python benchmarks/study_track_ends.py count --seed 150001,... --scenes 10 \\
         [--clothing any] [--focal-px 500] [--set KEY=JSON ...] [--detail]
@@ -55,12 +56,25 @@ def truth_frame(index: int, offset: int) -> int:
     return index + 1 + offset
 
 
+def rewind_fate(p) -> tuple[int, int]:
+    """(times the piece went back at a velocity jump (`life.jump_rewind`), its measured rows
+    after the last of them); (0, 0) for a piece never rewound."""
+    from rhythmjax.model.status import TrackState
+
+    if not p.rewind_times:
+        return 0, 0
+    last = p.rewind_times[-1]
+    return len(p.rewind_times), sum(r.t > last and r.state == TrackState.OBSERVE
+                                    for r in p.rows)
+
+
 def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
     """Per ended piece: [clip, id, first, last, reason, owner, kind, walker_goes_on, gap_s,
-    y_m, final, counted]; gap_s: a piece on a walker, from its last frame to the first of the
-    walker's next piece (NaN: none, or not on a walker); y_m: its last ground distance (the
-    filter's); final: the output track holding it (0: none), counted: whether that track is
-    counted; and the `walker_pairs` of the clip, each with its outcome."""
+    y_m, final, counted, rewinds, measured_after]; gap_s: a piece on a walker, from its last
+    frame to the first of the walker's next piece (NaN: none, or not on a walker); y_m: its
+    last ground distance (the filter's); final: the output track holding it (0: none), counted:
+    whether that track is counted; rewinds, measured_after: `rewind_fate`; and the
+    `walker_pairs` of the clip, each with its outcome."""
     from rhythmjax.count.counting import finish_count
     from rhythmjax.count.pedestrian_level import PedestrianLevel
     from rhythmjax.count.still import peek_background
@@ -83,6 +97,7 @@ def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
         rows.append([name, p.track_id, first, last, p.end_reason, own, kind, goes_on, np.nan,
                      round(float(p.boxes[-1].y), 1)])
     keys = [(p.boxes[0].frame, p.boxes[0].left, p.boxes[0].top) for p in pieces]
+    fates = [rewind_fate(p) for p in pieces]  # before the stitching joins pieces' rows
     pairs = walker_pairs(level, pieces, rows, truth, offset)  # before stitching joins pieces
     for q in pairs:
         rows[q["a"]][8] = (rows[q["b"]][2] - rows[q["a"]][3]) / fps
@@ -90,8 +105,8 @@ def study_clip(name, cfg, frames, truth, kinds, offset, opt, after_s: float):
     final = final_tracks(res, keys)
     counted = {int(i): bool(c) for i, c in zip(res.verdicts["track_id"],
                                                 res.verdicts["counted"])}
-    for r, f in zip(rows, final):
-        r += [f, counted.get(f, False)]
+    for r, f, fate in zip(rows, final, fates):
+        r += [f, counted.get(f, False), *fate]
     for q in pairs:  # each ends as one output track, or two both counted, or else
         fa, fb = final[q["a"]], final[q["b"]]
         q["outcome"] = ("joined" if fa and fa == fb else "two counted"
@@ -163,6 +178,19 @@ def final_tracks(res, keys) -> list[int]:
     return out
 
 
+def rewind_summary(rows, enough: int = 15) -> str:
+    """One line on the pieces that went back at a velocity jump (rows of `study_clip`): how
+    many, by number of rewinds (1, 2, 3 or more), and by end reason with how many of them were
+    measured in at least `enough` rows (1 s at 15 fps) after their last rewind."""
+    rw = [r for r in rows if r[12] > 0]
+    times = Counter(min(r[12], 3) for r in rw)
+    ends = Counter(r[4] for r in rw)
+    held = Counter(r[4] for r in rw if r[13] >= enough)
+    return (f"rewound pieces {len(rw)} (once {times[1]}, twice {times[2]}, 3+ {times[3]}); by "
+            f"end, with >= {enough} measured rows after the last rewind: " +
+            ", ".join(f"{k} {ends[k]} ({held[k]})" for k in sorted(ends)))
+
+
 def main(argv=None) -> int:
     from count_dump import clips_of
 
@@ -218,6 +246,7 @@ def main(argv=None) -> int:
         print(f"  {why:9s} {sum(q['outcome'] == 'joined' for q in qs):4d} / {len(two):4d} / "
               f"{sum(q['outcome'] == 'other' for q in qs):4d}   two counted: " +
               ", ".join(f"{k} {v}" for k, v in cov.items()))
+    print(rewind_summary(allrows))
     if a.detail:
         for r in allrows:
             print(*r)

@@ -94,3 +94,26 @@ def test_study_on_one_scene_accounts_for_every_piece():
     assert sorted(r[5] for r in rows) == [0, 1]  # one piece on each walker, both to the end
     assert all(r[4] == "clip-end" and not r[7] for r in rows) and pairs == []
     assert sorted(r[10] for r in rows) == [1, 2]
+    assert all(r[12:] == [0, 0] for r in rows)  # option off: no rewind
+
+
+def test_rewind_fate_and_summary_by_hand():
+    from rhythmjax.model.status import TrackState
+    from rhythmjax.track.rows import TrackRow
+
+    def row(k, state):
+        return TrackRow(k, k / 15.0, 1.0, 1.0, 1.0, 1.0, 0.0, 5.0, int(state))
+
+    obs, pred = TrackState.OBSERVE, TrackState.PREDICT
+    p = SimpleNamespace(rewind_times=[], rows=[row(k, obs) for k in range(30)])
+    assert ends.rewind_fate(p) == (0, 0)
+    # rewound at frames 10 and 20 (t 0.667, 1.333 s); after 20: frames 21-29, 3 of them predicted
+    p.rewind_times = [10 / 15.0, 20 / 15.0]
+    p.rows = p.rows[:21] + [row(k, pred if k in (22, 23, 29) else obs) for k in range(21, 30)]
+    assert ends.rewind_fate(p) == (2, 6)
+    # rows as study_clip's: reason at 4, rewinds at 12, measured after at 13
+    rows = [[None] * 4 + [why] + [None] * 7 + [n, m] for why, n, m in
+            (("timeout", 2, 3), ("timeout", 1, 20), ("clip-end", 4, 15), ("timeout", 0, 0))]
+    assert ends.rewind_summary(rows) == (
+        "rewound pieces 3 (once 1, twice 1, 3+ 1); by end, with >= 15 measured rows after the "
+        "last rewind: clip-end 1 (1), timeout 2 (1)")

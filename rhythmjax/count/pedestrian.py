@@ -48,6 +48,7 @@ class Pedestrian:
     states: deque | None = None  # `life.jump_rewind`: (t s, filter mean (4) + cov (16)) of its
     # last rows (`rewind.keep_state`); None: option off
     restore: tuple | None = None  # (state (20,), lead s): its slot goes back there next step
+    rewind_times: list[float] = field(default_factory=list)  # t s of each `rewind.rewind`
     rewound: bool = False  # `life.rewind_across`: rewound, measured across only while the placed
     # foot row lies beyond the level's row tolerance from its predicted row
 

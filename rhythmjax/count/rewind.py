@@ -72,6 +72,7 @@ def rewind(p: Pedestrian, k: int, t: float, camera, dt_next: float) -> bool:
     p.coast = t - measured[-1]
     p.z = (math.nan, math.nan)
     p.win_start = min(p.win_start, len(p.rows))
+    p.rewind_times.append(float(t))
     return True
 
 
