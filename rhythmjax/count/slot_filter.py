@@ -212,6 +212,9 @@ class SlotFilter:
         self._steps = SlotSteps(_advance, (cfg, image_noise(cfg)), self.slots,
                                 (dynamics, outlier_gate))
         self.dt_nominal = float(cfg.camera.dt)
+        self._unrestored = Restore(np.zeros(self.slots, bool),  # made once: most frames
+                                   np.zeros((self.slots, 20), np.float32),
+                                   np.zeros(self.slots, np.float32))
 
     def step(self, reset: np.ndarray, z: np.ndarray, present: np.ndarray, dt: float,
              dt_next: float | None = None, restore: Restore | None = None) -> FilterOut:
@@ -226,7 +229,7 @@ class SlotFilter:
         """`step` without waiting: the packed `FilterOut` (float32) as the jitted call returns
         it."""
         dt_next = self.dt_nominal if dt_next is None else dt_next
-        r = Restore.none(self.slots) if restore is None else restore
+        r = self._unrestored if restore is None else restore
         return self._steps(np.asarray(reset, bool), np.asarray(z, np.float32), np.float32(dt),
                            np.float32(dt_next), np.asarray(present, bool),
                            np.asarray(r.slots, bool), np.asarray(r.state, np.float32),
