@@ -8,7 +8,9 @@ jump rule dropped: the piece's rows stop before the jump) against all placements
 worst placed foot point against the walker's truth box (bottom centre) over those frames, by
 the ground depth y where it ended; and what the patch stood on in the frames the jump rule
 dropped (`dropped_on`: its own walker, another walker, a non-walker or nothing, by the truth box
-it overlaps most, IoU >= 0.3, in most of those frames).
+it overlaps most, IoU >= 0.3, in most of those frames); and in those frames how far from the
+walker's truth foot row the placed foot row was, against the foot row its head implies (the top
+row of its blobs in the patch's columns taken as a 1.7 m walker's head: `head_foot_row`).
 
     python benchmarks/study_jump_blobs.py count --seed 150001 --scenes 10 \\
         [--clothing any] [--focal-px 500] [--set KEY=JSON ...] [--last 8]
@@ -35,10 +37,13 @@ DEPTHS = ((0.0, 10.0), (10.0, 15.0), (15.0, 20.0), (20.0, 1e9))  # ground y band
 
 
 @contextmanager
-def watched_placements(module, log: dict):
+def watched_placements(module, log: dict, speeds: dict | None = None):
     """Within the block, every placement `module` (count.pedestrian_level) gates is logged:
     log[id(pedestrian)][frame index] = (blob box width / W, shared, placed u, placed v, the
-    patch's w, h px)."""
+    patch's w, h px, the foot row its head implies px (`head_foot_row`; NaN: none)); with
+    `speeds`, every velocity jump `module.PedestrianLevel._velocity_jump` finds too:
+    speeds[id(pedestrian)] = (its ground speed k rows before, at the jump, |change of the
+    velocity|) m/s."""
     place, gated = module.place_patch, module.gated
     last: dict = {}
     alive: list = []  # every pedestrian logged, kept so that no id is reused in the block
@@ -47,21 +52,55 @@ def watched_placements(module, log: dict):
         w0 = float(shape.size(u, v)[0])
         last["ratio"] = (bbox[2] - bbox[0]) / w0 if bbox is not None else np.nan
         last["shared"] = radius_px < 0.5 * w0  # the shared radius (0.3 W) against 0.75 W
-        return place(labels, related, claimed, shape, u, v, radius_px=radius_px, bbox=bbox,
-                     **kw)
+        pl = place(labels, related, claimed, shape, u, v, radius_px=radius_px, bbox=bbox, **kw)
+        last["head_v"] = (np.nan if pl is None or labels is None else
+                          head_foot_row(labels, related, claimed, shape, pl))
+        return pl
 
     def gated_logged(level, p, pl):
         if id(p) not in log:
             alive.append(p)
         log.setdefault(id(p), {})[level.n_frames - 1] = (last["ratio"], last["shared"], pl.u,
-                                                          pl.v, pl.w, pl.h)
+                                                          pl.v, pl.w, pl.h, last["head_v"])
         return gated(level, p, pl)
 
     module.place_patch, module.gated = place_logged, gated_logged
+    level_class = getattr(module, "PedestrianLevel", None) if speeds is not None else None
+    jump = level_class._velocity_jump if level_class is not None else None
+
+    def jump_logged(level, p):
+        k = jump(level, p)
+        if k:
+            alive.append(p)
+            (ax, ay), (bx, by) = ((g.vx, g.vy) for g in (p.ground[-1 - k], p.ground[-1]))
+            speeds[id(p)] = (float(np.hypot(ax, ay)), float(np.hypot(bx, by)),
+                             float(np.hypot(bx - ax, by - ay)))
+        return k
+
+    if jump is not None:
+        level_class._velocity_jump = jump_logged
     try:
         yield
     finally:
         module.place_patch, module.gated = place, gated
+        if jump is not None:
+            level_class._velocity_jump = jump
+
+
+def head_foot_row(labels, related, claimed, shape, pl) -> float:
+    """The foot row px of a walker whose head is the top row of the `related` blobs (not
+    `claimed`) in the columns of the placement `pl` (`widths.measured_top`, up to
+    `pedestrian_level.TOP_REACH` patch heights above its foot row), from the camera
+    (`head_feet.head_foot_row`); NaN where there is no top row or no such foot row."""
+    from rhythmjax.count.head_feet import head_foot_row as foot_of_head
+    from rhythmjax.count.pedestrian_level import TOP_REACH
+    from rhythmjax.count.widths import measured_top
+
+    top = measured_top(labels, related, claimed, pl.u, pl.v, pl.w, TOP_REACH * pl.h)
+    if not np.isfinite(top):
+        return np.nan
+    v = foot_of_head(shape, pl.u, top, labels.shape[0])
+    return np.nan if v is None else float(v)
 
 
 def truth_foot(truth, walker: int, frame: int, offset: int):
@@ -76,6 +115,7 @@ def truth_foot(truth, walker: int, frame: int, offset: int):
         "bb_height"][i]
 
 
+OFF_HEIGHTS = 0.1  # a placed foot row this many patch heights from the truth's is off (a priori)
 DROPPED_ON = ("own walker", "another walker", "non-walker", "nothing", "not placed")
 
 
@@ -104,12 +144,21 @@ def dropped_on(placed: list[tuple], truth, kinds, walker: int, offset: int) -> s
     return max(DROPPED_ON, key=lambda c: (votes[c], -DROPPED_ON.index(c)))
 
 
-def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None) -> list[dict]:
+def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None,
+                speeds: dict | None = None) -> list[dict]:
     """One record per piece ended by the velocity jump on a walker: the widest blob box (W) and
     whether any placement was shared within `last` frames of its end (either side), the worst
     |du|, |dv| px of its placed foot points there against the truth, the ground y (m) where
     it ended, and what its patch stood on in the frames after its last row (`dropped_on`,
-    within `last` frames). `owner(boxes, truth, offset, kinds)` -> (walker id, kind): by default
+    within `last` frames); over those frames the median |dv| px of the placed foot row and of
+    the foot row its head implies against the walker's truth (`dv_placed`, `dv_head`; NaN:
+    no such frame), the largest placed |dv| px there (`dv_worst`) and the dropped frames whose
+    placed foot row is more than `OFF_HEIGHTS` patch heights off (`off_rows`), the median |du|
+    px of the placed column (`du_placed`), the median |dv| px
+    over its own last `last` rows before the end (`dv_kept`), the frames with both
+    a truth and a head row (`head_frames`) and the piece's rows (`rows`).
+    With `speeds` (`watched_placements`): `speed_before`, `speed_at`, `dv_mps` m/s (NaN where
+    not recorded). `owner(boxes, truth, offset, kinds)` -> (walker id, kind): by default
     `study_track_ends.piece_owner`."""
     from study_track_ends import piece_owner
 
@@ -125,16 +174,65 @@ def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None) -
         seen = {f: v for f, v in log.get(id(p), {}).items() if abs(f - end) <= last}
         after = [(f, *x[2:6]) for f, x in sorted(seen.items()) if f > end]
         du = dv = 0.0
-        for f, (_, _, u, v, _, _) in seen.items():
+        placed_du, placed_dv, head_dv, kept_dv, off_rows = [], [], [], [], 0
+        for f, x in seen.items():
             t = truth_foot(truth, walker, f, offset)
             if t is not None:
-                du, dv = max(du, abs(u - t[0])), max(dv, abs(v - t[1]))
+                du, dv = max(du, abs(x[2] - t[0])), max(dv, abs(x[3] - t[1]))
+                if f <= end:
+                    kept_dv.append(abs(x[3] - t[1]))
+                else:
+                    placed_du.append(abs(x[2] - t[0]))
+                    placed_dv.append(abs(x[3] - t[1]))
+                    off_rows += abs(x[3] - t[1]) > OFF_HEIGHTS * x[5]
+                    if np.isfinite(x[6]):
+                        head_dv.append(abs(x[6] - t[1]))
         seen = list(seen.values())
         out.append({"ratio": max((s[0] for s in seen), default=np.nan),
                     "shared": any(s[1] for s in seen), "du": du, "dv": dv,
                     "y": p.ground[-1].y,
-                    "dropped_on": dropped_on(after, truth, kinds, walker, offset)})
+                    "dropped_on": dropped_on(after, truth, kinds, walker, offset),
+                    "dv_kept": float(np.median(kept_dv)) if kept_dv else np.nan,
+                    "du_placed": float(np.median(placed_du)) if placed_du else np.nan,
+                    "dv_placed": float(np.median(placed_dv)) if placed_dv else np.nan,
+                    "dv_worst": float(np.max(placed_dv)) if placed_dv else np.nan,
+                    "off_rows": int(off_rows),
+                    "dv_head": float(np.median(head_dv)) if head_dv else np.nan,
+                    "head_frames": len(head_dv), "rows": len(p.boxes),
+                    "placed_frames": len(placed_dv)})
+        if speeds is not None:
+            out[-1].update(zip(("speed_before", "speed_at", "dv_mps"),
+                               speeds.get(id(p), (np.nan,) * 3)))
     return out
+
+
+def own_walker_line(jumps: list[dict]) -> str | None:
+    """The summary of the jump pieces whose dropped frames stood on their own walker
+    (`jump_pieces` records): their rows, the placed foot point against the truth in the dropped
+    frames and the foot row in their own last rows, and the foot row from the head where there
+    is one (medians over pieces; the upper quartile of the dropped frames' |dv|); None: none."""
+    own = [j for j in jumps if j["dropped_on"] == "own walker"]
+    if not own:
+        return None
+    head = [j for j in own if j["head_frames"]]
+
+    def med(js, key):
+        return float(np.nanmedian([j[key] for j in js])) if js else np.nan
+
+    upper = float(np.nanpercentile([j["dv_placed"] for j in own], 75))
+    return (f"  on its own walker ({len(own)} pieces, {med(own, 'rows'):.0f} rows): foot point "
+            f"off the truth in the dropped frames by |du| {med(own, 'du_placed'):.1f}, |dv| "
+            f"{med(own, 'dv_placed'):.1f} px (a quarter of the pieces over {upper:.1f}), at "
+            f"worst |dv| {med(own, 'dv_worst'):.1f} px; dropped frames off by more than "
+            f"{OFF_HEIGHTS:g} H: {med(own, 'off_rows'):.0f} of each piece's "
+            f"{med(own, 'placed_frames'):.0f}; in "
+            f"its own last rows |dv| {med(own, 'dv_kept'):.1f} px; {len(head)} pieces with a "
+            f"head row in the dropped frames, the foot row it implies off by "
+            f"{med(head, 'dv_head'):.1f} px (placed, in those: {med(head, 'dv_placed'):.1f}); "
+            "medians over pieces" + (
+                f"; ground speed {med(own, 'speed_before'):.2f} m/s k rows before the jump, "
+                f"{med(own, 'speed_at'):.2f} at it, velocity change {med(own, 'dv_mps'):.2f}"
+                if "dv_mps" in own[0] else ""))
 
 
 def main(argv=None) -> int:
@@ -161,14 +259,15 @@ def main(argv=None) -> int:
         for _name, cfg, frames, truth, kinds, off, _ in clips_of(a.source, int(seed), a.scenes,
                                                                 a.clothing, a.focal_px):
             log: dict = {}
+            speeds: dict = {}
             level = level_module.PedestrianLevel(cfg, opt, defer=True)
-            with watched_placements(level_module, log):
+            with watched_placements(level_module, log, speeds):
                 drive_frames(iter(frames), level.update, None, n_frames=len(frames),
                              progress=False)
                 pieces = level.end_all()
             ratios += [v[0] for per in log.values() for v in per.values()]
             shared += [v[1] for per in log.values() for v in per.values()]
-            jumps += jump_pieces(pieces, log, truth, kinds, off, a.last)
+            jumps += jump_pieces(pieces, log, truth, kinds, off, a.last, speeds=speeds)
     ratios = np.asarray(ratios, np.float64)
     widest = np.asarray([j["ratio"] for j in jumps], np.float64)
     print(f"{len(ratios)} placements ({np.mean(shared):.2f} shared); {len(jumps)} pieces ended "
@@ -188,6 +287,9 @@ def main(argv=None) -> int:
     on = {c: sum(j["dropped_on"] == c for j in jumps) for c in DROPPED_ON}
     print("  the patch in the frames the jump rule dropped stood on: "
           + ", ".join(f"{c} {n}" for c, n in on.items()))
+    line = own_walker_line(jumps)
+    if line:
+        print(line)
     return 0
 
 
