@@ -152,11 +152,11 @@ def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None,
     it ended, and what its patch stood on in the frames after its last row (`dropped_on`,
     within `last` frames); over those frames the median |dv| px of the placed foot row and of
     the foot row its head implies against the walker's truth (`dv_placed`, `dv_head`; NaN:
-    no such frame), the largest placed |dv| px there (`dv_worst`) and the dropped frames whose
-    placed foot row is more than `OFF_HEIGHTS` patch heights off (`off_rows`), the median |du|
-    px of the placed column (`du_placed`), the median |dv| px
-    over its own last `last` rows before the end (`dv_kept`), the frames with both
-    a truth and a head row (`head_frames`) and the piece's rows (`rows`).
+    no such frame), the largest placed |dv| px there (`dv_worst`), the dropped frames with a
+    truth (`placed_frames`) and those whose placed foot row is more than `OFF_HEIGHTS` patch
+    heights off (`off_rows`), the median |du| px of the placed column (`du_placed`), the median
+    |dv| px over its own last `last` rows before the end (`dv_kept`), the frames with both a
+    truth and a head row (`head_frames`) and the piece's rows (`rows`).
     With `speeds` (`watched_placements`): `speed_before`, `speed_at`, `dv_mps` m/s (NaN where
     not recorded). `owner(boxes, truth, offset, kinds)` -> (walker id, kind): by default
     `study_track_ends.piece_owner`."""
