@@ -139,8 +139,7 @@ def _out(slots, x, vx, y, vy, uv, uv_next):
     out.started[:], out.used[:] = 1.0, 1.0
     out.est_uv[0], out.next_uv[0] = uv, uv_next
     out.ground[0], out.velocity[0], out.image_velocity[0] = (x, y), (vx, vy), (0.0, 0.0)
-    out.velocity_cov[0] = (0.01, 0.0, 0.01)
-    out.mean[0], out.cov[0] = (x, vx, y, vy), np.eye(4).ravel() * 0.01
+    out.cov[0] = np.eye(4).ravel() * 0.01
     return out
 
 

@@ -108,7 +108,8 @@ def _linear_step(noise: Noise, carry: Carry, z, dt, present) -> Carry:
 
 
 class FilterOut(NamedTuple):
-    """A frame's results per slot of `SlotFilter`, packed (`FILTER_OUT`) in one (S, 31) array."""
+    """A frame's results per slot of `SlotFilter`, packed (`FILTER_OUT`) in one (S, 28) array;
+    the whole state (`mean`) and the velocity's covariance (`velocity_cov`) are read from it."""
 
     started: np.ndarray  # (S,) 1: the filter has started (the first measurement was usable)
     est_uv: np.ndarray  # (S, 2) estimated foot point (u, v) px
@@ -117,13 +118,23 @@ class FilterOut(NamedTuple):
     velocity: np.ndarray  # (S, 2) state velocity: (vx, vy) m/s for "3d", else (du, dv) px/s
     image_velocity: np.ndarray  # (S, 2) d(u, v)/dt px/s of the estimated foot point
     used: np.ndarray  # (S,) 1: the measurement started or updated the filter (0: none, refused)
-    velocity_cov: np.ndarray  # (S, 3) the state velocity's posterior covariance (var vx, cov,
-    # var vy): (m/s)^2 for "3d", else (px/s)^2
-    mean: np.ndarray  # (S, 4) the state: (x, vx, y, vy) (m, m/s) for "3d", else (px, px/s)
-    cov: np.ndarray  # (S, 16) its posterior covariance, row-major 4 x 4 (`SlotFilter`'s restore)
+    cov: np.ndarray  # (S, 16) the state's posterior covariance, row-major 4 x 4 (order x, vx,
+    # y, vy; `SlotFilter`'s restore)
+
+    @property
+    def mean(self) -> np.ndarray:
+        """(S, 4) the state (x, vx, y, vy): (m, m/s) for "3d", else (px, px/s)."""
+        g, v = np.asarray(self.ground), np.asarray(self.velocity)
+        return np.stack([g[:, 0], v[:, 0], g[:, 1], v[:, 1]], axis=1)
+
+    @property
+    def velocity_cov(self) -> np.ndarray:
+        """(S, 3) the velocity's posterior covariance (var vx, cov, var vy): (m/s)^2 for "3d",
+        else (px/s)^2."""
+        return np.asarray(self.cov)[:, [5, 7, 15]]
 
 
-FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2, 1, 3, 4, 16))
+FILTER_OUT = Layout(FilterOut, (1, 2, 2, 2, 2, 2, 1, 16))
 
 
 def image_velocity(camera: Camera, mean):
@@ -146,7 +157,7 @@ def _restored(noise: Noise, carry: Carry, restore, state, lead) -> Carry:
 def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_next, present,
              restore, state, lead):
     """Every slot one frame (restored slots first put back, `_restored`); returns the carry and
-    the packed `FilterOut` (S, 31). "3d": a measurement `outlier_gate` refuses ("paper": (11),
+    the packed `FilterOut` (S, 28). "3d": a measurement `outlier_gate` refuses ("paper": (11),
     "innovation") is not used (it predicts)."""
     cfg, noise_img = params
     empty = empty_carry(z.dtype)
@@ -174,12 +185,10 @@ def _advance(dynamics: str, outlier_gate: str, params, carry, reset, z, dt, dt_n
         next_uv = nxt.mean[:, jnp.array([0, 2])]
         duv = carry.state.mean[:, jnp.array([1, 3])]  # the state's own (du, dv)
     mean, cov = carry.state.mean, carry.state.cov
-    vcov = jnp.stack([cov[:, 1, 1], cov[:, 1, 3], cov[:, 3, 3]], axis=1)
     return carry, FILTER_OUT.pack(z.dtype, started=carry.started, est_uv=est_uv,
                                   next_uv=next_uv, ground=mean[:, jnp.array([0, 2])],
                                   velocity=mean[:, jnp.array([1, 3])], image_velocity=duv,
-                                  used=used, velocity_cov=vcov, mean=mean,
-                                  cov=cov.reshape(cov.shape[0], 16))
+                                  used=used, cov=cov.reshape(cov.shape[0], 16))
 
 
 class Restore(NamedTuple):
