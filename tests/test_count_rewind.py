@@ -1,7 +1,8 @@
 """`life.jump_rewind`: at a velocity jump a pedestrian goes on from its filter state at the last
 kept row instead of ending (`count.rewind`, `slot_filter.Restore`). The restored filter against
 the float64 EKF loop of tests/helpers.py (the skipped frames replaced by one prediction of the
-lead); `rewind` on a hand-made pedestrian; the option through the level's `_after`."""
+lead); `rewind` and `rows_to_drop` on a hand-made pedestrian; the options through the level's
+`_after` and `_place`."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import pytest
 
 from rhythmjax.count import CountOptions
 from rhythmjax.count.options import with_changes
-from rhythmjax.count.rewind import keep_state, rewind, rewind_requests, state_store
+from rhythmjax.count.rewind import keep_state, rewind, rewind_requests, rows_to_drop, state_store
 from rhythmjax.count.slot_filter import FILTER_OUT, Restore, SlotFilter
 from rhythmjax.model.camera_np import project_3d
 from rhythmjax.model.status import TrackState
@@ -80,7 +81,9 @@ def _row(k, state=TrackState.OBSERVE):
     return TrackRow(k, k * DT, 10.0, 20.0, 5.0, 1.0, 0.0, 8.0, int(state), math.nan, math.nan)
 
 
-def _pedestrian(n, k, observed_until=None):
+def _pedestrian(n, k, observed_until=None, off=()):
+    """Rows 0..n-1 (measured through `observed_until`), the states of the last 2k + 1 kept;
+    the rows in `off` flagged with their foot row off the prediction."""
     from rhythmjax.count.pedestrian import Pedestrian
 
     p = Pedestrian(slot=2, born=0, track_id=4, states=state_store(k))
@@ -88,7 +91,7 @@ def _pedestrian(n, k, observed_until=None):
         measured = observed_until is None or r <= observed_until
         p.rows.append(_row(r, TrackState.OBSERVE if measured else TrackState.PREDICT))
         state = np.concatenate([[0.1 * r, 1.2, 8.0, -0.1], np.eye(4).ravel() * (1 + r)])
-        p.states.append((r * DT, state))
+        p.states.append((r * DT, state, r in off))
     return p
 
 
@@ -132,6 +135,21 @@ def test_rewind_refuses_without_state_or_measured_row():
     late.rows = late.rows[:-k]
     assert rewind(late, k, 11 * DT, CFG.camera, DT)
     assert late.coast == pytest.approx(5 * DT)
+
+
+def test_rows_to_drop_by_hand():
+    k = 4
+    p = _pedestrian(12, k, off=(9, 10))  # rows 8..11 are the last k; 9 the first off
+    assert rows_to_drop(p, k, only_off=False) == (k, True)  # option off: all k rows
+    assert rows_to_drop(p, k, only_off=True) == (3, True)  # rows 9, 10, 11 (11 not off itself)
+    assert rows_to_drop(_pedestrian(12, k, off=(11,)), k, True) == (1, True)
+    assert rows_to_drop(_pedestrian(12, k, off=(8, 11)), k, True) == (4, True)
+    assert rows_to_drop(_pedestrian(12, k, off=(7,)), k, True) == (k, False)  # before the k
+    assert rows_to_drop(_pedestrian(12, k), k, True) == (k, False)  # none off: it ends
+    assert rows_to_drop(p, 0, True) == (0, True)  # no jump
+    young = _pedestrian(3, k, off=(0,))  # no state before the off row: it ends
+    assert rows_to_drop(young, k, True) == (k, False)
+    assert rows_to_drop(_pedestrian(3, k, off=(1,)), k, True) == (2, True)
 
 
 def _out(slots, x, vx, y, vy, uv, uv_next):
@@ -190,11 +208,50 @@ def test_keep_state_only_with_the_option():
         keep_state(p, out, f * DT)
     assert len(p.states) == 3 and p.states[-1][0] == pytest.approx(4 * DT)
     np.testing.assert_array_equal(p.states[-1][1][:4], [1.0, 1.2, 8.0, 0.0])
+    assert p.states[-1][2] is False
+    keep_state(p, out, 5 * DT, True)
+    assert p.states[-1][2] is True
 
 
 def test_the_options_are_off_by_default():
     assert CountOptions().life.jump_rewind is False
     assert CountOptions().life.rewind_across is False
+    assert CountOptions().life.rewind_off_rows is False
+
+
+@pytest.mark.parametrize("bad", [0, 2])
+def test_only_the_off_rows_go(bad):
+    """`life.rewind_off_rows`: the last `bad` rows placed 3 tolerances below the prediction,
+    the velocity jumping at the last row: only those rows go and the slot goes back to the row
+    before them; with no row off the track ends at the jump as without the option."""
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    level = PedestrianLevel(CFG, with_changes(FAST, {"life.jump_rewind": True,
+                                                     "life.rewind_off_rows": True}))
+    level.image_shape = (192, 256)
+    p = level.new_pedestrian(0)
+    p.track_id = 1
+    level.peds.append(p)
+    k, tol = level._dv_frames, level.row_tolerance
+    n = 2 * k + 4
+    for f in range(n + 1):
+        t = f * DT
+        x, y = -1.0 + 1.3 * t, 8.0
+        uv = project_3d(CFG.camera, x, y, 0.0)
+        p.next_uv = (uv[0], uv[1])  # its prediction for this frame
+        p.z = (uv[0], uv[1] + (3 * tol if f > n - bad else 0.0))
+        vx = 1.3 if f < n else 3.3  # the last row's velocity jumped by 2 m/s
+        level._after(p, _out(level.filter.slots, x, vx, y, 0.0, uv, uv), f, t, DT, [], None)
+    if bad == 0:
+        assert p not in level.peds and p.end_reason == "velocity-jump"
+        assert len(level.finished[0].rows) == n + 1 - k and level.rewinds == 0
+        return
+    assert p in level.peds and level.rewinds == 1 and p.rewound
+    assert len(p.rows) == n + 1 - bad and len(p.ground) == n + 1 - bad
+    assert len(p.states) == 2 * k + 1 - bad and not any(q[2] for q in p.states)  # off ones gone
+    state, lead = p.restore
+    assert lead == pytest.approx(bad * DT)
+    np.testing.assert_allclose(state[0], -1.0 + 1.3 * (n - bad) * DT, atol=1e-12)
 
 
 def test_a_crossing_counted_with_rewinds():
@@ -241,4 +298,23 @@ def test_a_rewound_walker_is_measured_across_only_until_its_row_agrees(across):
     else:
         assert p.z[1] == 112.0 and not p.rewound and level.gated == {}
     p, _ = alone_on(level, lambda wf: [], rewound=across)
+    assert p.z[1] == 100.0 and not p.rewound
+
+
+def test_a_rewound_walker_predicts_while_its_row_is_off():
+    """`life.rewind_off_rows`: on the merged blob above (its bottom 10.5 px below the predicted
+    row) the rewound walker takes no measurement and stays rewound; alone on its own blob it is
+    measured and no longer rewound."""
+    from rhythmjax.count.options import VerdictOptions
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    from .test_count_occlusion import CFG as SMALL_CFG, alone_on
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"life.jump_rewind": True, "life.rewind_off_rows": True})
+    level = PedestrianLevel(SMALL_CFG, opt)
+    p, _ = alone_on(level, lambda wf: [(60, 85, 160, 113)], rewound=True)
+    assert math.isnan(p.z[0]) and math.isnan(p.z[1]) and p.rewound
+    assert level.gated == {"rewound": 1}
+    p, _ = alone_on(level, lambda wf: [], rewound=True)
     assert p.z[1] == 100.0 and not p.rewound

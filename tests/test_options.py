@@ -117,6 +117,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "placement.noise", ()),  # the counting filter's own noise, off
     ("(new: issue 16 counting)", "life.jump_rewind", False),  # go on from before a jump, off
     ("(new: issue 16 counting)", "life.rewind_across", False),  # then measured across only, off
+    ("(new: issue 16 counting)", "life.rewind_off_rows", False),  # only the off rows, then predicts
     # unjudged tracks explained by a counted one, and joins by appearance: both off (docs/rules.md)
     ("(new: issue 16 counting)", "explain.enabled", False),
     ("(new: issue 16 counting)", "explain.duplicate_widths", 1.0),

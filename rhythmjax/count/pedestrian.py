@@ -45,12 +45,12 @@ class Pedestrian:
     candidate_rows: list[tuple[float, ...]] | None = None  # `verdicts.window_candidates`: per
     # row, I(k) of the candidate windows B (`io.files.WINDOW_CANDIDATES` order, grey levels; NaN
     # where the row's intensity is), read by `track.toolkit.match_window`; None: option off
-    states: deque | None = None  # `life.jump_rewind`: (t s, filter mean (4) + cov (16)) of its
-    # last rows (`rewind.keep_state`); None: option off
+    states: deque | None = None  # `life.jump_rewind`: (t s, filter mean (4) + cov (16), foot
+    # row off its prediction) of its last rows (`rewind.keep_state`); None: option off
     restore: tuple | None = None  # (state (20,), lead s): its slot goes back there next step
     rewind_times: list[float] = field(default_factory=list)  # t s of each `rewind.rewind`
-    rewound: bool = False  # `life.rewind_across`: rewound, measured across only while the placed
-    # foot row lies beyond the level's row tolerance from its predicted row
+    rewound: bool = False  # `life.rewind_across` / `rewind_off_rows`: rewound, measured across
+    # only (or predicting) while its placed foot row lies beyond the level's row tolerance
 
 
 def finite_uv(uv) -> bool:

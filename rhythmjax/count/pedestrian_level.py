@@ -72,7 +72,7 @@ from .occlusion import feet_hidden, foot_row_tolerance, is_wide, placement_order
 from .patches import ShapeModel, ground_point, patch_box, place_patch
 from .pedestrian import Pedestrian as Pedestrian, finite_uv
 from .refinement import in_range, new_pedestrians
-from .rewind import keep_state, rewind, rewind_requests, state_store
+from .rewind import keep_state, rewind, rewind_requests, rows_to_drop, state_store
 from .rows import BlobRow, BoxRow, GroundRow
 from .slot_filter import FILTER_OUT, FilterOut, SlotFilter, filter_config
 from .still import duplicates, is_still
@@ -278,6 +278,8 @@ class PedestrianLevel:
                 z = (pl.u, float(p.next_uv[1]))
             elif p.rewound and abs(pl.v - p.next_uv[1]) > self.row_tolerance:  # `count.rewind`
                 self.gated["rewound"] = self.gated.get("rewound", 0) + 1  # its row still off:
+                if opt.life.rewind_off_rows:
+                    continue  # it predicts (`life.rewind_off_rows`)
                 z = (pl.u, float(p.next_uv[1]))  # across only (`life.rewind_across`)
             p.rewound = p.rewound and z[1] != pl.v  # ... until a row within the tolerance
             p.z = z  # the object's width: its blob's run, a patch width around
@@ -321,6 +323,7 @@ class PedestrianLevel:
         measured = finite_uv(p.z) and out.used[s] > 0.5  # the filter took it (`outlier_gate`)
         if not measured:
             p.z = (math.nan, math.nan)  # none, or refused: it predicts
+        off = bool(measured and abs(p.z[1] - p.next_uv[1]) > self.row_tolerance)  # row vs placed
         p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
         p.coast = 0.0 if measured else p.coast + dt
         (eu, ev), (nu, nv) = out.est_uv[s], out.next_uv[s]
@@ -346,7 +349,7 @@ class PedestrianLevel:
         vx, vy = out.velocity[s] if self.opt.dynamics == "3d" else (math.nan, math.nan)
         p.ground.append(GroundRow(gx, gy, vx, vy, *out.image_velocity[s], *(
             out.velocity_cov[s] if self.opt.dynamics == "3d" else (math.nan,) * 3)))
-        keep_state(p, out, t)  # `life.jump_rewind`
+        keep_state(p, out, t, off)  # `life.jump_rewind`
         p.blobs = meeting(self.patch_at(p.est_uv), boxes, 0.1)
         if p.track_id == 0:
             if p.hits >= self.opt.life.confirm_hits:
@@ -358,13 +361,15 @@ class PedestrianLevel:
             self._match(p)
         still = self._still(p)  # a ghost or a stopped object: no walker's frames, its patch
         jump = self.still_rows if still else self._velocity_jump(p)  # into the background
+        jump, goes_on = rows_to_drop(p, jump, self.opt.life.rewind_off_rows and not still)
         if jump:  # lost its object: the implausible frames go, the track ends before them
             p.rows, p.boxes, p.ground = p.rows[:-jump], p.boxes[:-jump], p.ground[:-jump]
             if p.candidate_rows is not None:
                 p.candidate_rows = p.candidate_rows[:-jump]
-            if not still and rewind(p, jump, t, self.shape.camera, self.filter.dt_nominal):
+            if goes_on and not still and rewind(p, jump, t, self.shape.camera,
+                                                self.filter.dt_nominal):
                 jump, self.rewinds = 0, self.rewinds + 1  # ... or goes on from before them:
-                p.rewound = self.opt.life.rewind_across
+                p.rewound = self.opt.life.rewind_across or self.opt.life.rewind_off_rows
                 w, h = p.size = tuple(float(q) for q in self.shape.size(*p.est_uv))  # there,
                 p.blobs = meeting(self.patch_at(p.est_uv), boxes, 0.1)  # related to its blobs
         H, Wi = self.image_shape

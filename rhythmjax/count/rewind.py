@@ -13,6 +13,13 @@ jumping times out after `thresholds.predict_timeout_s` like any other. The state
 2k + 1 rows are kept; a jump with fewer than k + 1 of them (a track younger than that) ends the
 track as without the option.
 
+With `life.rewind_off_rows` (off) not all k rows go: only those from the first whose measured foot
+row lay more than the level's row tolerance (`occlusion.foot_row_tolerance`, 3 r_v) from the
+prediction it was placed against (`rows_to_drop`; measured on the pools, the foot row leaves its
+walker only in the last one to four of the k frames, docs/rules.md, twenty-first round); a jump
+with no such row among them ends the track as without the option. The rewound pedestrian then
+predicts while its placed foot row stays beyond that tolerance (the merged blob still below it).
+
 Units: s, m, m/s, px.
 """
 
@@ -29,7 +36,7 @@ from .pedestrian import Pedestrian
 from .slot_filter import FilterOut, Restore
 
 
-__all__ = ["keep_state", "rewind", "rewind_requests", "state_store"]
+__all__ = ["keep_state", "rewind", "rewind_requests", "rows_to_drop", "state_store"]
 
 
 def state_store(k: int) -> deque:
@@ -38,12 +45,27 @@ def state_store(k: int) -> deque:
     return deque(maxlen=2 * int(k) + 1)
 
 
-def keep_state(p: Pedestrian, out: FilterOut, t: float) -> None:
+def keep_state(p: Pedestrian, out: FilterOut, t: float, off: bool = False) -> None:
     """Store slot `p.slot`'s state of this frame (t s; mean (4) and covariance (16) of `out`)
-    with the row just appended; nothing when `p.states` is None (option off)."""
+    with the row just appended, and whether its measured foot row was off its prediction (`off`,
+    beyond the row tolerance); nothing when `p.states` is None (option off)."""
     if p.states is not None:
         s = p.slot
-        p.states.append((float(t), np.concatenate([out.mean[s], out.cov[s]])))
+        p.states.append((float(t), np.concatenate([out.mean[s], out.cov[s]]), bool(off)))
+
+
+def rows_to_drop(p: Pedestrian, k: int, only_off: bool) -> tuple[int, bool]:
+    """(rows to drop, whether the track may go on) at a velocity jump over its last k rows: (k,
+    True) unless `only_off`; with it the rows from the first of the last k whose foot row was
+    off (`keep_state`) to the newest, or (k, False) when none was or no state before it is
+    kept: the track ends as without the option."""
+    if not only_off or p.states is None or k <= 0:
+        return k, True
+    flags = [q[2] for q in list(p.states)[-k:]]
+    first = next((i for i, off in enumerate(flags) if off), None)
+    if first is None or len(p.states) < len(flags) - first + 1:
+        return k, False
+    return len(flags) - first, True
 
 
 def rewind(p: Pedestrian, k: int, t: float, camera, dt_next: float) -> bool:
@@ -61,7 +83,7 @@ def rewind(p: Pedestrian, k: int, t: float, camera, dt_next: float) -> bool:
     measured = [r.t for r in p.rows if r.state == TrackState.OBSERVE]
     if not measured:
         return False
-    t_then, state = states[-1]
+    t_then, state, _ = states[-1]
     lead = t - t_then
     x, vx, y, vy = (float(q) for q in state[:4])
     p.restore = (state, lead)
