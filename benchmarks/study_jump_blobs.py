@@ -156,7 +156,9 @@ def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None,
     truth (`placed_frames`) and those whose placed foot row is more than `OFF_HEIGHTS` patch
     heights off (`off_rows`), the median |du| px of the placed column (`du_placed`), the median
     |dv| px over its own last `last` rows before the end (`dv_kept`), the frames with both a
-    truth and a head row (`head_frames`) and the piece's rows (`rows`).
+    truth and a head row (`head_frames`) and the piece's rows (`rows`); in the dropped frames
+    that are off and have a head row (`head_off_frames`) the median |dv| px of the foot row
+    from the head and of the placed one (`dv_head_off`, `dv_placed_off`).
     With `speeds` (`watched_placements`): `speed_before`, `speed_at`, `dv_mps` m/s (NaN where
     not recorded). `owner(boxes, truth, offset, kinds)` -> (walker id, kind): by default
     `study_track_ends.piece_owner`."""
@@ -175,6 +177,7 @@ def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None,
         after = [(f, *x[2:6]) for f, x in sorted(seen.items()) if f > end]
         du = dv = 0.0
         placed_du, placed_dv, head_dv, kept_dv, off_rows = [], [], [], [], 0
+        head_off, placed_off = [], []  # in the dropped frames off by more than OFF_HEIGHTS
         for f, x in seen.items():
             t = truth_foot(truth, walker, f, offset)
             if t is not None:
@@ -184,9 +187,13 @@ def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None,
                 else:
                     placed_du.append(abs(x[2] - t[0]))
                     placed_dv.append(abs(x[3] - t[1]))
-                    off_rows += abs(x[3] - t[1]) > OFF_HEIGHTS * x[5]
+                    off = abs(x[3] - t[1]) > OFF_HEIGHTS * x[5]
+                    off_rows += off
                     if np.isfinite(x[6]):
                         head_dv.append(abs(x[6] - t[1]))
+                        if off:
+                            head_off.append(abs(x[6] - t[1]))
+                            placed_off.append(abs(x[3] - t[1]))
         seen = list(seen.values())
         out.append({"ratio": max((s[0] for s in seen), default=np.nan),
                     "shared": any(s[1] for s in seen), "du": du, "dv": dv,
@@ -199,6 +206,9 @@ def jump_pieces(pieces, log, truth, kinds, offset: int, last: int, owner=None,
                     "off_rows": int(off_rows),
                     "dv_head": float(np.median(head_dv)) if head_dv else np.nan,
                     "head_frames": len(head_dv), "rows": len(p.boxes),
+                    "dv_head_off": float(np.median(head_off)) if head_off else np.nan,
+                    "dv_placed_off": float(np.median(placed_off)) if placed_off else np.nan,
+                    "head_off_frames": len(head_off),
                     "placed_frames": len(placed_dv)})
         if speeds is not None:
             out[-1].update(zip(("speed_before", "speed_at", "dv_mps"),
@@ -215,6 +225,7 @@ def own_walker_line(jumps: list[dict]) -> str | None:
     if not own:
         return None
     head = [j for j in own if j["head_frames"]]
+    head_off = [j for j in own if j["head_off_frames"]]
 
     def med(js, key):
         return float(np.nanmedian([j[key] for j in js])) if js else np.nan
@@ -229,6 +240,8 @@ def own_walker_line(jumps: list[dict]) -> str | None:
             f"its own last rows |dv| {med(own, 'dv_kept'):.1f} px; {len(head)} pieces with a "
             f"head row in the dropped frames, the foot row it implies off by "
             f"{med(head, 'dv_head'):.1f} px (placed, in those: {med(head, 'dv_placed'):.1f}); "
+            f"in the off frames ({len(head_off)} pieces with a head row there) "
+            f"{med(head_off, 'dv_head_off'):.1f} px (placed {med(head_off, 'dv_placed_off'):.1f}); "
             "medians over pieces" + (
                 f"; ground speed {med(own, 'speed_before'):.2f} m/s k rows before the jump, "
                 f"{med(own, 'speed_at'):.2f} at it, velocity change {med(own, 'dv_mps'):.2f}"

@@ -217,6 +217,7 @@ def test_the_options_are_off_by_default():
     assert CountOptions().life.jump_rewind is False
     assert CountOptions().life.rewind_across is False
     assert CountOptions().life.rewind_off_rows is False
+    assert CountOptions().life.rewind_predict is False
 
 
 @pytest.mark.parametrize("bad", [0, 2])
@@ -246,7 +247,7 @@ def test_only_the_off_rows_go(bad):
         assert p not in level.peds and p.end_reason == "velocity-jump"
         assert len(level.finished[0].rows) == n + 1 - k and level.rewinds == 0
         return
-    assert p in level.peds and level.rewinds == 1 and p.rewound
+    assert p in level.peds and level.rewinds == 1 and not p.rewound  # rewind_predict off
     assert len(p.rows) == n + 1 - bad and len(p.ground) == n + 1 - bad
     assert len(p.states) == 2 * k + 1 - bad and not any(q[2] for q in p.states)  # off ones gone
     state, lead = p.restore
@@ -302,7 +303,7 @@ def test_a_rewound_walker_is_measured_across_only_until_its_row_agrees(across):
 
 
 def test_a_rewound_walker_predicts_while_its_row_is_off():
-    """`life.rewind_off_rows`: on the merged blob above (its bottom 10.5 px below the predicted
+    """`life.rewind_predict`: on the merged blob above (its bottom 10.5 px below the predicted
     row) the rewound walker takes no measurement and stays rewound; alone on its own blob it is
     measured and no longer rewound."""
     from rhythmjax.count.options import VerdictOptions
@@ -311,7 +312,7 @@ def test_a_rewound_walker_predicts_while_its_row_is_off():
     from .test_count_occlusion import CFG as SMALL_CFG, alone_on
 
     opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
-                       {"life.jump_rewind": True, "life.rewind_off_rows": True})
+                       {"life.jump_rewind": True, "life.rewind_predict": True})
     level = PedestrianLevel(SMALL_CFG, opt)
     p, _ = alone_on(level, lambda wf: [(60, 85, 160, 113)], rewound=True)
     assert math.isnan(p.z[0]) and math.isnan(p.z[1]) and p.rewound

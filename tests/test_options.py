@@ -117,7 +117,8 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "placement.noise", ()),  # the counting filter's own noise, off
     ("(new: issue 16 counting)", "life.jump_rewind", False),  # go on from before a jump, off
     ("(new: issue 16 counting)", "life.rewind_across", False),  # then measured across only, off
-    ("(new: issue 16 counting)", "life.rewind_off_rows", False),  # only the off rows, then predicts
+    ("(new: issue 16 counting)", "life.rewind_off_rows", False),  # only the off rows go, off
+    ("(new: issue 16 counting)", "life.rewind_predict", False),  # then predicts while off, off
     # unjudged tracks explained by a counted one, and joins by appearance: both off (docs/rules.md)
     ("(new: issue 16 counting)", "explain.enabled", False),
     ("(new: issue 16 counting)", "explain.duplicate_widths", 1.0),

@@ -84,14 +84,16 @@ def test_a_jump_piece_record():
                      "dropped_on": "nothing", "dv_kept": 0.0, "du_placed": 9.0,
                      "dv_placed": 25.0, "dv_worst": 25.0, "off_rows": 4, "dv_head": 4.0,
                      "head_frames": 2, "rows": 15, "placed_frames": 4, "speed_before": 1.2,
-                     "speed_at": 2.9, "dv_mps": 2.1}]
+                     "speed_at": 2.9, "dv_mps": 2.1, "dv_head_off": 4.0, "dv_placed_off": 25.0,
+                     "head_off_frames": 2}]
     # only the end frame (19) itself: on the walker, and no dropped frame looked at
     (rec,) = near
     assert {k: rec[k] for k in ("ratio", "shared", "du", "dv", "dropped_on", "dv_kept",
                                 "head_frames", "rows", "off_rows", "placed_frames")} == {
         "ratio": 1.5, "shared": False, "du": 0.0, "dv": 0.0, "dropped_on": "not placed",
         "dv_kept": 0.0, "head_frames": 0, "rows": 15, "off_rows": 0, "placed_frames": 0}
-    assert all(np.isnan(rec[k]) for k in ("du_placed", "dv_placed", "dv_worst", "dv_head"))
+    assert all(np.isnan(rec[k]) for k in ("du_placed", "dv_placed", "dv_worst", "dv_head",
+                                          "dv_head_off", "dv_placed_off"))
     assert "speed_at" not in rec  # no speeds given
 
 
@@ -128,7 +130,9 @@ def test_the_own_walker_line():
     rec = lambda on, dv, head, n: {"dropped_on": on, "rows": n, "du_placed": 2.0,  # noqa: E731
                                    "dv_placed": dv, "dv_worst": 10 * dv, "off_rows": n // 10,
                                    "placed_frames": 8, "dv_kept": 1.0, "dv_head": head,
-                                   "head_frames": int(not np.isnan(head))}
+                                   "head_frames": int(not np.isnan(head)),
+                                   "dv_head_off": head + 1.0, "dv_placed_off": 4 * dv,
+                                   "head_off_frames": int(not np.isnan(head))}
     assert sjb.own_walker_line([rec("nothing", 9.0, np.nan, 10)]) is None
     line = sjb.own_walker_line([rec("own walker", 1.0, np.nan, 10),
                                 rec("own walker", 3.0, 8.0, 20),
@@ -141,8 +145,8 @@ def test_the_own_walker_line():
                     "at worst |dv| 20.0 px; dropped frames off by more than 0.1 H: 2 of each "
                     "piece's 8; in its own last rows |dv| 1.0 px; 1 pieces with a head row in "
                     "the dropped frames, the foot row it implies off by 8.0 px (placed, in those: "
-                    "3.0); "
-                    "medians over pieces")
+                    "3.0); in the off frames (1 pieces with a head row there) 9.0 px (placed "
+                    "12.0); medians over pieces")
 
 
 def test_the_foot_row_from_the_head():

@@ -129,7 +129,8 @@ class LifeOptions:
     rewind_across: bool = False  # ... and it is then measured across only (u placed, v its
     # predicted row) while its placed foot row is beyond `occlusion.foot_row_tolerance` (off)
     rewind_off_rows: bool = False  # ... only the rows from the first whose foot row was beyond
-    # that tolerance of its prediction go, and it predicts while its row stays off (`count.rewind`)
+    # that tolerance of its prediction go (`count.rewind`; off)
+    rewind_predict: bool = False  # ... and it predicts while its placed row stays off (off)
     still_s: float = 5.0  # a pedestrian whose foot point stays put this long ends (0: never)
     still_widths: float = 0.15  # ... its 1 s block means within this many W across
     still_heights: float = 0.04  # ... and this many H up or down (`still.is_still`)

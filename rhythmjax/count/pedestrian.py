@@ -49,7 +49,7 @@ class Pedestrian:
     # row off its prediction) of its last rows (`rewind.keep_state`); None: option off
     restore: tuple | None = None  # (state (20,), lead s): its slot goes back there next step
     rewind_times: list[float] = field(default_factory=list)  # t s of each `rewind.rewind`
-    rewound: bool = False  # `life.rewind_across` / `rewind_off_rows`: rewound, measured across
+    rewound: bool = False  # `life.rewind_across` / `rewind_predict`: rewound, measured across
     # only (or predicting) while its placed foot row lies beyond the level's row tolerance
 
 

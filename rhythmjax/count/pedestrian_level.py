@@ -278,8 +278,8 @@ class PedestrianLevel:
                 z = (pl.u, float(p.next_uv[1]))
             elif p.rewound and abs(pl.v - p.next_uv[1]) > self.row_tolerance:  # `count.rewind`
                 self.gated["rewound"] = self.gated.get("rewound", 0) + 1  # its row still off:
-                if opt.life.rewind_off_rows:
-                    continue  # it predicts (`life.rewind_off_rows`)
+                if opt.life.rewind_predict:
+                    continue  # it predicts (`life.rewind_predict`)
                 z = (pl.u, float(p.next_uv[1]))  # across only (`life.rewind_across`)
             p.rewound = p.rewound and z[1] != pl.v  # ... until a row within the tolerance
             p.z = z  # the object's width: its blob's run, a patch width around
@@ -369,7 +369,7 @@ class PedestrianLevel:
             if goes_on and not still and rewind(p, jump, t, self.shape.camera,
                                                 self.filter.dt_nominal):
                 jump, self.rewinds = 0, self.rewinds + 1  # ... or goes on from before them:
-                p.rewound = self.opt.life.rewind_across or self.opt.life.rewind_off_rows
+                p.rewound = self.opt.life.rewind_across or self.opt.life.rewind_predict
                 w, h = p.size = tuple(float(q) for q in self.shape.size(*p.est_uv))  # there,
                 p.blobs = meeting(self.patch_at(p.est_uv), boxes, 0.1)  # related to its blobs
         H, Wi = self.image_shape

@@ -17,8 +17,9 @@ With `life.rewind_off_rows` (off) not all k rows go: only those from the first w
 row lay more than the level's row tolerance (`occlusion.foot_row_tolerance`, 3 r_v) from the
 prediction it was placed against (`rows_to_drop`; measured on the pools, the foot row leaves its
 walker only in the last one to four of the k frames, docs/rules.md, twenty-first round); a jump
-with no such row among them ends the track as without the option. The rewound pedestrian then
-predicts while its placed foot row stays beyond that tolerance (the merged blob still below it).
+with no such row among them ends the track as without the option. With `life.rewind_predict`
+(off) the rewound pedestrian then predicts while its placed foot row stays beyond that
+tolerance (the merged blob still below it).
 
 Units: s, m, m/s, px.
 """
