@@ -119,6 +119,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "life.rewind_across", False),  # then measured across only, off
     ("(new: issue 16 counting)", "life.rewind_off_rows", False),  # only the off rows go, off
     ("(new: issue 16 counting)", "life.rewind_predict", False),  # then predicts while off, off
+    ("(new: issue 16 counting)", "life.merge_hold_s", 0.0),  # a merge holds the time-out, off
     # unjudged tracks explained by a counted one, and joins by appearance: both off (docs/rules.md)
     ("(new: issue 16 counting)", "explain.enabled", False),
     ("(new: issue 16 counting)", "explain.duplicate_widths", 1.0),

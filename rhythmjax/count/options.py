@@ -131,6 +131,8 @@ class LifeOptions:
     rewind_off_rows: bool = False  # ... only the rows from the first whose foot row was beyond
     # that tolerance of its prediction go (`count.rewind`; off)
     rewind_predict: bool = False  # ... and it predicts while its placed row stays off (off)
+    merge_hold_s: float = 0.0  # > 0: one keeping its prediction in a merge it entered measured
+    # does not run the PREDICT time-out, for up to this many s (`count.coast`; 0: off)
     still_s: float = 5.0  # a pedestrian whose foot point stays put this long ends (0: never)
     still_widths: float = 0.15  # ... its 1 s block means within this many W across
     still_heights: float = 0.04  # ... and this many H up or down (`still.is_still`)
@@ -251,6 +253,7 @@ class CountOptions:
         check_noise(self.placement.noise)
         for key, value in (("placement.wide_widths", self.placement.wide_widths),
                            ("life.max_dv_w", self.life.max_dv_w),
-                           ("life.jump_sigma", self.life.jump_sigma)):
+                           ("life.jump_sigma", self.life.jump_sigma),
+                           ("life.merge_hold_s", self.life.merge_hold_s)):
             if not (value >= 0 and math.isfinite(value)):  # NaN too
                 raise ValueError(f"{key} must be >= 0 (0: off), got {value!r}")

@@ -26,7 +26,9 @@ class Pedestrian:
     boxes: list[BoxRow] = field(default_factory=list)  # per row: the patch, a MOT row
     hits: int = 0
     misses: int = 0
-    coast: float = 0.0  # s without a measurement
+    coast: float = 0.0  # s without a measurement (outside merges with `life.merge_hold_s`)
+    held: float = 0.0  # `life.merge_hold_s`: s held in a merge since its last measurement
+    merged: bool = False  # this frame it kept its prediction in a merge (`count.coast`)
     next_uv: tuple = (math.nan, math.nan)  # predicted foot point for the next frame, px
     est_uv: tuple = (math.nan, math.nan)
     size: tuple = (math.nan, math.nan)  # patch (w, h) px at est_uv

@@ -24,17 +24,17 @@ Per frame (`PedestrianLevel.update`):
    of the run (`refinement.new_pedestrians`; with `new.head_feet`, a run too tall for a walker
    standing on its bottom starts with the feet its top row implies, `head_feet`); confirmed after
    `life.confirm_hits` measured frames (dropped at `life.tentative_misses` misses). One ends: after
-   predicting for predict_timeout_s; ("3d") when its ground velocity changes by more than
-   `life.max_dv_mps` within `life.dv_window_s` s (no walker or cyclist turns or brakes that fast: it
-   lost its walker and ends without those frames, `track.toolkit.velocity_jump`; with
-   `life.max_dv_w` the image velocity in W/s instead, `image_velocity_jump`, off; with
-   `life.jump_sigma` only a change the filter's own velocity noise does not explain; with
-   `life.jump_rewind` it goes on from its state before the change instead, `rewind`); when its foot
-   point stayed put for `life.still_s` s (`still.is_still`: a ghost or a stopped object, copied into
-   the background under its patch); two within `life.duplicate_widths` W with the same image
-   velocity for `life.duplicate_frames` frames are one: the younger ends. Relations for the next
-   frame: the blobs the placed patch overlaps. The background starts from `background` (the first
-   seconds' median, `still.peek_background`), else from the first frame.
+   predicting for predict_timeout_s (held in a merge up to `life.merge_hold_s`, `coast`); ("3d")
+   when its ground velocity changes by more than `life.max_dv_mps` within `life.dv_window_s` s (no
+   walker or cyclist turns or brakes that fast: it lost its walker and ends without those frames,
+   `track.toolkit.velocity_jump`; with `life.max_dv_w` the image velocity in W/s instead,
+   `image_velocity_jump`, off; with `life.jump_sigma` only a change the filter's own velocity noise
+   does not explain; with `life.jump_rewind` it goes on from its state before the change instead,
+   `rewind`); when its foot point stayed put for `life.still_s` s (`still.is_still`: a ghost or a
+   stopped object, copied into the background under its patch); two within `life.duplicate_widths` W
+   with the same image velocity for `life.duplicate_frames` frames are one: the younger ends.
+   Relations for the next frame: the blobs the placed patch overlaps. The background starts from
+   `background` (the first seconds' median, `still.peek_background`), else from the first frame.
 Every frame each pedestrian samples I(k) in window B at its foot point
 (`detect.window_b_intensity` on the frame difference, W = its patch width; with
 `verdicts.window_candidates` also in window B moved by each offset of `io.files.
@@ -67,6 +67,7 @@ from ..track.toolkit import (
 from ..vision.blobs import box_table, meeting
 from ..vision.detect import window_b_intensity
 from .appearance import look_of_frame
+from .coast import advance_coast, timed_out
 from .foot_gate import gated
 from .occlusion import feet_hidden, foot_row_tolerance, is_wide, placement_order
 from .patches import ShapeModel, ground_point, patch_box, place_patch
@@ -110,9 +111,8 @@ class PedestrianLevel:
         self.coast_s = float(cfg.thresholds.predict_timeout)
         self.peds: list[Pedestrian] = []
         self.finished: list[Pedestrian] = []
-        self.bg = self.prev = self.gray = None
+        self.bg = self.prev = self.gray = self.last_t = None  # last_t: the last frame's t, s
         self.prev_blobs: list = []
-        self.last_t: float | None = None
         self.next_id, self.n_frames = 1, 0
         self.crowd_frames: list[int] = []
         self.missing_frames: list[int] = []
@@ -162,7 +162,7 @@ class PedestrianLevel:
         self._flush()
         for p in self.peds:
             p.z, p.z_width = (math.nan, math.nan), math.nan  # unless placed
-            p.z_top = p.z_top_u = math.nan
+            p.z_top, p.z_top_u, p.merged = math.nan, math.nan, False
         boxes = box_table(blobs)
         rel = self._relate(graph, blobs, boxes)
         S = self.filter.slots
@@ -252,7 +252,8 @@ class PedestrianLevel:
                 boxes = [blobs[j].box for j in mine if users[j] > 1]
                 width = max(b[2] for b in boxes) - min(b[0] for b in boxes)
                 if width < opt.placement.merge_widths * k * w0:
-                    continue  # walking past each other: keep the prediction
+                    p.merged = True  # walking past each other: keep the prediction
+                    continue
             bx = [blobs[j].box for j in mine]
             bbox = (min(b[0] for b in bx), min(b[1] for b in bx), max(b[2] for b in bx),
                     max(b[3] for b in bx))
@@ -325,7 +326,7 @@ class PedestrianLevel:
             p.z = (math.nan, math.nan)  # none, or refused: it predicts
         off = bool(measured and abs(p.z[1] - p.next_uv[1]) > self.row_tolerance)  # row vs placed
         p.hits, p.misses = p.hits + measured, 0 if measured else p.misses + 1
-        p.coast = 0.0 if measured else p.coast + dt
+        advance_coast(p, bool(measured), dt, self.opt.life.merge_hold_s)  # `count.coast`
         (eu, ev), (nu, nv) = out.est_uv[s], out.next_uv[s]
         p.est_uv, p.next_uv = (eu, ev), (nu, nv)
         p.step_uv = (nu - eu, nv - ev)
@@ -377,7 +378,7 @@ class PedestrianLevel:
         outside = not (math.isfinite(w) and -0.5 * w <= u <= Wi + 0.5 * w and 0 <= v <= H + h)
         if still:
             self.absorb.append((u - w, v - 1.2 * h, u + w, v + 0.1 * h))
-        if p.coast > self.coast_s or outside or jump:
+        if timed_out(p, self.coast_s, self.opt.life.merge_hold_s) or outside or jump:
             self._end(p, "still" if still else "velocity-jump" if jump else
                       "left-image" if outside else "timeout")
 
