@@ -22,9 +22,13 @@ walker's columns. It is placed as a shared one is (the shared search radius), an
 foot row is used only within `foot_row_tolerance` of the prediction: k_sigma2 (Table 1) times the
 foot row's noise std r_std_v (the config's R), px; beyond that it is measured across only.
 
-Both are off: measured against decision rules written first, neither passed the held-out pools,
+`placement.shared_row_gate` (default off) refuses the foot row on shared blobs outright: a
+pedestrian sharing its blob with another whose placed foot row lies beyond that tolerance of the
+prediction takes no measurement (it predicts through the merge).
+
+All are off: measured against decision rules written first, none passed the held-out pools,
 the dev crowds or PETS09 (docs/rules.md, "What the pieces that end by the velocity jump were
-placed on").
+placed on" and later sections).
 """
 
 from __future__ import annotations
@@ -36,7 +40,8 @@ import numpy as np
 from ..model.params import Config, host_float
 
 
-__all__ = ["HIDDEN_ROWS", "feet_hidden", "foot_row_tolerance", "is_wide", "placement_order"]
+__all__ = ["HIDDEN_ROWS", "feet_hidden", "foot_row_tolerance", "is_wide", "placement_order",
+           "row_gated"]
 
 HIDDEN_ROWS = 2  # rows below a foot row searched for a nearer patch's claimed pixels (a priori)
 
@@ -87,3 +92,27 @@ def foot_row_tolerance(cfg: Config) -> float:
     measure its foot row (Table 1's k_sigma2 = 3; r_std_v the config's foot-row noise std,
     `noise.r_std_px[1]`)."""
     return host_float(cfg.thresholds.k_sigma2) * float(np.asarray(cfg.noise.r_std())[1])
+
+
+def row_gated(level, p, pl, z, *, shared: bool, wide: bool, claimed: np.ndarray | None):
+    """`PedestrianLevel._place`: pedestrian `p`'s measurement `z` (u, v) px from placement `pl`
+    under the row rules, each counted in `level.gated`: "hidden" (`placement.depth_order`, a
+    `shared` placement whose feet stand on a nearer patch's `claimed` pixels) and "wide" (a
+    `wide` one whose row lies beyond `level.row_tolerance` px of the prediction): measured
+    across only, (pl.u, predicted v); "rewound" (`count.rewind`, its row off): across only, or
+    None (it predicts) with `life.rewind_predict`; "shared-row" (`placement.shared_row_gate`, a
+    shared one whose row is off): None. Otherwise `z` unchanged."""
+    opt, v_pred = level.opt, float(p.next_uv[1])
+    off = abs(pl.v - v_pred) > level.row_tolerance
+    why, across = None, (pl.u, v_pred)
+    if shared and opt.placement.depth_order and feet_hidden(claimed, pl.u, pl.v, pl.w):
+        why, z = "hidden", across  # behind a nearer one
+    elif wide and off:
+        why, z = "wide", across  # its row: another object's
+    elif p.rewound and off:
+        why, z = "rewound", None if opt.life.rewind_predict else across
+    elif shared and off and opt.placement.shared_row_gate:
+        why, z = "shared-row", None
+    if why is not None:
+        level.gated[why] = level.gated.get(why, 0) + 1
+    return z

@@ -82,6 +82,8 @@ class PlacementOptions:
     # a nearer patch's claimed pixels measured across only (`count.occlusion`)
     wide_widths: float = 0.0  # > 0: one alone on blobs wider than this many W is placed as a
     # shared one, its foot row used only within k_sigma2 r_std_v of the prediction (occlusion)
+    shared_row_gate: bool = False  # one sharing its blob whose placed foot row lies beyond
+    # k_sigma2 r_std_v of the prediction takes no measurement: it predicts (`count.occlusion`)
     noise: tuple | list = ()  # (q_x, q_y m/s/sqrt(s), r_u, r_v px, r_corr): the counting filter's
     # noise instead of the config's (`slot_filter.filter_config`; () the config's)
 

@@ -69,7 +69,7 @@ from ..vision.detect import window_b_intensity
 from .appearance import look_of_frame
 from .coast import advance_coast, timed_out
 from .foot_gate import gated
-from .occlusion import feet_hidden, foot_row_tolerance, is_wide, placement_order
+from .occlusion import foot_row_tolerance, is_wide, placement_order, row_gated
 from .patches import ShapeModel, ground_point, patch_box, place_patch
 from .pedestrian import Pedestrian as Pedestrian, finite_uv
 from .refinement import in_range, new_pedestrians
@@ -271,17 +271,9 @@ class PedestrianLevel:
                              v_max=v_max, min_cover=opt.placement.min_cover, bbox=bbox)
             if pl is None or (z := gated(self, p, pl)) is None:  # `count.foot_gate`
                 continue
-            if k > 1 and opt.placement.depth_order and feet_hidden(claimed, pl.u, pl.v, pl.w):
-                self.gated["hidden"] = self.gated.get("hidden", 0) + 1  # behind a nearer one:
-                z = (pl.u, float(p.next_uv[1]))  # measured across only
-            elif wide and abs(pl.v - p.next_uv[1]) > self.row_tolerance:
-                self.gated["wide"] = self.gated.get("wide", 0) + 1  # its row: another object's
-                z = (pl.u, float(p.next_uv[1]))
-            elif p.rewound and abs(pl.v - p.next_uv[1]) > self.row_tolerance:  # `count.rewind`
-                self.gated["rewound"] = self.gated.get("rewound", 0) + 1  # its row still off:
-                if opt.life.rewind_predict:
-                    continue  # it predicts (`life.rewind_predict`)
-                z = (pl.u, float(p.next_uv[1]))  # across only (`life.rewind_across`)
+            z = row_gated(self, p, pl, z, shared=k > 1, wide=wide, claimed=claimed)
+            if z is None:  # `count.occlusion`: its row another object's, it predicts
+                continue
             p.rewound = p.rewound and z[1] != pl.v  # ... until a row within the tolerance
             p.z = z  # the object's width: its blob's run, a patch width around
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
