@@ -203,3 +203,53 @@ def test_a_negative_or_nan_limit_is_refused(key, value):
         with_changes(CountOptions(), {key: value})
     group, name = key.split(".")
     assert getattr(getattr(with_changes(CountOptions(), {key: 3.0}), group), name) == 3.0
+
+
+@pytest.mark.parametrize("gate", [False, True])
+def test_a_shared_placement_whose_row_is_off_predicts_with_the_gate(gate):
+    """`placement.shared_row_gate`: the merged blob above (the older far walker placed first
+    takes the nearer one's feet, a quarter far H = about 9 px below its predicted row, over the
+    6 px tolerance): without the gate it measures that row, with it it takes no measurement
+    (gated "shared-row"); the nearer walker, on its own feet, is measured either way."""
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"placement.shared_row_gate": gate})
+    level = PedestrianLevel(CFG, opt)
+    far, near, blobs, lab, wf, hf, vn = _merged(level, 1.0)
+    assert vn - far.next_uv[1] > level.row_tolerance
+    level._place({id(far): {0}, id(near): {0}}, blobs, lab)
+    assert near.z == pytest.approx((near.next_uv[0], vn), abs=1.0)
+    if gate:
+        assert all(np.isnan(far.z)) and level.gated == {"shared-row": 1}
+    else:
+        assert far.z[1] == vn and level.gated == {}
+
+
+def test_row_gated_by_hand():
+    """`row_gated` on a stub level: the first rule that applies wins; within the tolerance (6 px
+    here) nothing changes; alone (not shared) the shared-row gate does not apply."""
+    from rhythmjax.count.occlusion import row_gated
+
+    def level(**changes):
+        opt = with_changes(CountOptions(), changes)
+        return SimpleNamespace(opt=opt, row_tolerance=6.0, gated={})
+
+    p = SimpleNamespace(next_uv=(50.0, 100.0), rewound=False)
+    near, off = SimpleNamespace(u=52.0, v=105.0, w=20.0), SimpleNamespace(u=52.0, v=107.0, w=20.0)
+    on = level(**{"placement.shared_row_gate": True})
+    assert row_gated(on, p, near, (52.0, 105.0), shared=True, wide=False, claimed=None) == \
+        (52.0, 105.0)
+    assert row_gated(on, p, off, (52.0, 107.0), shared=True, wide=False, claimed=None) is None
+    assert on.gated == {"shared-row": 1}
+    assert row_gated(on, p, off, (52.0, 107.0), shared=False, wide=False, claimed=None) == \
+        (52.0, 107.0)
+    assert row_gated(on, p, off, (52.0, 107.0), shared=True, wide=True, claimed=None) == \
+        (52.0, 100.0) and on.gated == {"shared-row": 1, "wide": 1}  # wide first: across only
+    default = level()
+    assert row_gated(default, p, off, (52.0, 107.0), shared=True, wide=False,
+                     claimed=None) == (52.0, 107.0) and default.gated == {}
+    p.rewound = True
+    predict = level(**{"life.rewind_predict": True})
+    assert row_gated(predict, p, off, (52.0, 107.0), shared=False, wide=False,
+                     claimed=None) is None and predict.gated == {"rewound": 1}
