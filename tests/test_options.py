@@ -121,6 +121,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "life.rewind_predict", False),  # then predicts while off, off
     ("(new: issue 16 counting)", "life.merge_hold_s", 0.0),  # a merge holds the time-out, off
     ("(new: issue 16 counting)", "placement.shared_row_gate", False),  # shared off rows refused
+    ("(new: issue 16 counting)", "placement.shared_row_unsampled", False),  # ... and no I(k)
     # unjudged tracks explained by a counted one, and joins by appearance: both off (docs/rules.md)
     ("(new: issue 16 counting)", "explain.enabled", False),
     ("(new: issue 16 counting)", "explain.duplicate_widths", 1.0),

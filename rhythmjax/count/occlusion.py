@@ -24,7 +24,8 @@ foot row's noise std r_std_v (the config's R), px; beyond that it is measured ac
 
 `placement.shared_row_gate` (default off) refuses the foot row on shared blobs outright: a
 pedestrian sharing its blob with another whose placed foot row lies beyond that tolerance of the
-prediction takes no measurement (it predicts through the merge).
+prediction takes no measurement (it predicts through the merge; `Pedestrian.unseen`), and with
+`placement.shared_row_unsampled` that row gives no rhythm sample either (a missing I(k)).
 
 All are off: measured against decision rules written first, none passed the held-out pools,
 the dev crowds or PETS09 (docs/rules.md, "What the pieces that end by the velocity jump were
@@ -101,7 +102,7 @@ def row_gated(level, p, pl, z, *, shared: bool, wide: bool, claimed: np.ndarray 
     `wide` one whose row lies beyond `level.row_tolerance` px of the prediction): measured
     across only, (pl.u, predicted v); "rewound" (`count.rewind`, its row off): across only, or
     None (it predicts) with `life.rewind_predict`; "shared-row" (`placement.shared_row_gate`, a
-    shared one whose row is off): None. Otherwise `z` unchanged."""
+    shared one whose row is off): None, `p.unseen` set. Otherwise `z` unchanged."""
     opt, v_pred = level.opt, float(p.next_uv[1])
     off = abs(pl.v - v_pred) > level.row_tolerance
     why, across = None, (pl.u, v_pred)
@@ -112,7 +113,7 @@ def row_gated(level, p, pl, z, *, shared: bool, wide: bool, claimed: np.ndarray 
     elif p.rewound and off:
         why, z = "rewound", None if opt.life.rewind_predict else across
     elif shared and off and opt.placement.shared_row_gate:
-        why, z = "shared-row", None
+        why, z, p.unseen = "shared-row", None, True
     if why is not None:
         level.gated[why] = level.gated.get(why, 0) + 1
     return z

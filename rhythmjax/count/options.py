@@ -84,6 +84,7 @@ class PlacementOptions:
     # shared one, its foot row used only within k_sigma2 r_std_v of the prediction (occlusion)
     shared_row_gate: bool = False  # one sharing its blob whose placed foot row lies beyond
     # k_sigma2 r_std_v of the prediction takes no measurement: it predicts (`count.occlusion`)
+    shared_row_unsampled: bool = False  # ... and such a row gives no rhythm sample (NaN I(k))
     noise: tuple | list = ()  # (q_x, q_y m/s/sqrt(s), r_u, r_v px, r_corr): the counting filter's
     # noise instead of the config's (`slot_filter.filter_config`; () the config's)
 

@@ -29,6 +29,7 @@ class Pedestrian:
     coast: float = 0.0  # s without a measurement (outside merges with `life.merge_hold_s`)
     held: float = 0.0  # `life.merge_hold_s`: s held in a merge since its last measurement
     merged: bool = False  # this frame it kept its prediction in a merge (`count.coast`)
+    unseen: bool = False  # this frame its shared placement's row was refused (`count.occlusion`)
     next_uv: tuple = (math.nan, math.nan)  # predicted foot point for the next frame, px
     est_uv: tuple = (math.nan, math.nan)
     size: tuple = (math.nan, math.nan)  # patch (w, h) px at est_uv

@@ -162,7 +162,7 @@ class PedestrianLevel:
         self._flush()
         for p in self.peds:
             p.z, p.z_width = (math.nan, math.nan), math.nan  # unless placed
-            p.z_top, p.z_top_u, p.merged = math.nan, math.nan, False
+            p.z_top, p.z_top_u, p.merged, p.unseen = math.nan, math.nan, False, False
         boxes = box_table(blobs)
         rel = self._relate(graph, blobs, boxes)
         S = self.filter.slots
@@ -330,7 +330,8 @@ class PedestrianLevel:
             gx, gy, ok = (float(q) for q in ground_point(self.shape.camera, *p.est_uv))
         fu, fv = p.z if measured else p.est_uv
         W = float(self.shape.size(fu, fv)[0])
-        inten = math.nan if D is None else window_b_intensity(D, fu, fv, W)
+        unsampled = p.unseen and self.opt.placement.shared_row_unsampled  # `count.occlusion`
+        inten = math.nan if D is None or unsampled else window_b_intensity(D, fu, fv, W)
         if p.candidate_rows is not None:  # `verdicts.window_candidates`
             p.candidate_rows.append(sample_candidates(D, fu, fv, W, inten))
         state = TrackState.OBSERVE if measured else TrackState.PREDICT
