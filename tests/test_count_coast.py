@@ -79,7 +79,7 @@ def test_a_narrow_shared_blob_marks_both_merged():
     assert not a.merged and a.z == pytest.approx((100.0, 100.0), abs=1.0)
 
 
-def _out(slots, uv):
+def unmeasured_step(slots, uv):
     """A filter step that took no measurement: the state on (uv) px, 8 m ahead."""
     out = FILTER_OUT.unpack(FILTER_OUT.empty(slots, np.float64))
     out.started[:], out.used[:] = 1.0, 0.0
@@ -106,7 +106,7 @@ def test_a_pedestrian_held_in_a_merge_outlives_the_coast(hold_s, arrives_coastin
     assert level.coast_s == pytest.approx(1.0)
     for f in range(100):
         p.z, p.merged = (math.nan, math.nan), not (arrives_coasting and f == 0)
-        level._after(p, _out(level.filter.slots, uv), f, f * DT, DT, [], None)
+        level._after(p, unmeasured_step(level.filter.slots, uv), f, f * DT, DT, [], None)
         if p not in level.peds:
             break
     assert f + 1 == lasts and p.end_reason == "timeout"

@@ -6,6 +6,7 @@ walker stands right under its feet."""
 
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -253,3 +254,34 @@ def test_row_gated_by_hand():
     predict = level(**{"life.rewind_predict": True})
     assert row_gated(predict, p, off, (52.0, 107.0), shared=False, wide=False,
                      claimed=None) is None and predict.gated == {"rewound": 1}
+
+
+@pytest.mark.parametrize("unsampled", [False, True])
+def test_a_refused_shared_row_samples_no_intensity_with_the_option(unsampled):
+    """`placement.shared_row_unsampled`: a row whose shared placement the gate refused
+    (`Pedestrian.unseen`) keeps a predicted row in the tracks; its I(k) is NaN with the option,
+    window B's sum at the estimate without it (a frame difference of ones: W x W/5 pixels)."""
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+    from rhythmjax.model.camera_np import project_3d
+
+    from .test_count_coast import DT, unmeasured_step
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"placement.shared_row_gate": True,
+                        "placement.shared_row_unsampled": unsampled})
+    level = PedestrianLevel(CFG, opt)
+    level.image_shape = (192, 256)
+    p = level.new_pedestrian(0)
+    p.track_id = p.hits = 1
+    level.peds.append(p)
+    uv = project_3d(CFG.camera, 0.0, 8.0, 0.0)
+    D = np.ones((192, 256), np.float32)
+    for unseen in (False, True):
+        p.z, p.unseen = (math.nan, math.nan), unseen
+        level._after(p, unmeasured_step(level.filter.slots, uv), 0, 0.0, DT, [], D)
+    seen_row, unseen_row = p.rows
+    assert seen_row.intensity > 0 and np.isfinite(seen_row.intensity)
+    if unsampled:
+        assert np.isnan(unseen_row.intensity)
+    else:
+        assert unseen_row.intensity == seen_row.intensity
