@@ -2,7 +2,8 @@
 hand-worked cases, and one hand-made merged blob placed by `PedestrianLevel._place`: an older
 far walker whose blob a nearer walker's joins from below takes the nearer one's feet in the
 default order, its own with the depth order, and is measured across only when the nearer
-walker stands right under its feet."""
+walker stands right under its feet; with `placement.shared_row_gate` it takes no measurement
+there (and, with `shared_row_unsampled`, no rhythm sample); `row_gated` by hand."""
 
 from __future__ import annotations
 
