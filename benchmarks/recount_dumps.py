@@ -1,0 +1,102 @@
+"""Recount a counting run saved by `benchmarks/count_dump.py` under another counting rule, the
+tracks unchanged: the rules below decide only which judged tracks are counted, so applying them
+to a saved run gives exactly what the tracker would count with them (issue 16, twenty-third
+round; docs/rules.md). Writes a dump of the same form (atomically) for `paired_dumps.py`.
+
+Rules (`--rule`):
+- `no-peak`: a track judged Non-pedestrian only because no window's spectral peak reached P_thr
+  (reason "no-peak": no rhythm seen, rather than one outside the walking model) is counted as an
+  unjudged track is: unless too fast (`too_fast`, 2.57 m/s).
+- `speed-se:Z`: an unjudged track is too fast only when its least-squares ground speed less Z
+  standard errors still exceeds the top walking speed (`speed_and_se`; the count's speed is the
+  same fit, `count.track_speed` "lsq").
+
+    python benchmarks/recount_dumps.py RUN.pkl OUT.pkl --rule no-peak
+    python benchmarks/paired_dumps.py RUN.pkl OUT.pkl
+
+Nothing is chosen here: it recounts.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import pickle
+import tempfile
+
+import numpy as np
+
+
+def top_speed() -> float:
+    """The top walking speed m/s of Table 1's walking model (`count.walking_top_speed`: 2.57)."""
+    from rhythmjax.count import walking_top_speed
+    from rhythmjax.model.params import config_from_dict
+
+    return walking_top_speed(config_from_dict({}))
+
+
+def speed_and_se(t, x, y) -> tuple[float, float]:
+    """Ground speed (m/s) of the least-squares slopes of x and y (m) against t (s), and its
+    standard error by the delta method from the slopes' residual variances (each slope's
+    variance s^2 / sum (t - mean t)^2, s^2 the residuals' squares over n - 2); NaN with fewer
+    than 3 points or a span under 0.5 s (as `count.track_speed`)."""
+    t, x, y = (np.asarray(q, np.float64) for q in (t, x, y))
+    if t.size < 3 or np.ptp(t) < 0.5:
+        return np.nan, np.nan
+    tc = t - t.mean()
+    stt = float(tc @ tc)
+    bx, by = tc @ (x - x.mean()) / stt, tc @ (y - y.mean()) / stt
+    rx, ry = x - x.mean() - bx * tc, y - y.mean() - by * tc
+    vx, vy = rx @ rx / (t.size - 2) / stt, ry @ ry / (t.size - 2) / stt
+    s = float(np.hypot(bx, by))
+    se = float(np.sqrt(bx * bx * vx + by * by * vy)) / s if s > 0 else np.nan
+    return s, se
+
+
+def recounted(record: dict, rule: str) -> np.ndarray:
+    """The `counted` column of one clip's record under `rule` (module doc)."""
+    v = record["verdicts"]
+    counted = np.asarray(v["counted"], bool).copy()
+    verdict, reason = np.asarray(v["verdict"]), np.asarray(v["reason"])
+    too_fast = np.asarray(v["too_fast"], bool)
+    if rule == "no-peak":
+        return counted | ((verdict == "non-pedestrian") & (reason == "no-peak") & ~too_fast)
+    if rule.startswith("speed-se:"):
+        z = float(rule.split(":", 1)[1])
+        tr, top = record["tracks"], top_speed()
+        ids, state = np.asarray(tr["track_id"]), np.asarray(tr["state"])
+        t, x, y = (np.asarray(tr[c], np.float64) for c in ("t", "x_est", "y_est"))
+        for i, tid in enumerate(np.asarray(v["track_id"])):
+            if verdict[i] != "unclassified" or not too_fast[i]:
+                continue
+            k = (ids == tid) & (state == "observe") & np.isfinite(x) & np.isfinite(y)
+            s, se = speed_and_se(t[k], x[k], y[k])
+            counted[i] = counted[i] or bool(s - z * se <= top)
+        return counted
+    raise SystemExit(f"unknown rule {rule!r}: no-peak or speed-se:Z")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("run")
+    ap.add_argument("out")
+    ap.add_argument("--rule", required=True)
+    a = ap.parse_args(argv)
+    with open(a.run, "rb") as f:
+        records = pickle.load(f)
+    before = after = 0
+    for r in records:
+        c = recounted(r, a.rule)
+        before += int(np.sum(r["verdicts"]["counted"]))
+        after += int(c.sum())
+        r["verdicts"] = {**r["verdicts"], "counted": c}
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(a.out)), suffix=".tmp")
+    with os.fdopen(fd, "wb") as f:
+        pickle.dump(records, f)
+    os.replace(tmp, a.out)
+    print(f"{a.run}: {len(records)} clips, counted {before} -> {after} ({a.rule})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

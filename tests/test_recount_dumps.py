@@ -1,0 +1,53 @@
+"""benchmarks/recount_dumps.py: the speed's standard error against a hand-worked fit, and both
+recount rules on a hand-made clip record."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import numpy as np
+import pytest
+
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "benchmarks"))
+
+import recount_dumps as rd  # noqa: E402
+
+
+def test_speed_and_se_by_hand():
+    t = np.array([0.0, 0.5, 1.0, 1.5])
+    # x: slope 2 m/s with residuals +-0.1 (+, -, -, +): sum (t - 0.75)^2 = 1.25, residual
+    # squares 0.04 over n - 2 = 2: slope variance 0.02 / 1.25 = 0.016; y constant: slope 0
+    x = 2.0 * t + np.array([0.1, -0.1, -0.1, 0.1])
+    s, se = rd.speed_and_se(t, x, np.full(4, 5.0))
+    assert s == pytest.approx(2.0, abs=1e-12) and se == pytest.approx(np.sqrt(0.016), abs=1e-12)
+    assert np.isnan(rd.speed_and_se(t[:2], x[:2], x[:2])[0])  # fewer than 3 points
+    assert np.isnan(rd.speed_and_se(t * 0.1, x, x)[0])  # a 0.15 s span
+
+
+def _record():
+    t = np.arange(20) / 10.0  # 1.9 s
+    fast = 3.0 * t  # 3 m/s exactly: too fast, se 0
+    noisy = 2.8 * t + np.where(np.arange(20) % 2, 0.6, -0.6)  # fits 2.89 m/s, se 0.24
+    rows = {"track_id": np.repeat([1, 2], 20), "state": np.array(["observe"] * 40),
+            "t": np.tile(t, 2), "x_est": np.concatenate([fast, noisy]), "y_est": np.zeros(40)}
+    verdicts = {"track_id": np.array([1, 2, 3, 4]),
+                "verdict": np.array(["unclassified", "unclassified", "non-pedestrian",
+                                     "non-pedestrian"], dtype=object),
+                "reason": np.array(["too-short", "too-short", "no-peak", "no-model-match"],
+                                   dtype=object),
+                "too_fast": np.array([True, True, False, False]),
+                "counted": np.array([False, False, False, False])}
+    return {"tracks": rows, "verdicts": verdicts}
+
+
+def test_the_recount_rules():
+    r = _record()
+    assert rd.recounted(r, "no-peak").tolist() == [False, False, True, False]
+    s, se = rd.speed_and_se(r["tracks"]["t"][20:], r["tracks"]["x_est"][20:], np.zeros(20))
+    assert s - 1.0 * se > rd.top_speed() > s - 2.0 * se  # the noisy one: uncut at z = 2
+    assert rd.recounted(r, "speed-se:1").tolist() == [False, False, False, False]
+    assert rd.recounted(r, "speed-se:2").tolist() == [False, True, False, False]
+    with pytest.raises(SystemExit, match="unknown rule"):
+        rd.recounted(r, "other")
