@@ -27,9 +27,9 @@ pedestrian sharing its blob with another whose placed foot row lies beyond that 
 prediction takes no measurement (it predicts through the merge; `Pedestrian.unseen`), and with
 `placement.shared_row_unsampled` that row gives no rhythm sample either (a missing I(k)).
 
-All are off: measured against decision rules written first, none passed the held-out pools,
-the dev crowds or PETS09 (docs/rules.md, "What the pieces that end by the velocity jump were
-placed on" and later sections).
+All are off: each was measured against a decision rule written first (training, held-out and
+third pools of our scenes, the dev crowds, PETS09) and none passed it (docs/rules.md, "What the
+pieces that end by the velocity jump were placed on" and "A merge that holds the time-out").
 """
 
 from __future__ import annotations
