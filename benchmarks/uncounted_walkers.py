@@ -1,9 +1,9 @@
-"""Walkers of a saved counting run (`benchmarks/count_dump.py`) that no counted track follows
-although a track does: per run, how the tracks that follow them were judged (verdict, reason,
-too fast). A track follows the walker its boxes overlap with IoU >= 0.3 in at least half its
-frames (`eval_count.owner_of_tracks`); for those judged "no-peak", the medians of their rows,
-the fraction of them predicted and the fraction without I(k). Issue 16, twenty-third round
-(docs/rules.md).
+"""The walkers counted in a saved counting run (`benchmarks/count_dump.py`) against the truth, and
+the walkers no counted track follows although a track does: per run, how the tracks that follow
+them were judged (verdict, reason, too fast). A track follows the walker its boxes overlap with
+IoU >= 0.3 in at least half its frames (`eval_count.owner_of_tracks`); for those judged
+"no-peak", the medians of their rows, the fraction of them predicted and the fraction without
+I(k). Issue 16, twenty-third round (docs/rules.md).
 
     python benchmarks/uncounted_walkers.py RUN.pkl [RUN2.pkl ...]
 
@@ -79,7 +79,10 @@ def main(argv=None) -> int:
         with open(path, "rb") as f:
             records = pickle.load(f)
         total = sum((uncounted(r) for r in records), Counter())
-        print(path, dict(sorted(total.items())))
+        counted = sum(int(np.sum(r["verdicts"]["counted"])) for r in records)
+        print(f"{path}: {len(records)} clips, {counted} counted for "
+              f"{sum(r['true'] for r in records)} walkers; uncounted tracks on walkers no "
+              f"counted track follows: {dict(sorted(total.items()))}")
         rows = [x for r in records for x in no_peak_rows(r)]
         if rows:
             n, pred, nan = np.median(np.asarray(rows, np.float64), axis=0)
