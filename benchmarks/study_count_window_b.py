@@ -65,6 +65,7 @@ def track_against_truth(cfg, shape, res, grays: dict, truth, kinds, offset: int,
     own = ec.owner_of_tracks(truth, res.mot, offset)
     v, tr, n = res.verdicts, res.tracks, int(cfg.thresholds.n)
     ids = np.asarray(tr["track_id"])
+    mid, mfr = np.asarray(res.mot["id"]), np.asarray(res.mot["frame"])
     out = []
     for i, tid in enumerate(v["track_id"]):
         o = own.get(int(tid))
@@ -75,23 +76,59 @@ def track_against_truth(cfg, shape, res, grays: dict, truth, kinds, offset: int,
         t = np.asarray(tr["t"], np.float64)[k]
         xy = np.stack([np.asarray(tr[c], np.float64)[k] for c in ("x_est", "y_est")], 1)
         u_tr, v_tr = (np.asarray(tr[c], np.float64)[k] for c in ("u", "v"))
-        at_truth, off = np.full(len(k), np.nan), []
+        at = {name: np.full(len(k), np.nan) for name in PLACES}
+        off = []
         for j, f in enumerate(fr):
             m = np.flatnonzero((truth["id"] == o) & (truth["frame"] == truth_frame(int(f), offset)))
             if f < 1 or not m.size:
                 continue
             u = truth["bb_left"][m[0]] + 0.5 * truth["bb_width"][m[0]]
             vv = truth["bb_top"][m[0]] + truth["bb_height"][m[0]] - 1.0  # box bottom: v + 1
-            at_truth[j] = window_b_intensity(frame_difference(grays[f - 1], grays[f]), u, vv,
-                                             float(shape.size(u, vv)[0]))
+            b = np.flatnonzero((mid == tid) & (mfr == f))
+            ue = res.mot["bb_left"][b[0]] + 0.5 * res.mot["bb_width"][b[0]] if b.size else np.nan
+            ve = res.mot["bb_top"][b[0]] + res.mot["bb_height"][b[0]] if b.size else np.nan
+            us, vs = (u_tr[j], v_tr[j]) if np.isfinite(u_tr[j]) else (ue, ve)  # as sampled
+            D = frame_difference(grays[f - 1], grays[f])
+            for name, (pu, pv) in places(u, vv, us, vs, ue).items():
+                if np.isfinite(pu) and np.isfinite(pv):
+                    W = float(shape.size(pu, pv)[0])
+                    if name.startswith("legs"):
+                        pu = leg_column(D, pu, pv, W, 1.0 if name == "legs" else 0.5)
+                    at[name][j] = window_b_intensity(D, pu, pv, W)
             if np.isfinite(v_tr[j]):
                 off.append((abs(v_tr[j] - vv), abs(u_tr[j] - u)))
         starts = window_starts(fr, n)
         sampled = np.asarray(tr["intensity"], np.float64)[k]
         row, col = np.median(np.asarray(off), axis=0) if off else (np.nan, np.nan)
         out.append((len(k), best_power(cfg, sampled, t, xy, starts),
-                    best_power(cfg, at_truth, t, xy, starts), float(row), float(col)))
+                    *(best_power(cfg, at[name], t, xy, starts) for name in PLACES),
+                    float(row), float(col)))
     return out
+
+
+PLACES = ("truth", "truth-column", "truth-row", "legs", "legs-half", "estimate-column")
+
+
+def places(u, v, us, vs, ue) -> dict[str, tuple[float, float]]:
+    """Window B's foot points compared: the truth (u, v); the truth column at the track's row
+    (us, vs: where the track sampled); the track's column at the truth row; the track's point
+    with its column moved to the legs (`leg_column`, reach W and W/2); the filter's column ue
+    (its box centre) at the track's row."""
+    return {"truth": (u, v), "truth-column": (u, vs), "truth-row": (us, v), "legs": (us, vs),
+            "legs-half": (us, vs), "estimate-column": (ue, vs)}
+
+
+def leg_column(D: np.ndarray, u: float, v: float, W: float, reach: float = 1.0) -> float:
+    """The column px of the difference D's centroid over window B's rows (W/5 rows ending at v)
+    and the columns u +- reach W (clipped to the image); u where D is all zero there."""
+    from rhythmjax.vision.window_b import window_b_rect
+
+    x0, y0, x1, y1 = window_b_rect(D.shape, u, v, 2.0 * reach * W)
+    y0 = max(y1 - max(1, int(np.floor(W / 5 + 0.5))), 0)
+    col = np.asarray(D[y0:y1, x0:x1], np.float64).sum(axis=0)
+    if x1 <= x0 or col.sum() <= 0:
+        return float(u)
+    return float(x0 + np.sum(np.arange(x1 - x0) * col) / col.sum())
 
 
 def main(argv=None) -> int:
@@ -124,12 +161,12 @@ def main(argv=None) -> int:
         return 0
     r = np.asarray(rows, np.float64)
     judged = np.isfinite(r[:, 2])
-    print(f"{len(r)} walker tracks judged {a.reason!r}: medians {np.median(r[:, 0]):.0f} rows, "
-          f"best P {np.nanmedian(r[:, 1]):.1f} on the track's window B, "
-          f"{np.nanmedian(r[:, 2]):.1f} at the truth foot point "
-          f"({int(np.sum(r[judged, 2] >= 10))} of {int(judged.sum())} with a judged window "
-          f">= 10 there); foot point off the truth {np.nanmedian(r[:, 3]):.1f} px in row, "
-          f"{np.nanmedian(r[:, 4]):.1f} px in column")
+    print(f"{len(r)} walker tracks judged {a.reason!r}: medians {np.median(r[:, 0]):.0f} rows; "
+          f"best P {np.nanmedian(r[:, 1]):.1f} on the track's window B, " + ", ".join(
+              f"{np.nanmedian(r[:, 2 + c]):.1f} at {name} "
+              f"({int(np.sum(r[judged, 2 + c] >= 10))} >= 10)" for c, name in enumerate(PLACES))
+          + f" of {int(judged.sum())} judged; foot point off the truth "
+          f"{np.nanmedian(r[:, -2]):.1f} px in row, {np.nanmedian(r[:, -1]):.1f} px in column")
     return 0
 
 

@@ -19,9 +19,12 @@ from .patches import DYNAMICS
 from .slot_filter import OUTLIER_GATES, check_noise
 
 
+WINDOW_COLUMNS = ("measured", "estimate")  # `PlacementOptions.window_column`
+
+
 __all__ = ["AppearanceOptions", "BlobOptions", "CountOptions", "ExplainOptions", "LifeOptions",
            "NewPedestrianOptions", "PlacementOptions", "StitchOptions", "VerdictOptions",
-           "with_changes"]
+           "WINDOW_COLUMNS", "with_changes"]
 
 
 SPEED_FITS = ("lsq", "theil-sen")  # `verdicts.speed_fit`, `count.track_speed`
@@ -85,11 +88,17 @@ class PlacementOptions:
     shared_row_gate: bool = False  # one sharing its blob whose placed foot row lies beyond
     # k_sigma2 r_std_v of the prediction takes no measurement: it predicts (`count.occlusion`)
     shared_row_unsampled: bool = False  # ... and such a row gives no rhythm sample (NaN I(k))
+    window_column: str = "measured"  # window B's column on a measured frame (`WINDOW_COLUMNS`):
+    # "measured", the placed foot point's; "estimate", the filter's posterior column (the foot
+    # row stays the measured one; issue 16, twenty-fourth round)
     noise: tuple | list = ()  # (q_x, q_y m/s/sqrt(s), r_u, r_v px, r_corr): the counting filter's
     # noise instead of the config's (`slot_filter.filter_config`; () the config's)
 
     def __post_init__(self):
         object.__setattr__(self, "noise", tuple(float(x) for x in self.noise))  # JSON lists
+        if self.window_column not in WINDOW_COLUMNS:
+            raise ValueError(f"placement.window_column must be one of {WINDOW_COLUMNS}, "
+                             f"got {self.window_column!r}")
 
 
 @dataclass(frozen=True)

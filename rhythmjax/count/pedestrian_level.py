@@ -329,6 +329,8 @@ class PedestrianLevel:
         else:
             gx, gy, ok = (float(q) for q in ground_point(self.shape.camera, *p.est_uv))
         fu, fv = p.z if measured else p.est_uv
+        if measured and self.opt.placement.window_column == "estimate":
+            fu = eu  # window B on the filter's column, the measured foot row
         W = float(self.shape.size(fu, fv)[0])
         unsampled = p.unseen and self.opt.placement.shared_row_unsampled  # `count.occlusion`
         inten = math.nan if D is None or unsampled else window_b_intensity(D, fu, fv, W)
