@@ -286,3 +286,46 @@ def test_a_refused_shared_row_samples_no_intensity_with_the_option(unsampled):
         assert np.isnan(unseen_row.intensity)
     else:
         assert unseen_row.intensity == seen_row.intensity
+
+
+@pytest.mark.parametrize("column", ["measured", "estimate"])
+def test_window_b_column_on_a_measured_frame(column):
+    """`placement.window_column`: on a measured frame window B is centred on the placed column
+    ("measured") or on the filter's column estimate ("estimate"), its bottom row the measured
+    foot row either way. On a frame difference equal to the column index, I(k) is Hb rows x
+    the sum of Wb consecutive column indices from x0, worked by hand from (u, v, W)."""
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+    from rhythmjax.model.camera_np import project_3d
+
+    from .test_count_coast import DT, unmeasured_step
+
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"placement.window_column": column})
+    level = PedestrianLevel(CFG, opt)
+    level.image_shape = (192, 256)
+    p = level.new_pedestrian(0)
+    p.track_id = p.hits = 1
+    level.peds.append(p)
+    eu, ev = (float(q) for q in project_3d(CFG.camera, 0.0, 8.0, 0.0))
+    out = unmeasured_step(level.filter.slots, (eu, ev))
+    out.used[0] = 1.0  # the filter took the measurement
+    zu, zv = eu + 7.3, ev + 0.4  # placed 7.3 px across and 0.4 px below the estimate
+    p.z = (zu, zv)
+    D = np.tile(np.arange(256, dtype=np.float32), (192, 1))  # D[y, x] = x
+    level._after(p, out, 0, 0.0, DT, [], D)
+    u = zu if column == "measured" else eu
+    W = float(level.shape.size(u, zv)[0])
+    wb, hb = math.floor(W + 0.5), math.floor(W / 5 + 0.5)
+    x0 = math.floor(u - wb / 2 + 0.5)
+    want = hb * wb * (x0 + (wb - 1) / 2)  # the column indices x0 .. x0 + wb - 1, hb rows
+    row = p.rows[-1]
+    assert (row.u, row.v) == (zu, zv)  # the tracks keep the measured foot point
+    assert row.intensity == pytest.approx(want, rel=1e-6)
+    other = zu if column == "estimate" else eu  # the other column gives another sum
+    assert abs(row.intensity - hb * wb * (math.floor(other - wb / 2 + 0.5) + (wb - 1) / 2)) > 1
+
+
+def test_window_column_refuses_an_unknown_value():
+    assert CountOptions().placement.window_column == "measured"
+    with pytest.raises(ValueError, match="placement.window_column"):
+        with_changes(CountOptions(), {"placement.window_column": "legs"})

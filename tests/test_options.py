@@ -122,6 +122,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "life.merge_hold_s", 0.0),  # a merge holds the time-out, off
     ("(new: issue 16 counting)", "placement.shared_row_gate", False),  # shared off rows refused
     ("(new: issue 16 counting)", "placement.shared_row_unsampled", False),  # ... and no I(k)
+    ("(new: issue 16 counting)", "placement.window_column", "measured"),  # window B column
     # unjudged tracks explained by a counted one, and joins by appearance: both off (docs/rules.md)
     ("(new: issue 16 counting)", "explain.enabled", False),
     ("(new: issue 16 counting)", "explain.duplicate_widths", 1.0),

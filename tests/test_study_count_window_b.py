@@ -7,6 +7,7 @@ import os
 import sys
 
 import numpy as np
+import pytest
 
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "benchmarks"))
@@ -40,3 +41,16 @@ def test_best_power_sees_a_rhythm():
     holes = walk.copy()
     holes[::3] = np.nan  # a third missing in every window: none judged
     assert np.isnan(scw.best_power(cfg, holes, t, xy, starts))
+
+
+def test_leg_column_and_the_compared_places():
+    D = np.zeros((100, 200), np.float32)
+    D[60:71, 118:121] = 5.0  # legs in columns 118-120 (centroid 119) over rows 60-70
+    # window B rows for W = 20: 4 rows ending at v = 70; reach W: columns 90-129 (u = 110)
+    assert scw.leg_column(D, 110.0, 70.0, 20.0) == pytest.approx(119.0, abs=1e-9)
+    assert scw.leg_column(D, 110.0, 70.0, 20.0, 0.25) == 110.0  # columns 105-114: all zero
+    assert scw.leg_column(D, 110.0, 50.0, 20.0) == 110.0  # rows 47-50: none there
+    got = scw.places(10.0, 20.0, 11.0, 21.0, 12.0)
+    assert got == {"truth": (10.0, 20.0), "truth-column": (10.0, 21.0), "truth-row": (11.0, 20.0),
+                   "legs": (11.0, 21.0), "legs-half": (11.0, 21.0), "estimate-column": (12.0, 21.0)}
+    assert tuple(got) == scw.PLACES

@@ -52,6 +52,10 @@ MAX_MISSING_FRACTION = 0.25
 # runs, `mem.burg`'s `known` / and `run_taper`; built and measured in issue 16's tenth round,
 # off: a walker more on the dev clips and PETS, but a larger pace error, docs/rules.md).
 GAPS = "interpolate"
+# What is removed from a window's I(k) before the unit-variance scaling: "mean" (the default,
+# the paper's) or "line" (its least-squares line over the sample index, `remove_line`: a slow
+# trend is no rhythm; issue 16, twenty-fourth round, docs/rules.md). Read when traced.
+DETREND = "mean"
 MAX_DT_JITTER = 0.10
 
 
@@ -88,6 +92,22 @@ def normalise_window(x: Float[Array, " n"], known: Bool[Array, " n"] | None = No
     return jnp.where(ok, xc / jnp.where(ok, sd, 1.0), 0.0), ok
 
 
+def remove_line(x: Float[Array, " n"], known: Bool[Array, " n"] | None = None
+                ) -> Float[Array, " n"]:
+    """x less its least-squares line a + b k over the sample index k = 0 .. n-1 (fitted to the
+    `known` samples only when given; the others are returned unchanged). Fewer than two known
+    samples: x less their mean."""
+    k = jnp.arange(x.shape[0], dtype=x.dtype)
+    w = jnp.ones_like(x) if known is None else known.astype(x.dtype)
+    xs = jnp.where(w > 0, x, 0.0)
+    n = jnp.maximum(jnp.sum(w), 1.0)
+    km, xm = jnp.sum(w * k) / n, jnp.sum(w * xs) / n
+    skk = jnp.sum(w * (k - km) ** 2)
+    b = jnp.where(skk > 0, jnp.sum(w * (k - km) * (xs - xm)) / jnp.where(skk > 0, skk, 1.0), 0.0)
+    fitted = x - (xm + b * (k - km))
+    return fitted if known is None else jnp.where(known, fitted, x)
+
+
 def fill_gaps(x: Float[Array, " n"], known: Bool[Array, " n"]) -> Float[Array, " n"]:
     """Linear interpolation over the unknown entries (ends held at the nearest known value)."""
     n = x.shape[0]
@@ -105,7 +125,8 @@ def fill_gaps(x: Float[Array, " n"], known: Bool[Array, " n"]) -> Float[Array, "
 
 def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order: int
                     ) -> tuple[mem.Spectrum, Bool[Array, ""]]:
-    """(Sec. 4.1's MEM spectrum of the normalised window, False for a constant window): the
+    """(Sec. 4.1's MEM spectrum of the normalised window, False for a constant window; with
+    `DETREND` "line" the window's least-squares line removed first, `remove_line`): the
     missing samples (NaN) interpolated linearly (`fill_gaps`) when `GAPS` is "interpolate",
     left out of Burg's sums (`mem.burg`'s `known`, the fit pooled over the known runs) when it
     is "segments" ("segments_taper": each run tapered as a window of its own, `run_taper`).
@@ -113,12 +134,16 @@ def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order
     if GAPS not in ("interpolate", "segments", "segments_taper"):
         raise ValueError(f"rhythm.GAPS must be 'interpolate', 'segments' or 'segments_taper', "
                          f"got {GAPS!r}")
+    if DETREND not in ("mean", "line"):
+        raise ValueError(f"rhythm.DETREND must be 'mean' or 'line', got {DETREND!r}")
     known = jnp.isfinite(intensity)
     if GAPS in ("segments", "segments_taper"):
-        x, nonconstant = normalise_window(intensity, known)
+        x = remove_line(intensity, known) if DETREND == "line" else intensity
+        x, nonconstant = normalise_window(x, known)
         return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS, known=known,
                             run_taper=GAPS == "segments_taper"), nonconstant
-    x, nonconstant = normalise_window(fill_gaps(intensity, known))
+    x = fill_gaps(intensity, known)
+    x, nonconstant = normalise_window(remove_line(x) if DETREND == "line" else x)
     return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS), nonconstant
 
 
