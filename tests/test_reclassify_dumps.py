@@ -26,9 +26,9 @@ CFG = config_from_dict({})
 
 
 def _record(trend: float) -> dict:
-    """Track 1: 96 frames of a walker at 1.4 m/s across at 8 m, I(k) a 1.9 Hz rhythm (step
-    0.74 m: inside the walking model) and noise (5 grey levels) plus a rise of `trend` grey levels per 64 frames; track
-    2: 12 frames (too short to judge)."""
+    """Track 1: 96 frames of a walker at 1.4 m/s across at 8 m, I(k) a 1.9 Hz rhythm of 10 grey
+    levels (step 0.74 m: inside the walking model), noise of 5 and a rise of `trend` grey
+    levels per 64 frames; track 2: 12 frames (too short to judge)."""
     fps = float(CFG.camera.fps)
     rng = np.random.default_rng(2)
     rows = []
