@@ -100,7 +100,10 @@ def _sort_on(det, n_frames: int, truth, offset: int) -> dict:
 
 
 def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None,
-                clothing: str = "contrasted"):
+                clothing: str = "contrasted", pairs: float = 0.0):
+    """(scene seed, spec) of n random counting scenes; `pairs` > 0: that fraction of walkers
+    joined by a partner at their shoulder (`sim.groups.with_pairs`; 0, the scenes so far)."""
+    from rhythmjax.sim.groups import with_pairs
     from rhythmjax.sim.scene import random_spec
 
     rng = np.random.default_rng(seed)
@@ -111,11 +114,12 @@ def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None,
         for _ in range(20):  # a seed whose paths cannot all be placed is skipped
             s += 7919
             try:
-                out.append((s, random_spec(s, n_walkers=nw, n_bicycles=nb, n_dogs=0,
-                                           n_frames=n_frames, camera=camera, occlusion=True,
-                                           min_life=100, max_life=150, bicycle_speed=(3.0, 3.2),
-                                           range_m=(3.1, 19.9), crossing_fraction=0.95,
-                                           clothing=clothing)))
+                spec = random_spec(s, n_walkers=nw, n_bicycles=nb, n_dogs=0,
+                                   n_frames=n_frames, camera=camera, occlusion=True,
+                                   min_life=100, max_life=150, bicycle_speed=(3.0, 3.2),
+                                   range_m=(3.1, 19.9), crossing_fraction=0.95,
+                                   clothing=clothing)
+                out.append((s, with_pairs(spec, s, pairs, range_m=(3.1, 19.9))))
                 break
             except RuntimeError:
                 continue

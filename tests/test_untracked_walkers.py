@@ -21,16 +21,16 @@ def _record():
     rows = []
     for f in range(5):
         if f < 4:
-            rows.append((f, 1, 100.0))
-        rows.append((f, 2, 110.0))
-        rows.append((f, 3, 300.0))
-        rows.append((f, 9, 305.0))  # the dog overlapping walker 3 by 15 px
+            rows.append((f, 1, 100.0, 53.0))
+        rows.append((f, 2, 110.0, 50.0))
+        rows.append((f, 3, 300.0, 50.0))
+        rows.append((f, 9, 305.0, 50.0))  # the dog overlapping walker 3 by 15 px
     tr = {"frame": np.array([r[0] for r in rows]), "id": np.array([r[1] for r in rows]),
-          "bb_left": np.array([r[2] for r in rows]), "bb_top": np.full(len(rows), 50.0),
+          "bb_left": np.array([r[2] for r in rows]), "bb_top": np.array([r[3] for r in rows]),
           "bb_width": np.full(len(rows), 20.0), "bb_height": np.full(len(rows), 60.0)}
     # one track's box on walker 1 in frames 0-2 (mot frames are truth frames - offset)
     mot = {"frame": np.array([1, 2, 3]), "id": np.array([1, 1, 1]),
-           "bb_left": np.full(3, 100.0), "bb_top": np.full(3, 50.0),
+           "bb_left": np.full(3, 100.0), "bb_top": np.full(3, 53.0),
            "bb_width": np.full(3, 20.0), "bb_height": np.full(3, 60.0)}
     verdicts = {"track_id": np.array([1, 2, 3, 4, 5]),
                 "verdict": np.array(["pedestrian", "unclassified", "unclassified",
@@ -51,7 +51,10 @@ def test_decompose_by_hand():
 def test_beside_and_covered_by_hand():
     r = _record()
     # walker 2: 1 beside in frames 0-3 of its 5 (overlap 10 px >= 0.3 x 20); the track's box
-    # (on walker 1) has IoU 10 x 60 / (2 x 1200 - 600) = 1/3 >= 0.3 with it in frames 0-2
-    assert uw.beside_and_covered(r, 2) == pytest.approx((4 / 5, 3 / 5))
-    assert uw.beside_and_covered(r, 1) == pytest.approx((1.0, 3 / 4))
-    assert uw.beside_and_covered(r, 3) == (0.0, 0.0)  # the dog beside it is no walker
+    # (on walker 1, 3 px lower) has IoU 10 x 57 / (2 x 1200 - 570) = 0.311 >= 0.3 with it in
+    # frames 0-2
+    # walker 1 stands 3 px (0.05 of its 60 px height) lower: nearer; 2 the farther
+    assert uw.beside_and_covered(r, 2) == pytest.approx((4 / 5, 3 / 5, 0.05, 1.0))
+    assert uw.beside_and_covered(r, 1) == pytest.approx((1.0, 3 / 4, 0.05, 0.0))
+    got = uw.beside_and_covered(r, 3)  # the dog beside it is no walker
+    assert got[:2] == (0.0, 0.0) and np.isnan(got[2]) and np.isnan(got[3])
