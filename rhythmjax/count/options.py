@@ -19,15 +19,13 @@ from .patches import DYNAMICS
 from .slot_filter import OUTLIER_GATES, check_noise
 
 
-WINDOW_COLUMNS = ("measured", "estimate")  # `PlacementOptions.window_column`
-
-
 __all__ = ["AppearanceOptions", "BlobOptions", "CountOptions", "ExplainOptions", "LifeOptions",
            "NewPedestrianOptions", "PlacementOptions", "StitchOptions", "VerdictOptions",
            "WINDOW_COLUMNS", "with_changes"]
 
 
 SPEED_FITS = ("lsq", "theil-sen")  # `verdicts.speed_fit`, `count.track_speed`
+WINDOW_COLUMNS = ("measured", "estimate")  # `placement.window_column`
 
 
 @dataclass(frozen=True)
