@@ -5,6 +5,9 @@ point (its box's bottom centre, W the camera's patch width there) in the same fr
 the track's foot point lay from the truth (row, column px; medians). Windows: N rows from the
 track's first, every N/2, only those without a stitching gap and with at most N/4 missing.
 Issue 16, twenty-third round (docs/rules.md): is a walker's missing peak the window or the signal?
+Since the twenty-fourth round also with window B at the other `PLACES` (`places`): the truth
+column at the track's row, the track's column at the truth row, the legs' centroid
+(`leg_column`) and the filter's column at the track's row.
 
     python benchmarks/study_count_window_b.py --seed 160001,160002,160003 --scenes 10 \\
         [--reason no-peak] [--set placement.shared_row_gate=true]
