@@ -7,6 +7,7 @@ heights H at the foot point (`patches.ShapeModel`), m on the ground. `level` is 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,18 +16,39 @@ from .patches import ground_point
 from .pedestrian import Pedestrian, finite_uv
 
 
-__all__ = ["in_range", "new_pedestrians"]
+__all__ = ["REFUSALS", "FreeRun", "free_runs", "in_range", "new_pedestrians"]
 
 
-def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
-    """Runs of blob columns no patch covers (`new.walker_widths` W around each foot point),
-    wide and full enough for a pedestrian, reaching the blob's bottom or lifted and tall
-    enough (`new.*`): one new pedestrian per walker width of the run, side by side (groups),
-    its foot point in the detection range (`in_range`); with `new.head_feet`, a run too tall
-    for a walker standing on its bottom stands where its top row is a walker's head
-    (`head_feet`: its legs lost in the mask). They are added to `level.peds` and returned; when
-    the free slots run out the frame is listed in `level.full_frames` and those started so far
-    are returned without being added (as the level always did)."""
+REFUSALS = ("narrow", "thin", "short", "lifted")  # why a free run starts no one (`free_runs`)
+
+
+@dataclass(frozen=True)
+class FreeRun:
+    """A run of blob columns no patch covers (`free_runs`): its blob's box origin (x0, y0) px,
+    its columns c0..c1 in the blob's box, the blob's pixels there (`crop`), its foot row `vb`
+    px (from the head with `from_head`), its centre column `uc` px, the patch (w, h) px at
+    (uc, vb), the walkers it holds `n`, and `refused`: "" or the first test of `REFUSALS` it
+    fails (narrower than new.min_widths W, fewer pixels than new.min_fill of n patches, shorter
+    than new.min_height H, lifted and shorter than new.lifted_height H)."""
+
+    x0: int
+    y0: int
+    c0: int
+    c1: int
+    crop: np.ndarray
+    vb: float
+    uc: float
+    w: float
+    h: float
+    n: int
+    from_head: bool
+    refused: str
+
+
+def free_runs(level, blobs, labels):
+    """The runs of blob columns no patch covers (`new.walker_widths` W around each pedestrian's
+    foot point, measured or predicted), per blob, each tested (`FreeRun.refused`); runs where
+    the camera gives no patch size are left out. Nothing in `level` changes."""
     opt = level.opt
     head = opt.new.head_feet
     cover = []
@@ -34,8 +56,6 @@ def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
         b = level.patch_at(p.z if finite_uv(p.z) else p.next_uv)
         half = 0.5 * opt.new.walker_widths * (b[2] - b[0])
         cover.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3]))
-    free_slots = sorted(set(range(level.filter.slots)) - {p.slot for p in level.peds})
-    new: list[Pedestrian] = []
     for b in blobs:
         x0, y0, x1, y1 = b.box
         free = np.ones(x1 - x0, bool)  # columns no patch covers
@@ -67,25 +87,46 @@ def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
             n = max(1, int(round((c1 - c0) / (opt.new.walker_widths * w))))
             lifted = vb < y1 - 1 - opt.new.max_lift * hb  # above the blob's bottom: an arm,
             # or a farther walker merged with a nearer object (it stands taller than an arm)
-            if ((c1 - c0) < opt.new.min_widths * w or sub.sum() < opt.new.min_fill * w * h * n
-                    or span < opt.new.min_height * h
-                    or (lifted and span < opt.new.lifted_height * min(h, vb + 1.0))):
-                continue
-            for k in range(n):
-                a0, a1 = c0 + (c1 - c0) * k // n, c0 + (c1 - c0) * (k + 1) // n
-                r = np.flatnonzero(crop[:, a0:a1].any(axis=1))
-                if not free_slots:
-                    level.full_frames.append(level.n_frames)
-                    return new  # (as before the split: these are not added to level.peds)
-                z = (x0 + 0.5 * (a0 + a1 - 1), float(y0 + r[-1])) if r.size else None
-                if z is not None and from_head:  # one walker on the run: its row above
-                    vf = vb if n == 1 else head_foot_row(level.shape, z[0], float(y0 + r[0]),
+            refused = ("narrow" if (c1 - c0) < opt.new.min_widths * w
+                       else "thin" if sub.sum() < opt.new.min_fill * w * h * n
+                       else "short" if span < opt.new.min_height * h
+                       else "lifted" if lifted and span < opt.new.lifted_height * min(h, vb + 1.0)
+                       else "")
+            yield FreeRun(x0, y0, int(c0), int(c1), crop, vb, uc, w, h, n, bool(from_head),
+                          refused)
+
+
+def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
+    """Runs of blob columns no patch covers (`free_runs`), wide and full enough for a
+    pedestrian, reaching the blob's bottom or lifted and tall enough (`new.*`): one new
+    pedestrian per walker width of the run, side by side (groups), its foot point in the
+    detection range (`in_range`); with `new.head_feet`, a run too tall for a walker standing on
+    its bottom stands where its top row is a walker's head (`head_feet`: its legs lost in the
+    mask). They are added to `level.peds` and returned; when the free slots run out the frame
+    is listed in `level.full_frames` and those started so far are returned without being added
+    (as the level always did)."""
+    free_slots = sorted(set(range(level.filter.slots)) - {p.slot for p in level.peds})
+    new: list[Pedestrian] = []
+    for run in list(free_runs(level, blobs, labels)):
+        if run.refused:
+            continue
+        c0, c1, n, crop = run.c0, run.c1, run.n, run.crop
+        for k in range(n):
+            a0, a1 = c0 + (c1 - c0) * k // n, c0 + (c1 - c0) * (k + 1) // n
+            r = np.flatnonzero(crop[:, a0:a1].any(axis=1))
+            if not free_slots:
+                level.full_frames.append(level.n_frames)
+                return new  # (as before the split: these are not added to level.peds)
+            z = (run.x0 + 0.5 * (a0 + a1 - 1), float(run.y0 + r[-1])) if r.size else None
+            if z is not None and run.from_head:  # one walker on the run: its row above
+                vf = run.vb if n == 1 else head_foot_row(level.shape, z[0],
+                                                         float(run.y0 + r[0]),
                                                          labels.shape[0])
-                    z = None if vf is None else (z[0], vf)
-                if z is not None and in_range(level, z):
-                    p = level.new_pedestrian(free_slots.pop(0))
-                    p.z, p.z_width = z, float(a1 - a0)  # its share of the run
-                    new.append(p)
+                z = None if vf is None else (z[0], vf)
+            if z is not None and in_range(level, z):
+                p = level.new_pedestrian(free_slots.pop(0))
+                p.z, p.z_width = z, float(a1 - a0)  # its share of the run
+                new.append(p)
     level.peds += new
     return new
 
