@@ -47,6 +47,7 @@ WHOSE = TRACKS + tuple("stitched into " + t for t in TRACKS) + ("no output track
 CAUSES = (tuple("tracked: " + t for t in WHOSE)
           + ("no mask", "covered by a nearer", "covered by a farther")
           + tuple("free: " + r for r in REFUSALS + ("started elsewhere on its run",
+                                                     "no start on its run (out of range)",
                                                      "no run there")))
 FATES = ("tentative", "short") + tuple("output: " + t for t in WHOSE)
 
@@ -73,9 +74,12 @@ class Watch:
                            uv[1]))
             live.append(((b[0], b[1], b[2] - b[0], b[3] - b[1]), p))
         fg = None if labels is None else labels > 0
-        runs = [] if labels is None else [(r.x0 + r.c0, r.x0 + r.c1, r.refused)
+        runs = [] if labels is None else [(r.x0 + r.c0, r.x0 + r.c1, r.refused, r.vb)
                                           for r in free_runs(level, blobs, labels)]
         new = inner(level, blobs, labels)
+        runs = [(c0, c1, refused or ("started elsewhere on its run" if any(
+            c0 <= p.z[0] < c1 for p in new) else "no start on its run (out of range)"), vb)
+            for c0, c1, refused, vb in runs]
         self.frames[f] = {"covers": covers, "live": live, "fg": fg, "runs": runs}
         self.starts += [(f, tuple(p.z), p) for p in new]
         return new
@@ -85,9 +89,10 @@ def _finite(uv) -> bool:
     return math.isfinite(uv[0]) and math.isfinite(uv[1])
 
 
-def frame_cause(seen: dict | None, box: np.ndarray, whose) -> str:
+def frame_cause(seen: dict | None, box: np.ndarray, whose, lifts: list | None = None) -> str:
     """One truth frame's cause (module doc) from what the refinement saw that frame; a frame a
-    live patch covers is split by `whose(pedestrian)`: what its track follows in the end."""
+    live patch covers is split by `whose(pedestrian)`: what its track follows in the end. A free
+    frame's run bottom above the box bottom, in box heights, is appended to `lifts`."""
     from rhythmjax.evaluation.motscore import iou_matrix
 
     if seen is None or seen["fg"] is None:
@@ -106,9 +111,11 @@ def frame_cause(seen: dict | None, box: np.ndarray, whose) -> str:
     for cx0, cy0, cx1, cy1, foot in seen["covers"]:
         if cx0 <= uc < cx1 and cy0 < y0 + h and cy1 > y0:
             return "covered by a nearer" if foot > vb else "covered by a farther"
-    for c0, c1, refused in seen["runs"]:
+    for c0, c1, refused, vb_run in seen["runs"]:
         if c0 <= uc < c1:
-            return "free: " + (refused or "started elsewhere on its run")
+            if lifts is not None:
+                lifts.append((vb - vb_run) / h)
+            return "free: " + refused
     return "free: no run there"
 
 
@@ -147,14 +154,15 @@ def study_clip(cfg, frames, truth, kinds, opt):
     owner = ec.owner_of_tracks(truth, res.mot, -1)
     followed = {o for o in owner.values() if o is not None}
     holder = {id(r): q for _, _, q in watch.starts if q.track_id in owner for r in q.rows}
-    causes, mains, fates = Counter(), Counter(), Counter()
+    causes, mains, fates, lifts = Counter(), Counter(), Counter(), []
     tb = np.stack([np.asarray(truth[c], np.float64) for c in BOX], 1)
     for wid in (w for w, k in kinds.items() if k == "pedestrian" and w not in followed):
         rows = np.flatnonzero(truth["id"] == wid)
         if not rows.size:
             continue
         mine = Counter(frame_cause(watch.frames.get(int(truth["frame"][j])), tb[j],
-                                   lambda q: follows(q, owner, kinds, holder)) for j in rows)
+                                   lambda q: follows(q, owner, kinds, holder), lifts)
+                       for j in rows)
         causes.update(mine)
         mains[max(mine, key=mine.get)] += 1
         frame_of = {int(truth["frame"][j]): tb[j] for j in rows}
@@ -167,7 +175,7 @@ def study_clip(cfg, frames, truth, kinds, opt):
                     fate += ": " + follows(p, owner, kinds, holder)
                 fates[fate] += 1
         fates["walkers"] += 1
-    return causes, mains, fates
+    return causes, mains, fates, lifts
 
 
 def main(argv=None) -> int:
@@ -186,18 +194,22 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),
                        {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
-    causes, mains, fates = Counter(), Counter(), Counter()
+    causes, mains, fates, lifts = Counter(), Counter(), Counter(), []
     for seed in a.seed.split(","):
         for _, cfg, frames, truth, kinds, _, _ in clips_of("count", int(seed), a.scenes,
                                                            a.clothing, a.focal_px, a.pairs):
-            c, m, f = study_clip(cfg, frames, truth, kinds, opt)
-            causes, mains, fates = causes + c, mains + m, fates + f
+            c, m, f, lift = study_clip(cfg, frames, truth, kinds, opt)
+            causes, mains, fates, lifts = causes + c, mains + m, fates + f, lifts + lift
         print(seed, dict(mains), flush=True)
     n = max(sum(causes.values()), 1)
     print(f"untracked walkers: {fates['walkers']}")
     print("frames by cause: " + ", ".join(f"{k} {causes[k]} ({100 * causes[k] / n:.0f} %)"
                                           for k in CAUSES if causes[k]))
     print("walkers by main cause: " + ", ".join(f"{k} {mains[k]}" for k in CAUSES if mains[k]))
+    if lifts:
+        q = np.percentile(lifts, [10, 50, 90])
+        print(f"free frames: the run's bottom above the box bottom {q[1]:.2f} box heights "
+              f"(10-90 %: {q[0]:.2f} to {q[2]:.2f})")
     print("starts on them by fate: " + ", ".join(f"{k} {fates[k]}" for k in FATES if fates[k]))
     return 0
 

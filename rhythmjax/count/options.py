@@ -115,6 +115,10 @@ class NewPedestrianOptions:
     head_feet: float = 0.0  # > 0: a run taller than this many H of a walker standing on its
     # bottom (legs lost in the mask) starts its walker with the feet where its top row is a
     # head (`count.head_feet`; 1.25 = `head_feet.TALL_HEIGHTS` when on)
+    head_feet_out_of_range: bool = False  # ... only where a walker standing on the run's bottom
+    # would have no size or stand outside the detection range (`refinement.starts_on`: the legs
+    # lost, the bottom the hips near the horizon); a run whose bottom starts one in range is
+    # left as it is (issue 16, twenty-fifth round)
 
 
 @dataclass(frozen=True)

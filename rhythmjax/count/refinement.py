@@ -16,7 +16,7 @@ from .patches import ground_point
 from .pedestrian import Pedestrian, finite_uv
 
 
-__all__ = ["REFUSALS", "FreeRun", "free_runs", "in_range", "new_pedestrians"]
+__all__ = ["REFUSALS", "FreeRun", "free_runs", "in_range", "new_pedestrians", "starts_on"]
 
 
 REFUSALS = ("narrow", "thin", "short", "lifted")  # why a free run starts no one (`free_runs`)
@@ -77,6 +77,8 @@ def free_runs(level, blobs, labels):
             span = rows[-1] - rows[0] + 1
             uc = x0 + 0.5 * (c0 + c1 - 1)
             from_head = head > 0 and too_tall(level.shape, uc, vb, float(span), head)
+            if from_head and opt.new.head_feet_out_of_range:  # only where its bottom row
+                from_head = not starts_on(level, (uc, vb))  # starts no one (legs lost)
             if from_head:  # legs lost in the mask: the feet from the head (`head_feet`)
                 vf = head_foot_row(level.shape, uc, float(y0 + rows[0]), labels.shape[0])
                 from_head = vf is not None and vf > vb
@@ -129,6 +131,13 @@ def new_pedestrians(level, blobs, labels) -> list[Pedestrian]:
                 new.append(p)
     level.peds += new
     return new
+
+
+def starts_on(level, uv) -> bool:
+    """A walker standing on foot point `uv` (px) has a patch size and its ground point in the
+    detection range (`in_range`): the refinement could start one there."""
+    w = float(level.shape.size(*uv)[0])
+    return math.isfinite(w) and w > 0 and in_range(level, uv)
 
 
 def in_range(level, uv) -> bool:
