@@ -147,3 +147,85 @@ def test_the_count_command_takes_feet_from_head(tmp_path, capsys):
         assert rc == 0
         walkers.append(json.loads(capsys.readouterr().out)["counts"]["walkers"])
     assert walkers == [0, 1]
+
+
+def free_run_of(mask_rows: tuple[int, int], out_of_range: bool):
+    """The one free run of a hand-made blob (columns 120-135, rows mask_rows[0] to
+    mask_rows[1] - 1) under LOW_SMALL's camera, `new.head_feet` on, with or without
+    `new.head_feet_out_of_range`, no pedestrian tracked."""
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+    from rhythmjax.count.refinement import free_runs
+    from rhythmjax.vision.blobs import find_blobs
+
+    cfg = config_from_dict(LOW_SMALL)
+    opt = with_changes(CountOptions(), {"new.head_feet": TALL_HEIGHTS,
+                                        "new.head_feet_out_of_range": out_of_range})
+    mask = np.zeros((192, 256), np.uint8)
+    mask[mask_rows[0]:mask_rows[1], 120:136] = 1
+    blobs, labels = find_blobs(mask, min_area=30)
+    (run,) = free_runs(PedestrianLevel(cfg, opt), blobs, labels)
+    return cfg, run
+
+
+def test_out_of_range_variant_leaves_a_tall_run_standing_in_range_on_its_bottom():
+    """A blob standing on the row of a point 6 m ahead (in the 2-20 m range), 1.5 walker heights
+    tall there (above 1.25): `new.head_feet` alone takes its feet from its top row (at a 1 m
+    camera a nearer walker whose legs the mask lost, its feet 35 px below the bottom; (3) solved
+    here by bisection for the distance whose head row is the top); with
+    `new.head_feet_out_of_range` the bottom, which starts a walker in range, stays its foot row.
+    A blob whose bottom is 1 px below the horizon (the hips of a walker whose legs the mask
+    lost: a ground point far beyond 20 m), topped where a 1.7 m walker 8 m ahead has its head,
+    takes its feet from the head either way, within 1 px of that walker's foot row (pin-hole of
+    (3) above)."""
+    from scipy.optimize import brentq
+
+    from rhythmjax.count.refinement import starts_on
+
+    cam = config_from_dict(LOW_SMALL).camera
+    bottom = round(row_of(cam, 6.0, 0.0))
+    h = float(shape_of(cam).size(128.0, float(bottom))[1])
+    top = bottom - round(1.5 * h)
+    for out_of_range, feet_from_head in ((False, True), (True, False)):
+        cfg, run = free_run_of((top, bottom + 1), out_of_range)
+        assert run.from_head is feet_from_head
+        if feet_from_head:  # where (3) puts the feet of a 1.7 m walker with its head on `top`
+            y = brentq(lambda d: row_of(cam, d, WALKER_M) - top, 0.5, 50.0)
+            assert run.vb == pytest.approx(row_of(cam, y, 0.0), abs=1.0)  # 128.85 px
+        else:
+            assert run.vb == bottom and run.refused == ""
+    horizon = float(cam.vc) - 200.0 * math.tan(float(cam.theta))
+    hips, head = math.floor(horizon) + 1, round(row_of(cam, 8.0, WALKER_M))
+    for out_of_range in (False, True):
+        cfg, run = free_run_of((head, hips + 1), out_of_range)
+        assert not starts_on_row(cfg, hips)
+        assert run.from_head
+        assert run.vb == pytest.approx(row_of(cam, 8.0, 0.0), abs=1.0)
+    assert starts_on_row(cfg, bottom)
+    assert not starts_on(_level(cfg), (128.0, math.floor(horizon) - 1.0))  # above the horizon
+
+
+def _level(cfg):
+    from rhythmjax.count.pedestrian_level import PedestrianLevel
+
+    return PedestrianLevel(cfg, CountOptions())
+
+
+def starts_on_row(cfg, row: float) -> bool:
+    from rhythmjax.count.refinement import starts_on
+
+    return starts_on(_level(cfg), (128.0, float(row)))
+
+
+def test_out_of_range_variant_still_counts_the_walker_without_trousers():
+    """The rendered walker of `test_a_walker_with_trousers_of_the_ground_grey_is_counted`,
+    whose blob ends at the hips beyond the range: with `new.head_feet_out_of_range` too, one
+    walker counted, its patch's foot row within 1 px of the true one."""
+    opt = with_changes(CountOptions(verdicts=VerdictOptions(classify=False, online=False)),
+                       {"new.head_feet": TALL_HEIGHTS, "new.head_feet_out_of_range": True})
+    cfg, scene = trousers_scene(30)
+    items = [(k, k / scene.fps, f) for k, f in enumerate(scene.frames)]
+    on = count_frames(cfg, iter(items), options=opt)
+    assert on.counts["tracks"] == on.counts["walkers"] == 1
+    frames = on.mot["frame"] - 1
+    foot = on.mot["bb_top"] + on.mot["bb_height"]
+    assert np.median(np.abs(foot - scene.truth[0].v[frames])) <= 1.0

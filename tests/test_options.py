@@ -140,6 +140,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "appearance.max_distance", 0.387),
     ("(new: issue 16 counting)", "appearance.veto_distance", math.inf),
     ("(new: issue 16 counting)", "new.head_feet", 0.0),
+    ("(new: issue 16 counting)", "new.head_feet_out_of_range", False),
 ]
 COUNT_REMOVED = ["height_m", "coast_s"]  # the config's width.height_m, thresholds.predict_timeout_s
 
