@@ -22,6 +22,7 @@ fate. Nothing in the library changes; nothing is chosen here.
 
     python benchmarks/study_unstarted_walkers.py --seed 160001,160002 --scenes 10 \
         [--clothing any] [--focal-px 500] [--pairs 0.5] [--set KEY=JSON ...]
+    RHYTHMJAX_DATA=../shared/data python benchmarks/study_unstarted_walkers.py dev_count
 """
 
 from __future__ import annotations
@@ -56,12 +57,13 @@ class Watch:
     """What the refinement saw each frame: the covers and the mask, the live patches, the
     pedestrians it started (their first foot point)."""
 
-    def __init__(self):
+    def __init__(self, offset: int = -1):
+        self.offset = offset  # truth frame = frame index + 1 + offset (`count_dump.clips_of`)
         self.frames: dict[int, dict] = {}
         self.starts: list[tuple[int, tuple, object]] = []  # (frame, z, Pedestrian)
 
     def hook(self, level, blobs, labels, inner):
-        f = level.n_frames - 1  # the clips' frame index (count_dump: frames from 0)
+        f = level.n_frames + self.offset  # the truth's frame (the clips' frames from index 0)
         w = level.opt.new.walker_widths
         covers, live = [], []
         for p in level.peds:
@@ -139,19 +141,20 @@ def follows(p, owner: dict, kinds: dict, holder: dict) -> str:
             if kinds.get(o) == "pedestrian" else "a track on a non-walker")
 
 
-def study_clip(cfg, frames, truth, kinds, opt):
-    """(frame causes, walker main causes, start fates) Counters of one clip."""
+def study_clip(cfg, frames, truth, kinds, opt, offset: int = -1):
+    """(frame causes, walker main causes, start fates) Counters and the free frames' lifts of
+    one clip (`offset`: truth frame = MOT frame + offset, as `count_dump.clips_of` gives)."""
     import eval_count as ec
 
     from rhythmjax.count import count_frames, pedestrian_level as pl
 
-    watch, inner = Watch(), pl.new_pedestrians
+    watch, inner = Watch(offset), pl.new_pedestrians
     pl.new_pedestrians = lambda level, blobs, labels: watch.hook(level, blobs, labels, inner)
     try:
         res = count_frames(cfg, iter(frames), n_frames=len(frames), options=opt)
     finally:
         pl.new_pedestrians = inner
-    owner = ec.owner_of_tracks(truth, res.mot, -1)
+    owner = ec.owner_of_tracks(truth, res.mot, offset)
     followed = {o for o in owner.values() if o is not None}
     holder = {id(r): q for _, _, q in watch.starts if q.track_id in owner for r in q.rows}
     causes, mains, fates, lifts = Counter(), Counter(), Counter(), []
@@ -185,6 +188,7 @@ def main(argv=None) -> int:
     from rhythmjax.track.options import with_changes
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("source", nargs="?", default="count", choices=("count", "dev_count"))
     p.add_argument("--seed", default="160001")
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
@@ -195,10 +199,10 @@ def main(argv=None) -> int:
     opt = with_changes(CountOptions(),
                        {k: json.loads(v) for k, v in (x.split("=", 1) for x in a.set)})
     causes, mains, fates, lifts = Counter(), Counter(), Counter(), []
-    for seed in a.seed.split(","):
-        for _, cfg, frames, truth, kinds, _, _ in clips_of("count", int(seed), a.scenes,
-                                                           a.clothing, a.focal_px, a.pairs):
-            c, m, f, lift = study_clip(cfg, frames, truth, kinds, opt)
+    for seed in a.seed.split(",") if a.source == "count" else ["0"]:
+        for _, cfg, frames, truth, kinds, off, _ in clips_of(a.source, int(seed), a.scenes,
+                                                             a.clothing, a.focal_px, a.pairs):
+            c, m, f, lift = study_clip(cfg, frames, truth, kinds, opt, off)
             causes, mains, fates, lifts = causes + c, mains + m, fates + f, lifts + lift
         print(seed, dict(mains), flush=True)
     n = max(sum(causes.values()), 1)
