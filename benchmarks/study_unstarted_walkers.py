@@ -1,18 +1,21 @@
-"""Why the counting tracker never follows some walkers of the own counting scenes (issue 16,
-twenty-fifth round; a study). The counting run of `count_dump.py` is repeated with the
+"""Why the counting tracker never follows some walkers of the own counting scenes or the dev
+crowds (issue 16, twenty-fifth round; a study). The counting run of `count_dump.py` is repeated with the
 refinement (`count.refinement.new_pedestrians`, as `count.pedestrian_level` calls it) and the
 pedestrians' ends watched. For every walker no output track follows (`eval_count.
 owner_of_tracks`: IoU >= 0.3 in half the track's frames) each of its truth frames gets one
 cause, the first that holds:
-- `tracked`: a live pedestrian's patch (tentative or confirmed) covers its box at IoU >= 0.3;
+- `tracked`: a live pedestrian's patch (tentative or confirmed) covers its box at IoU >= 0.3,
+  split by what that pedestrian's output track follows in the end (another walker, nothing, a
+  non-walker; directly or after stitching joined it behind an earlier track), or no output track;
 - `no mask`: no foreground pixel in the lower half of its box;
 - `covered`: its box's centre column lies in another pedestrian's cover (`new.walker_widths`
   W around that one's foot point, rows overlapping), so the refinement sees no free column
   there; split by whether the cover's pedestrian stands nearer (its foot row lower) or farther;
 - `free`: its centre column is free but no pedestrian starts there, split by the test its run
-  of free columns fails (`count.refinement.free_runs`: narrow, thin, short, lifted), or none
-  (the run's pedestrians started at other columns, or out of range), or no run holds it (the
-  column has no pixel of the blob its box's lower half touches);
+  of free columns fails (`count.refinement.free_runs`: narrow, thin, short, lifted), or it
+  passes and its pedestrians started at other columns, or it passes and no one started on it
+  (its foot points out of the detection range), or no run holds it (the column has no pixel of
+  a blob); for free frames also how far the run's bottom lies above the box's, in box heights;
 and every pedestrian started on it (its first foot point inside the walker's box columns and
 within 0.25 of its height of the box bottom) gets its fate: `tentative` (dropped before
 `life.confirm_hits` measured frames, or with no ground point), `short` (confirmed, under

@@ -1,6 +1,7 @@
 """Refinement of the pedestrians level (`pedestrian_level.PedestrianLevel`): blob columns no
-tracked pedestrian's patch explains start new pedestrians (`new_pedestrians`), one per walker
-width of the run, in the config's detection range (`in_range`). Units: px, patch widths W and
+tracked pedestrian's patch explains (`free_runs`: each run with the test it fails, if any)
+start new pedestrians (`new_pedestrians`), one per walker width of a run that passes, in the
+config's detection range (`in_range`). Units: px, patch widths W and
 heights H at the foot point (`patches.ShapeModel`), m on the ground. `level` is the
 `PedestrianLevel` (not imported here: it imports this module)."""
 
