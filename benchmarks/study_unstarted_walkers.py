@@ -1,7 +1,7 @@
 """Why the counting tracker never follows some walkers of the own counting scenes or the dev
-crowds (issue 16, twenty-fifth round; a study). The counting run of `count_dump.py` is repeated with the
-refinement (`count.refinement.new_pedestrians`, as `count.pedestrian_level` calls it) and the
-pedestrians' ends watched. For every walker no output track follows (`eval_count.
+crowds (issue 16, twenty-fifth round; a study). The counting run of `count_dump.py` is
+repeated with the refinement (`count.refinement.new_pedestrians`, as `count.pedestrian_level`
+calls it) and the pedestrians' ends watched. For every walker no output track follows (`eval_count.
 owner_of_tracks`: IoU >= 0.3 in half the track's frames) each of its truth frames gets one
 cause, the first that holds:
 - `tracked`: a live pedestrian's patch (tentative or confirmed) covers its box at IoU >= 0.3,
