@@ -39,7 +39,7 @@ from collections import Counter
 
 import numpy as np
 
-from rhythmjax.count.refinement import REFUSALS, free_runs
+from rhythmjax.count.refinement import REFUSALS, covers, free_runs
 
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -67,16 +67,13 @@ class Watch:
 
     def hook(self, level, blobs, labels, inner):
         f = level.n_frames + self.offset  # the truth's frame (the clips' frames from index 0)
-        w = level.opt.new.walker_widths
-        covers, live = [], []
-        for p in level.peds:
+        cover, live = [], []
+        for p, c in covers(level):
             uv = p.z if _finite(p.z) else p.next_uv
             if not _finite(uv):
                 continue
+            cover.append((*c, uv[1]))
             b = level.patch_at(uv)
-            half = 0.5 * w * (b[2] - b[0])
-            covers.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3],
-                           uv[1]))
             live.append(((b[0], b[1], b[2] - b[0], b[3] - b[1]), p))
         fg = None if labels is None else labels > 0
         runs = [] if labels is None else [(r.x0 + r.c0, r.x0 + r.c1, r.refused, r.vb)
@@ -85,7 +82,7 @@ class Watch:
         runs = [(c0, c1, refused or ("started elsewhere on its run" if any(
             c0 <= p.z[0] < c1 for p in new) else "no start on its run (out of range)"), vb)
             for c0, c1, refused, vb in runs]
-        self.frames[f] = {"covers": covers, "live": live, "fg": fg, "runs": runs}
+        self.frames[f] = {"covers": cover, "live": live, "fg": fg, "runs": runs}
         self.starts += [(f, tuple(p.z), p) for p in new]
         return new
 

@@ -1,8 +1,8 @@
 """Refinement of the pedestrians level (`pedestrian_level.PedestrianLevel`): blob columns no
-tracked pedestrian's patch explains (`free_runs`: each run with the test it fails, if any)
-start new pedestrians (`new_pedestrians`), one per walker width of a run that passes, in the
-config's detection range (`in_range`). Units: px, patch widths W and
-heights H at the foot point (`patches.ShapeModel`), m on the ground. `level` is the
+tracked pedestrian's patch explains (`covers`; `free_runs`: each run with the test it fails,
+if any) start new pedestrians (`new_pedestrians`), one per walker width of a run that passes,
+in the config's detection range (`in_range`). Units: px, patch widths W and heights H at the
+foot point (`patches.ShapeModel`), m on the ground. `level` is the
 `PedestrianLevel` (not imported here: it imports this module)."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from .patches import ground_point
 from .pedestrian import Pedestrian, finite_uv
 
 
-__all__ = ["REFUSALS", "FreeRun", "free_runs", "in_range", "new_pedestrians", "starts_on"]
+__all__ = ["REFUSALS", "FreeRun", "covers", "free_runs", "in_range", "new_pedestrians", "starts_on"]
 
 
 REFUSALS = ("narrow", "thin", "short", "lifted")  # why a free run starts no one (`free_runs`)
@@ -46,17 +46,25 @@ class FreeRun:
     refused: str
 
 
+def covers(level) -> list[tuple[Pedestrian, tuple[float, float, float, float]]]:
+    """Each pedestrian of `level` with the box (x0, y0, x1, y1) px its patch explains: the
+    patch's rows, `new.walker_widths` patch widths of columns around its foot point (measured
+    this frame, else predicted; a walker's blob spans its stance foot to its leading arm)."""
+    out = []
+    for p in level.peds:
+        b = level.patch_at(p.z if finite_uv(p.z) else p.next_uv)
+        half = 0.5 * level.opt.new.walker_widths * (b[2] - b[0])
+        out.append((p, (0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3])))
+    return out
+
+
 def free_runs(level, blobs, labels):
     """The runs of blob columns no patch covers (`new.walker_widths` W around each pedestrian's
     foot point, measured or predicted), per blob, each tested (`FreeRun.refused`); runs where
     the camera gives no patch size are left out. Nothing in `level` changes."""
     opt = level.opt
     head = opt.new.head_feet
-    cover = []
-    for p in level.peds:
-        b = level.patch_at(p.z if finite_uv(p.z) else p.next_uv)
-        half = 0.5 * opt.new.walker_widths * (b[2] - b[0])
-        cover.append((0.5 * (b[0] + b[2]) - half, b[1], 0.5 * (b[0] + b[2]) + half, b[3]))
+    cover = [c for _, c in covers(level)]
     for b in blobs:
         x0, y0, x1, y1 = b.box
         free = np.ones(x1 - x0, bool)  # columns no patch covers
