@@ -61,23 +61,29 @@ def covers(level) -> list[tuple[Pedestrian, tuple[float, float, float, float]]]:
 def free_runs(level, blobs, labels):
     """The runs of blob columns no patch covers (`new.walker_widths` W around each pedestrian's
     foot point, measured or predicted), per blob, each tested (`FreeRun.refused`); runs where
-    the camera gives no patch size are left out. Nothing in `level` changes."""
+    the camera gives no patch size are left out. With `new.cover_to_feet` a cover explains its
+    columns only down to its foot row plus `level.row_tolerance` px: a run is then made of the
+    columns holding blob pixels no cover explains (a nearer walker in front of a tracked one),
+    its foot row and height taken over all its blob pixels, its fill over the free ones only.
+    Nothing in `level` changes."""
     opt = level.opt
     head = opt.new.head_feet
+    below = level.row_tolerance if opt.new.cover_to_feet else math.inf
     cover = [c for _, c in covers(level)]
     for b in blobs:
         x0, y0, x1, y1 = b.box
-        free = np.ones(x1 - x0, bool)  # columns no patch covers
+        low = np.full(x1 - x0, -1.0)  # per column: the lowest crop row a cover explains
         for c in cover:
             if c[1] < y1 and c[3] > y0:
-                free[max(0, int(math.floor(c[0])) - x0):max(0, int(math.ceil(c[2])) - x0)] \
-                    = False
-        if not free.any():  # every column covered: no run (the blob's pixels not needed)
+                cols = slice(max(0, int(math.floor(c[0])) - x0), max(0, int(math.ceil(c[2])) - x0))
+                low[cols] = np.maximum(low[cols], c[3] + below - y0)
+        if (low >= y1 - y0 - 1).all():  # every column explained to the bottom: no run
             continue
         hb = float(level.shape.size(0.5 * (x0 + x1 - 1), y1 - 1)[1])
         crop = labels[y0:y1, x0:x1] == b.label
-        ext = np.zeros(free.size + 2, np.int8)  # run edges of the free blob columns
-        np.logical_and(crop.any(axis=0), free, out=ext[1:-1].view(bool))
+        unexplained = crop & (np.arange(y1 - y0)[:, None] > low[None, :])
+        ext = np.zeros(low.size + 2, np.int8)  # run edges of the columns with free pixels
+        np.any(unexplained, axis=0, out=ext[1:-1].view(bool))
         edges = np.flatnonzero(np.diff(ext))
         for c0, c1 in zip(edges[::2], edges[1::2]):
             sub = crop[:, c0:c1]
@@ -99,7 +105,7 @@ def free_runs(level, blobs, labels):
             lifted = vb < y1 - 1 - opt.new.max_lift * hb  # above the blob's bottom: an arm,
             # or a farther walker merged with a nearer object (it stands taller than an arm)
             refused = ("narrow" if (c1 - c0) < opt.new.min_widths * w
-                       else "thin" if sub.sum() < opt.new.min_fill * w * h * n
+                       else "thin" if unexplained[:, c0:c1].sum() < opt.new.min_fill * w * h * n
                        else "short" if span < opt.new.min_height * h
                        else "lifted" if lifted and span < opt.new.lifted_height * min(h, vb + 1.0)
                        else "")
