@@ -141,6 +141,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "appearance.veto_distance", math.inf),
     ("(new: issue 16 counting)", "new.head_feet", 0.0),
     ("(new: issue 16 counting)", "new.head_feet_out_of_range", False),
+    ("(new: issue 16 counting)", "new.cover_to_feet", True),  # on since the 26th round
 ]
 COUNT_REMOVED = ["height_m", "coast_s"]  # the config's width.height_m, thresholds.predict_timeout_s
 

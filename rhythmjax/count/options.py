@@ -119,9 +119,10 @@ class NewPedestrianOptions:
     # would have no size or stand outside the detection range (`refinement.starts_on`: the legs
     # lost, the bottom the hips near the horizon); a run whose bottom starts one in range is
     # left as it is (issue 16, twenty-fifth round)
-    cover_to_feet: bool = False  # a cover explains its columns only down to its pedestrian's
+    cover_to_feet: bool = True  # a cover explains its columns only down to its pedestrian's
     # foot row plus the row tolerance (k_sigma2 r_v px); blob pixels lower there are free (a
-    # nearer walker in front of it: `refinement.free_runs`; issue 16, twenty-sixth round; off)
+    # nearer walker in front of it: `refinement.free_runs`; issue 16, twenty-sixth round, on;
+    # False: the whole column, as before)
 
 
 @dataclass(frozen=True)
