@@ -8,9 +8,11 @@ cause, the first that holds:
   split by what that pedestrian's output track follows in the end (another walker, nothing, a
   non-walker; directly or after stitching joined it behind an earlier track), or no output track;
 - `no mask`: no foreground pixel in the lower half of its box;
+- `free` (first where a run of free columns holds its centre column: with `new.cover_to_feet`
+  a run can lie under a cover, below its foot row): as below;
 - `covered`: its box's centre column lies in another pedestrian's cover (`new.walker_widths`
-  W around that one's foot point, rows overlapping), so the refinement sees no free column
-  there; split by whether the cover's pedestrian stands nearer (its foot row lower) or farther;
+  W around that one's foot point, rows overlapping) and in no free run; split by whether the
+  cover's pedestrian stands nearer (its foot row lower) or farther;
 - `free`: its centre column is free but no pedestrian starts there, split by the test its run
   of free columns fails (`count.refinement.free_runs`: narrow, thin, short, lifted), or it
   passes and its pedestrians started at other columns, or it passes and no one started on it
@@ -110,14 +112,14 @@ def frame_cause(seen: dict | None, box: np.ndarray, whose, lifts: list | None = 
     if r1 <= r0 or c1 <= c0 or not seen["fg"][r0:r1, c0:c1].any():
         return "no mask"
     uc, vb = x0 + 0.5 * w, y0 + h
-    for cx0, cy0, cx1, cy1, foot in seen["covers"]:
-        if cx0 <= uc < cx1 and cy0 < y0 + h and cy1 > y0:
-            return "covered by a nearer" if foot > vb else "covered by a farther"
-    for c0, c1, refused, vb_run in seen["runs"]:
+    for c0, c1, refused, vb_run in seen["runs"]:  # (under a cover only with new.cover_to_feet)
         if c0 <= uc < c1:
             if lifts is not None:
                 lifts.append((vb - vb_run) / h)
             return "free: " + refused
+    for cx0, cy0, cx1, cy1, foot in seen["covers"]:
+        if cx0 <= uc < cx1 and cy0 < y0 + h and cy1 > y0:
+            return "covered by a nearer" if foot > vb else "covered by a farther"
     return "free: no run there"
 
 

@@ -112,3 +112,25 @@ def test_a_nearer_walker_in_front_starts_a_pedestrian_on_its_feet():
         assert len(new) == n
         if n:
             assert new[0].z == (127.5, cover_of(lv)[3] + 40.0)
+
+
+def test_two_legs_under_a_cover_are_one_run_with_join_gap_widths():
+    """Two legs (columns 110-125 and 130-145, a 4 px gap) 40 rows below the tracked one's feet:
+    alone, each 16 columns is narrower than 0.6 W (W 44 px at the blob's bottom row 150);
+    with `new.join_gap_widths` 0.6 (gap < 26 px) they are one run of 36 columns holding
+    2 x 16 x 34 = 1088 free pixels (>= min_fill 0.15 W H): it passes. A gap of 30 px is not
+    joined."""
+    def legs(on: bool, right: int):
+        lv = level_with_one(True)
+        if on:
+            lv.opt = with_changes(lv.opt, {"new.join_gap_widths": 0.6})
+        mask = legs_mask(40, (110, 126)) | legs_mask(40, (right, right + 16))
+        return runs_of(lv, mask)[0]
+
+    apart = legs(False, 130)
+    assert [(r.c1 - r.c0, r.refused) for r in apart] == [(16, "narrow"), (16, "narrow")]
+    (one,) = legs(True, 130)
+    assert (one.x0 + one.c0, one.x0 + one.c1, one.refused) == (110, 146, "")
+    w_bottom = float(level_with_one(True).shape.size(127.5, 150.0)[0])
+    assert 4 < 0.6 * w_bottom < 30
+    assert len(legs(True, 156)) == 2  # 30 px apart: two runs

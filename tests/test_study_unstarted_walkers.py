@@ -51,6 +51,10 @@ def test_each_cause_by_hand():
     assert su.frame_cause(_seen(runs=[(104, 116, "thin", 70.0)]), BOX, whose, lifts) == \
         "free: thin"
     assert lifts == [0.5]
+    # a run under a farther one's cover (new.cover_to_feet: its legs below that one's feet)
+    # names the run's test, not the cover
+    below = _seen(covers=[(95.0, 20.0, 125.0, 90.0, 90.0)], runs=[(104, 116, "narrow", 100.0)])
+    assert su.frame_cause(below, BOX, whose) == "free: narrow"
 
 
 def test_fates_and_what_a_track_follows():

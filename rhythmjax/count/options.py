@@ -123,6 +123,9 @@ class NewPedestrianOptions:
     # foot row plus the row tolerance (k_sigma2 r_v px); blob pixels lower there are free (a
     # nearer walker in front of it: `refinement.free_runs`; issue 16, twenty-sixth round, on;
     # False: the whole column, as before)
+    join_gap_widths: float = 0.0  # > 0: runs of free columns of one blob less than this many W
+    # apart (W at the blob's bottom row) are one run: a walker's two legs under another's cover
+    # (`refinement.free_runs`; issue 16, twenty-sixth round; off)
 
 
 @dataclass(frozen=True)

@@ -65,7 +65,8 @@ def free_runs(level, blobs, labels):
     columns only down to its foot row plus `level.row_tolerance` px: a run is then made of the
     columns holding blob pixels no cover explains (a nearer walker in front of a tracked one),
     its foot row and height taken over all its blob pixels, its fill over the free ones only.
-    Nothing in `level` changes."""
+    With `new.join_gap_widths` runs of one blob closer than that many W (at the blob's bottom
+    row) are joined (a walker's legs). Nothing in `level` changes."""
     opt = level.opt
     head = opt.new.head_feet
     below = level.row_tolerance if opt.new.cover_to_feet else math.inf
@@ -85,6 +86,12 @@ def free_runs(level, blobs, labels):
         ext = np.zeros(low.size + 2, np.int8)  # run edges of the columns with free pixels
         np.any(unexplained, axis=0, out=ext[1:-1].view(bool))
         edges = np.flatnonzero(np.diff(ext))
+        if opt.new.join_gap_widths > 0 and edges.size > 2:  # a walker's legs: one run
+            gap = opt.new.join_gap_widths * float(level.shape.size(0.5 * (x0 + x1 - 1),
+                                                                    y1 - 1)[0])
+            gap = gap if math.isfinite(gap) else 0.0  # no size at the bottom: none joined
+            keep = np.r_[True, edges[2::2] - edges[1:-1:2] >= gap]  # runs starting anew
+            edges = np.c_[edges[::2][keep], edges[1::2][np.r_[keep[1:], True]]].ravel()
         for c0, c1 in zip(edges[::2], edges[1::2]):
             sub = crop[:, c0:c1]
             rows = np.flatnonzero(sub.any(axis=1))
