@@ -16,6 +16,7 @@ from rhythmjax.count.refinement import free_runs, new_pedestrians
 from rhythmjax.model.params import config_from_dict
 from rhythmjax.vision.blobs import find_blobs
 
+
 SMALL = {"camera": {"f_m": 0.008, "h_m": 1.0, "theta_deg": 10.0, "a_px_per_m": 25000.0,
                     "b_px_per_m": 25000.0, "uc_px": 128.0, "vc_px": 96.0, "fps": 15.0,
                     "image_width_px": 256, "image_height_px": 192},
