@@ -1,9 +1,10 @@
 """Refinement of the pedestrians level (`pedestrian_level.PedestrianLevel`): blob columns no
-tracked pedestrian's patch explains (`covers`; `free_runs`: each run with the test it fails,
-if any) start new pedestrians (`new_pedestrians`), one per walker width of a run that passes,
-in the config's detection range (`in_range`). Units: px, patch widths W and heights H at the
-foot point (`patches.ShapeModel`), m on the ground. `level` is the
-`PedestrianLevel` (not imported here: it imports this module)."""
+tracked pedestrian's patch explains (`covers`, down to its foot row with `new.cover_to_feet`;
+`free_runs`: each run with the test it fails, if any) start new pedestrians
+(`new_pedestrians`), one per walker width of a run that passes, in the config's detection range
+(`in_range`). Units: px, patch widths W and heights H at the foot point
+(`patches.ShapeModel`), m on the ground. `level` is the `PedestrianLevel` (not imported here:
+it imports this module)."""
 
 from __future__ import annotations
 
@@ -80,16 +81,14 @@ def free_runs(level, blobs, labels):
                 low[cols] = np.maximum(low[cols], c[3] + below - y0)
         if (low >= y1 - y0 - 1).all():  # every column explained to the bottom: no run
             continue
-        hb = float(level.shape.size(0.5 * (x0 + x1 - 1), y1 - 1)[1])
+        wb, hb = (float(q) for q in level.shape.size(0.5 * (x0 + x1 - 1), y1 - 1))
         crop = labels[y0:y1, x0:x1] == b.label
         unexplained = crop & (np.arange(y1 - y0)[:, None] > low[None, :])
         ext = np.zeros(low.size + 2, np.int8)  # run edges of the columns with free pixels
         np.any(unexplained, axis=0, out=ext[1:-1].view(bool))
         edges = np.flatnonzero(np.diff(ext))
         if opt.new.join_gap_widths > 0 and edges.size > 2:  # a walker's legs: one run
-            gap = opt.new.join_gap_widths * float(level.shape.size(0.5 * (x0 + x1 - 1),
-                                                                    y1 - 1)[0])
-            gap = gap if math.isfinite(gap) else 0.0  # no size at the bottom: none joined
+            gap = opt.new.join_gap_widths * wb if math.isfinite(wb) else 0.0  # W at the bottom
             keep = np.r_[True, edges[2::2] - edges[1:-1:2] >= gap]  # runs starting anew
             edges = np.c_[edges[::2][keep], edges[1::2][np.r_[keep[1:], True]]].ravel()
         for c0, c1 in zip(edges[::2], edges[1::2]):
