@@ -9,7 +9,8 @@ and the MOT truth with each truth id's kind (a pickle). A diagnostic for
 SOURCE: pets | count (own counting scenes of `eval_count.scene_specs`, seed --seed) |
 dev_count (report only). --clothing and --focal-px change the own scenes as in
 `eval_count_options.py` (clothing of any grey; the camera's a f = b f in px); --pairs joins
-that fraction of their walkers with a partner at their shoulder (`sim.groups.with_pairs`).
+that fraction of their walkers with a partner at their shoulder, or in file with
+`--pair-layout file` (`sim.groups.with_pairs`).
 --set overrides a `count.CountOptions` field (dotted).
 """
 
@@ -28,7 +29,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
 def clips_of(source: str, seed: int, scenes: int, clothing: str = "contrasted",
-             focal_px: float = 0.0, pairs: float = 0.0):
+             focal_px: float = 0.0, pairs: float = 0.0, pair_layout: str = "side"):
     """(name, cfg, frames, truth, kinds, offset, true walkers) per clip of `source`."""
     import eval_all as ea
     import eval_count as ec
@@ -55,7 +56,7 @@ def clips_of(source: str, seed: int, scenes: int, clothing: str = "contrasted",
             d["camera"] = {"a_px_per_m": focal_px / 0.008, "b_px_per_m": focal_px / 0.008}
         cfg = config_from_dict(d)
         for s, spec in ec.scene_specs(scenes, seed=seed, camera=cfg.camera, clothing=clothing,
-                                      pairs=pairs):
+                                      pairs=pairs, pair_layout=pair_layout):
             scene = render_scene(s, spec)
             truth, kinds = ec.truth_boxes(scene)
             seen = set(truth["id"].tolist())
@@ -89,6 +90,8 @@ def main(argv=None) -> int:
     p.add_argument("--focal-px", type=float, default=0.0)
     p.add_argument("--pairs", type=float, default=0.0,
                    help="own scenes: fraction of walkers joined by a partner side by side")
+    p.add_argument("--pair-layout", default="side", choices=("side", "file"),
+                   help="own scenes: pairs side by side or in file (`sim.groups.LAYOUTS`)")
     p.add_argument("--set", action="append", default=[])
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),
@@ -96,7 +99,7 @@ def main(argv=None) -> int:
     rows = []
     clips = (c for seed in a.seed.split(",")
              for c in clips_of(a.source, int(seed), a.scenes, a.clothing, a.focal_px,
-                                 a.pairs))
+                                 a.pairs, a.pair_layout))
     for name, cfg, frames, truth, kinds, off, true in clips:
         res = count_frames(cfg, iter(frames), n_frames=len(frames), options=opt)
         rows.append({"clip": name, "mot": res.mot, "tracks": res.tracks,

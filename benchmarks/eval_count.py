@@ -100,9 +100,10 @@ def _sort_on(det, n_frames: int, truth, offset: int) -> dict:
 
 
 def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None,
-                clothing: str = "contrasted", pairs: float = 0.0):
+                clothing: str = "contrasted", pairs: float = 0.0, pair_layout: str = "side"):
     """(scene seed, spec) of n random counting scenes; `pairs` > 0: that fraction of walkers
-    joined by a partner at their shoulder (`sim.groups.with_pairs`; 0, the scenes so far)."""
+    joined by a partner at their shoulder, or in file with `pair_layout` "file"
+    (`sim.groups.with_pairs`; 0, the scenes so far)."""
     from rhythmjax.sim.groups import with_pairs
     from rhythmjax.sim.scene import random_spec
 
@@ -119,7 +120,8 @@ def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None,
                                    min_life=100, max_life=150, bicycle_speed=(3.0, 3.2),
                                    range_m=(3.1, 19.9), crossing_fraction=0.95,
                                    clothing=clothing)
-                out.append((s, with_pairs(spec, s, pairs, range_m=(3.1, 19.9))))
+                out.append((s, with_pairs(spec, s, pairs, range_m=(3.1, 19.9),
+                                          layout=pair_layout)))
                 break
             except RuntimeError:
                 continue

@@ -196,6 +196,7 @@ def main(argv=None) -> int:
     p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
     p.add_argument("--focal-px", type=float, default=0.0)
     p.add_argument("--pairs", type=float, default=0.0)
+    p.add_argument("--pair-layout", default="side", choices=("side", "file"))
     p.add_argument("--set", action="append", default=[])
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),
@@ -203,7 +204,8 @@ def main(argv=None) -> int:
     causes, mains, fates, lifts = Counter(), Counter(), Counter(), []
     for seed in a.seed.split(",") if a.source == "count" else ["0"]:
         for _, cfg, frames, truth, kinds, off, _ in clips_of(a.source, int(seed), a.scenes,
-                                                             a.clothing, a.focal_px, a.pairs):
+                                                             a.clothing, a.focal_px, a.pairs,
+                                                             a.pair_layout):
             c, m, f, lift = study_clip(cfg, frames, truth, kinds, opt, off)
             causes, mains, fates, lifts = causes + c, mains + m, fates + f, lifts + lift
         print(seed, dict(mains), flush=True)

@@ -1,5 +1,6 @@
-"""`sim.groups`: a walker's partner at its shoulder worked by hand, the view check, and pairing
-a random scene (deterministic, walker counts kept, pairs side by side in every frame)."""
+"""`sim.groups`: a walker's partner at its shoulder or in file worked by hand, the view check,
+and pairing a random scene (deterministic, walker counts kept, pairs side by side or one
+behind the other in every frame)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import math
 import pytest
 
 from rhythmjax.model.params import Camera
-from rhythmjax.sim.groups import in_view, partner_of, with_pairs
+from rhythmjax.sim.groups import LAYOUTS, follower_of, in_view, partner_of, with_pairs
 from rhythmjax.sim.scene import ActorSpec, SceneSpec, random_spec
 
 
@@ -66,3 +67,39 @@ def test_pairing_a_random_scene():
     assert bikes == [x for x in spec.actors if x.kind == "bicycle"]  # others untouched
     with pytest.raises(ValueError, match="pair fraction"):
         with_pairs(spec, 31, 1.5)
+
+
+def test_follower_by_hand():
+    """In file: 1.5 m ahead of (side +1) or behind (-1) the lead along its heading; the lead's
+    start, life, heading and speed, its own pace."""
+    at_camera = ActorSpec("pedestrian", x0=0.5, y0=12.0, heading_rad=-math.pi / 2, pace_hz=2.0,
+                          step_length_m=0.7, start_frame=3, n_frames=50)
+    other = ActorSpec("pedestrian", x0=3.0, y0=5.0, heading_rad=1.0, pace_hz=1.75,
+                      step_length_m=0.8)
+    ahead = follower_of(at_camera, other, 1.5, 1.0)
+    behind = follower_of(at_camera, other, 1.5, -1.0)
+    assert (ahead.x0, ahead.y0) == pytest.approx((0.5, 10.5), abs=1e-12)  # nearer the camera
+    assert (behind.x0, behind.y0) == pytest.approx((0.5, 13.5), abs=1e-12)
+    assert (behind.heading_rad, behind.start_frame, behind.n_frames) == (-math.pi / 2, 3, 50)
+    assert behind.speed_mps == pytest.approx(1.4, abs=1e-12) and behind.pace_hz == 1.75
+
+
+def test_pairing_a_random_scene_in_file():
+    spec = random_spec(31, n_walkers=6, n_bicycles=1, n_dogs=0, n_frames=120, occlusion=True,
+                       min_life=60, max_life=90, range_m=(3.1, 19.9))
+    a = with_pairs(spec, 31, 1.0, layout="file")
+    assert a == with_pairs(spec, 31, 1.0, layout="file")
+    assert with_pairs(spec, 31, 1.0) == with_pairs(spec, 31, 1.0, (0.55, 0.8))  # side: as before
+    groups: dict = {}
+    for w in (x for x in a.actors if x.kind == "pedestrian"):
+        groups.setdefault((w.start_frame, w.n_frames, w.heading_rad), []).append(w)
+    pairs = [g for g in groups.values() if len(g) == 2]
+    assert len(pairs) >= 2
+    for p, q in pairs:  # the offset lies along the heading, within the file range
+        h = p.heading_rad
+        dx, dy = q.x0 - p.x0, q.y0 - p.y0
+        assert abs(-dx * math.sin(h) + dy * math.cos(h)) < 1e-9
+        assert LAYOUTS["file"][0] <= math.hypot(dx, dy) <= LAYOUTS["file"][1]
+        assert in_view(a, q, (3.1, 19.9), 8.0)
+    with pytest.raises(ValueError, match="pair layout"):
+        with_pairs(spec, 31, 0.5, layout="ring")

@@ -1,5 +1,7 @@
 """Walkers in pairs, side by side: a scene's walkers re-drawn so that some walk with a partner
-at the partner's shoulder (issue 16, twenty-fourth round).
+at the partner's shoulder (issue 16, twenty-fourth round), or in file, one behind the other
+(`layout` "file", twenty-sixth round: walking toward or away from the camera, one stands in
+front of the other in the image, as in the independent renderer's crowds).
 
 Why: in our counting scenes two walkers whose image boxes overlap stand at different depths
 (their foot rows a median 0.18 walker heights apart: one passes behind the other), while in
@@ -8,7 +10,8 @@ the independent renderer's crowd clips such walkers stand side by side (0.05 H a
 
 A pair: the second walker takes the first's start frame, life, heading and ground speed (its own
 pace, its step length scaled to that speed), its path shifted sideways, perpendicular to the
-heading, by `spacing_m`; the gait phases stay independent. Everything else of the second walker
+heading, by `spacing_m` (in file: along the heading, behind or ahead); the gait phases stay
+independent. Everything else of the second walker
 (height, clothing, bag) is kept. A pair whose second path would leave the image or the ground
 range while alive is tried on the other side, then left unpaired.
 """
@@ -24,7 +27,11 @@ from ..model.camera_np import camera_tuple, project_3d
 from .scene import ActorSpec, SceneSpec
 
 
-__all__ = ["in_view", "partner_of", "with_pairs"]
+__all__ = ["LAYOUTS", "follower_of", "in_view", "partner_of", "with_pairs"]
+
+
+LAYOUTS = {"side": (0.55, 0.8), "file": (1.0, 2.5)}  # a pair's spacing range, m, per layout
+# (side: shoulder to shoulder; file: one pace to two strides and more between walkers in file)
 
 
 def in_view(spec: SceneSpec, actor: ActorSpec, range_m: tuple[float, float],
@@ -57,17 +64,32 @@ def partner_of(lead: ActorSpec, other: ActorSpec, spacing_m: float, side: float)
                    step_length_m=lead.speed_mps / other.pace_hz)
 
 
+def follower_of(lead: ActorSpec, other: ActorSpec, gap_m: float, side: float) -> ActorSpec:
+    """`other` walking in file with `lead`: the lead's start, life, heading and speed (m/s),
+    other's own pace, its start point `gap_m` m ahead of the lead (side +1) or behind it (-1)
+    along the heading."""
+    h = lead.heading_rad
+    return replace(partner_of(lead, other, 0.0, 1.0), x0=lead.x0 + side * gap_m * math.cos(h),
+                   y0=lead.y0 + side * gap_m * math.sin(h))
+
+
 def with_pairs(spec: SceneSpec, seed: int, fraction: float,
-               spacing_m: tuple[float, float] = (0.55, 0.8),
-               range_m: tuple[float, float] = (3.1, 19.9), margin_px: float = 8.0) -> SceneSpec:
+               spacing_m: tuple[float, float] | None = None,
+               range_m: tuple[float, float] = (3.1, 19.9), margin_px: float = 8.0,
+               layout: str = "side") -> SceneSpec:
     """The scene with walkers paired: in the order of the actors, each walker not yet in a pair
-    is, with probability `fraction`, joined by the next unpaired walker (`partner_of`, spacing
-    uniform in `spacing_m` m, a random side first). Deterministic given `seed`; `fraction` 0
+    is, with probability `fraction`, joined by the next unpaired walker (`partner_of` for
+    `layout` "side", `follower_of` for "file"; spacing uniform in `spacing_m` m, by default the
+    layout's `LAYOUTS` range; a random side first). Deterministic given `seed`; `fraction` 0
     returns `spec` itself."""
     if not 0.0 <= fraction <= 1.0:
         raise ValueError(f"pair fraction must be in [0, 1], got {fraction}")
+    if layout not in LAYOUTS:
+        raise ValueError(f"pair layout must be one of {sorted(LAYOUTS)}, got {layout!r}")
     if fraction == 0.0:
         return spec
+    spacing_m = LAYOUTS[layout] if spacing_m is None else spacing_m
+    place = partner_of if layout == "side" else follower_of
     rng = np.random.default_rng(seed)
     actors = list(spec.actors)
     walkers = [i for i, a in enumerate(actors) if a.kind == "pedestrian"]
@@ -78,7 +100,7 @@ def with_pairs(spec: SceneSpec, seed: int, fraction: float,
         if rng.random() < fraction:
             spacing, first = float(rng.uniform(*spacing_m)), float(rng.choice([-1.0, 1.0]))
             for side in (first, -first):
-                partner = partner_of(lead, actors[i], spacing, side)
+                partner = place(lead, actors[i], spacing, side)
                 if in_view(spec, partner, range_m, margin_px):
                     actors[i], paired = partner, True
                     break
