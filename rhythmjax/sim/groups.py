@@ -1,7 +1,7 @@
 """Walkers in pairs, side by side: a scene's walkers re-drawn so that some walk with a partner
 at the partner's shoulder (issue 16, twenty-fourth round), or in file, one behind the other
 (`layout` "file", twenty-sixth round: walking toward or away from the camera, one stands in
-front of the other in the image, as in the independent renderer's crowds).
+front of the other in the image).
 
 Why: in our counting scenes two walkers whose image boxes overlap stand at different depths
 (their foot rows a median 0.18 walker heights apart: one passes behind the other), while in
