@@ -89,8 +89,9 @@ def test_pixels_below_the_feet_are_free_only_with_the_option_and_beyond_the_tole
 def test_the_run_is_as_tall_as_all_its_blob_pixels_and_as_full_as_its_free_ones():
     """The run of the legs 40 rows below the feet counts the covered pixels above in its
     height (its free rows alone, 34, are under min_height 0.5 H at its foot row: it would be
-    refused as short); 2 free rows under 42 columns of the cover are refused as thin (84 px,
-    under min_fill 0.15 of a patch), 2 columns as narrow."""
+    refused as short); 2 free rows under 42 columns of the cover, in one blob with the body,
+    are refused as thin (84 px, under min_fill 0.15 of a patch, though the blob's pixels in
+    those columns are not), 2 columns as narrow."""
     on = level_with_one(True)
     foot = cover_of(on)[3]
     (run,) = runs_of(on, legs_mask(40))[0]
@@ -98,9 +99,10 @@ def test_the_run_is_as_tall_as_all_its_blob_pixels_and_as_full_as_its_free_ones(
     (narrow,) = runs_of(on, legs_mask(40, (127, 129)))[0]
     assert narrow.refused == "narrow"
     mask = legs_mask(0)
-    mask[foot + 7:foot + 9, 107:149] = True
+    mask[foot + 1:foot + 9, 107:149] = True  # one blob with the body; rows foot + 7, + 8 free
     (thin,) = runs_of(on, mask)[0]
     assert (thin.c1 - thin.c0, thin.refused) == (42, "thin")
+    assert thin.crop[:, thin.c0:thin.c1].sum() > on.opt.new.min_fill * thin.w * thin.h  # all
 
 
 def test_a_nearer_walker_in_front_starts_a_pedestrian_on_its_feet():

@@ -11,9 +11,9 @@ the independent renderer's crowd clips such walkers stand side by side (0.05 H a
 A pair: the second walker takes the first's start frame, life, heading and ground speed (its own
 pace, its step length scaled to that speed), its path shifted sideways, perpendicular to the
 heading, by `spacing_m` (in file: along the heading, behind or ahead); the gait phases stay
-independent. Everything else of the second walker
-(height, clothing, bag) is kept. A pair whose second path would leave the image or the ground
-range while alive is tried on the other side, then left unpaired.
+independent. Everything else of the second walker (height, clothing, bag) is kept. A pair whose
+second path would leave the image or the ground range while alive is tried on the other side,
+then left unpaired.
 """
 
 from __future__ import annotations
