@@ -10,7 +10,7 @@ SOURCE: pets | count (own counting scenes of `eval_count.scene_specs`, seed --se
 dev_count (report only). --clothing and --focal-px change the own scenes as in
 `eval_count_options.py` (clothing of any grey; the camera's a f = b f in px); --pairs joins
 that fraction of their walkers with a partner at their shoulder, or in file with
-`--pair-layout file` (`sim.groups.with_pairs`).
+`--pair-layout file` (`late`: the second appearing 1-2 s after the first; `sim.groups.with_pairs`).
 --set overrides a `count.CountOptions` field (dotted).
 """
 
@@ -90,8 +90,9 @@ def main(argv=None) -> int:
     p.add_argument("--focal-px", type=float, default=0.0)
     p.add_argument("--pairs", type=float, default=0.0,
                    help="own scenes: fraction of walkers joined by a partner side by side")
-    p.add_argument("--pair-layout", default="side", choices=("side", "file"),
-                   help="own scenes: pairs side by side or in file (`sim.groups.LAYOUTS`)")
+    p.add_argument("--pair-layout", default="side", choices=("side", "file", "late"),
+                   help="own scenes: pairs side by side, in file, or in file with the second "
+                   "appearing later (`sim.groups.LAYOUTS`)")
     p.add_argument("--set", action="append", default=[])
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),

@@ -196,7 +196,7 @@ def main(argv=None) -> int:
     p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"))
     p.add_argument("--focal-px", type=float, default=0.0)
     p.add_argument("--pairs", type=float, default=0.0)
-    p.add_argument("--pair-layout", default="side", choices=("side", "file"))
+    p.add_argument("--pair-layout", default="side", choices=("side", "file", "late"))
     p.add_argument("--set", action="append", default=[])
     a = p.parse_args(argv)
     opt = with_changes(CountOptions(),

@@ -143,6 +143,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "new.head_feet_out_of_range", False),
     ("(new: issue 16 counting)", "new.cover_to_feet", True),  # on since the 26th round
     ("(new: issue 16 counting)", "new.join_gap_widths", 0.0),  # a walker's legs joined, off
+    ("(new: issue 16 counting)", "new.fill_exposed", False),  # fill of the part below, off
 ]
 COUNT_REMOVED = ["height_m", "coast_s"]  # the config's width.height_m, thresholds.predict_timeout_s
 

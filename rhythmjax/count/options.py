@@ -126,6 +126,8 @@ class NewPedestrianOptions:
     join_gap_widths: float = 0.0  # > 0: runs of free columns of one blob less than this many W
     # apart (W at the blob's bottom row) are one run: a walker's two legs under another's cover
     # (`refinement.free_runs`; issue 16, twenty-sixth round; off)
+    fill_exposed: bool = False  # a run under a cover asks `min_fill` of its patch's part below
+    # the covers only (`refinement.free_runs`; issue 16, twenty-sixth round; off)
 
 
 @dataclass(frozen=True)

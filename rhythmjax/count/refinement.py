@@ -67,7 +67,8 @@ def free_runs(level, blobs, labels):
     columns holding blob pixels no cover explains (a nearer walker in front of a tracked one),
     its foot row and height taken over all its blob pixels, its fill over the free ones only.
     With `new.join_gap_widths` runs of one blob closer than that many W (at the blob's bottom
-    row) are joined (a walker's legs). Nothing in `level` changes."""
+    row) are joined (a walker's legs); with `new.fill_exposed` a run under a cover asks its fill
+    of the patch rows below the cover only. Nothing in `level` changes."""
     opt = level.opt
     head = opt.new.head_feet
     below = level.row_tolerance if opt.new.cover_to_feet else math.inf
@@ -108,10 +109,14 @@ def free_runs(level, blobs, labels):
             if not (math.isfinite(w) and w > 0):
                 continue
             n = max(1, int(round((c1 - c0) / (opt.new.walker_widths * w))))
+            fill = opt.new.min_fill * w * h * n  # pixels asked: of n whole patches, or with
+            top = float(low[c0:c1].max())  # `new.fill_exposed` under a cover of their rows below
+            if opt.new.fill_exposed and 0 <= top < math.inf:
+                fill = opt.new.min_fill * w * min(h, vb - (y0 + top)) * n
             lifted = vb < y1 - 1 - opt.new.max_lift * hb  # above the blob's bottom: an arm,
             # or a farther walker merged with a nearer object (it stands taller than an arm)
             refused = ("narrow" if (c1 - c0) < opt.new.min_widths * w
-                       else "thin" if unexplained[:, c0:c1].sum() < opt.new.min_fill * w * h * n
+                       else "thin" if unexplained[:, c0:c1].sum() < fill
                        else "short" if span < opt.new.min_height * h
                        else "lifted" if lifted and span < opt.new.lifted_height * min(h, vb + 1.0)
                        else "")

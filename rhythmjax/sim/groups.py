@@ -18,6 +18,7 @@ then left unpaired.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import replace
 
@@ -27,11 +28,13 @@ from ..model.camera_np import camera_tuple, project_3d
 from .scene import ActorSpec, SceneSpec
 
 
-__all__ = ["LAYOUTS", "follower_of", "in_view", "partner_of", "with_pairs"]
+__all__ = ["LATE_S", "LAYOUTS", "follower_of", "in_view", "late_of", "partner_of", "with_pairs"]
 
 
-LAYOUTS = {"side": (0.55, 0.8), "file": (1.0, 2.5)}  # a pair's spacing range, m, per layout
-# (side: shoulder to shoulder; file: one pace to two strides and more between walkers in file)
+LAYOUTS = {"side": (0.55, 0.8), "file": (1.0, 2.5), "late": (1.0, 2.5)}  # a pair's spacing
+# range, m, per layout (side: shoulder to shoulder; file: one pace to two strides and more
+# between walkers in file; late: in file, the second walker appearing LATE_S after the first)
+LATE_S = (1.0, 2.0)  # s: when the second walker of a "late" pair appears (uniform)
 
 
 def in_view(spec: SceneSpec, actor: ActorSpec, range_m: tuple[float, float],
@@ -73,15 +76,28 @@ def follower_of(lead: ActorSpec, other: ActorSpec, gap_m: float, side: float) ->
                    y0=lead.y0 + side * gap_m * math.sin(h))
 
 
+def late_of(lead: ActorSpec, other: ActorSpec, gap_m: float, side: float, delay: int,
+            fps: float) -> ActorSpec:
+    """`follower_of` appearing `delay` frames after the lead (at `fps` frames/s): where the file
+    puts it then, living that much less (a walker stepping in front of, or behind, one already
+    in view)."""
+    f = follower_of(lead, other, gap_m, side)
+    step = f.speed_mps * delay / fps
+    h = lead.heading_rad
+    return replace(f, x0=f.x0 + step * math.cos(h), y0=f.y0 + step * math.sin(h),
+                   start_frame=lead.start_frame + delay,
+                   n_frames=None if lead.n_frames is None else lead.n_frames - delay)
+
+
 def with_pairs(spec: SceneSpec, seed: int, fraction: float,
                spacing_m: tuple[float, float] | None = None,
                range_m: tuple[float, float] = (3.1, 19.9), margin_px: float = 8.0,
                layout: str = "side") -> SceneSpec:
     """The scene with walkers paired: in the order of the actors, each walker not yet in a pair
     is, with probability `fraction`, joined by the next unpaired walker (`partner_of` for
-    `layout` "side", `follower_of` for "file"; spacing uniform in `spacing_m` m, by default the
-    layout's `LAYOUTS` range; a random side first). Deterministic given `seed`; `fraction` 0
-    returns `spec` itself."""
+    `layout` "side", `follower_of` for "file", `late_of` for "late", its delay uniform in
+    `LATE_S`; spacing uniform in `spacing_m` m, by default the layout's `LAYOUTS` range; a
+    random side first). Deterministic given `seed`; `fraction` 0 returns `spec` itself."""
     if not 0.0 <= fraction <= 1.0:
         raise ValueError(f"pair fraction must be in [0, 1], got {fraction}")
     if layout not in LAYOUTS:
@@ -90,6 +106,7 @@ def with_pairs(spec: SceneSpec, seed: int, fraction: float,
         return spec
     spacing_m = LAYOUTS[layout] if spacing_m is None else spacing_m
     place = partner_of if layout == "side" else follower_of
+    fps = float(spec.camera.fps)
     rng = np.random.default_rng(seed)
     actors = list(spec.actors)
     walkers = [i for i, a in enumerate(actors) if a.kind == "pedestrian"]
@@ -99,6 +116,9 @@ def with_pairs(spec: SceneSpec, seed: int, fraction: float,
         paired = False
         if rng.random() < fraction:
             spacing, first = float(rng.uniform(*spacing_m)), float(rng.choice([-1.0, 1.0]))
+            if layout == "late":
+                delay = int(rng.integers(round(LATE_S[0] * fps), round(LATE_S[1] * fps) + 1))
+                place = functools.partial(late_of, delay=delay, fps=fps)
             for side in (first, -first):
                 partner = place(lead, actors[i], spacing, side)
                 if in_view(spec, partner, range_m, margin_px):
