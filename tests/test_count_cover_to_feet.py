@@ -137,3 +137,16 @@ def test_two_legs_under_a_cover_are_one_run_with_join_gap_widths():
     w_bottom = float(level_with_one(True).shape.size(127.5, 150.0)[0])
     assert 4 < 0.6 * w_bottom < 30
     assert len(legs(True, 156)) == 2  # 30 px apart: two runs
+
+
+def test_fill_exposed_asks_the_fill_of_the_rows_below_the_cover():
+    """Legs 20 rows below the tracked one's feet (36 columns, 14 rows free beyond the 6 px
+    tolerance: 504 px) are thin against a whole patch (0.15 w h, over 900 px at their foot row)
+    but not with `new.fill_exposed`, which asks 0.15 w x 14 rows (by hand, under 100 px)."""
+    on = level_with_one(True)
+    (run,) = runs_of(on, legs_mask(20))[0]
+    assert run.refused == "thin" and 36 * 14 < on.opt.new.min_fill * run.w * run.h
+    exposed = level_with_one(True)
+    exposed.opt = with_changes(exposed.opt, {"new.fill_exposed": True})
+    (run,) = runs_of(exposed, legs_mask(20))[0]
+    assert run.refused == "" and on.opt.new.min_fill * run.w * 14 < 100 < 36 * 14

@@ -9,7 +9,15 @@ import math
 import pytest
 
 from rhythmjax.model.params import Camera
-from rhythmjax.sim.groups import LAYOUTS, follower_of, in_view, partner_of, with_pairs
+from rhythmjax.sim.groups import (
+    LATE_S,
+    LAYOUTS,
+    follower_of,
+    in_view,
+    late_of,
+    partner_of,
+    with_pairs,
+)
 from rhythmjax.sim.scene import ActorSpec, SceneSpec, random_spec
 
 
@@ -103,3 +111,26 @@ def test_pairing_a_random_scene_in_file():
         assert in_view(a, q, (3.1, 19.9), 8.0)
     with pytest.raises(ValueError, match="pair layout"):
         with_pairs(spec, 31, 0.5, layout="ring")
+
+
+def test_late_follower_by_hand_and_in_a_scene():
+    """The follower 1.5 m ahead of a lead walking at the camera (1.4 m/s), appearing 15 frames
+    (1 s at 15 fps) later: 1.4 m farther along, at (0.5, 9.1), from frame 18 for 35 frames. In
+    a paired random scene every late partner appears 15-30 frames after its lead."""
+    lead = ActorSpec("pedestrian", x0=0.5, y0=12.0, heading_rad=-math.pi / 2, pace_hz=2.0,
+                     step_length_m=0.7, start_frame=3, n_frames=50)
+    other = ActorSpec("pedestrian", x0=3.0, y0=5.0, heading_rad=1.0, pace_hz=1.75,
+                      step_length_m=0.8)
+    late = late_of(lead, other, 1.5, 1.0, 15, 15.0)
+    assert (late.x0, late.y0) == pytest.approx((0.5, 9.1), abs=1e-12)
+    assert (late.start_frame, late.n_frames, late.heading_rad) == (18, 35, -math.pi / 2)
+    spec = random_spec(31, n_walkers=6, n_bicycles=1, n_dogs=0, n_frames=120, occlusion=True,
+                       min_life=60, max_life=90, range_m=(3.1, 19.9))
+    a = with_pairs(spec, 31, 1.0, layout="late")
+    walkers = [x for x in a.actors if x.kind == "pedestrian"]
+    moved = [(p, q) for p, q in zip(walkers[::2], walkers[1::2]) if q.start_frame != p.start_frame]
+    assert len(moved) >= 2
+    for p, q in moved:
+        assert LATE_S[0] * 15 <= q.start_frame - p.start_frame <= LATE_S[1] * 15
+        assert q.start_frame + q.n_frames == p.start_frame + p.n_frames  # ends with its lead
+        assert in_view(a, q, (3.1, 19.9), 8.0)
