@@ -1,7 +1,8 @@
 """Walkers in pairs, side by side: a scene's walkers re-drawn so that some walk with a partner
 at the partner's shoulder (issue 16, twenty-fourth round), or in file, one behind the other
 (`layout` "file", twenty-sixth round: walking toward or away from the camera, one stands in
-front of the other in the image).
+front of the other in the image), the second possibly appearing 1-2 s later ("late": a walker
+stepping in front of, or behind, one already in view).
 
 Why: in our counting scenes two walkers whose image boxes overlap stand at different depths
 (their foot rows a median 0.18 walker heights apart: one passes behind the other), while in
