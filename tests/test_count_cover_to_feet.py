@@ -1,7 +1,9 @@
 """`new.cover_to_feet` (`count.refinement.free_runs`): a tracked pedestrian's cover explains
 the blob pixels of its columns down to its foot row plus the row tolerance (k_sigma2 r_v px)
-only; lower pixels there (a nearer walker in front of it) make a free run. Hand-made masks
-under a small 1 m camera, the runs worked out by hand from the cover's columns and rows."""
+only; lower pixels there (a nearer walker in front of it) make a free run; with
+`new.join_gap_widths` a walker's two legs make one, with `new.fill_exposed` its fill is asked of
+the rows below the cover. Hand-made masks under a small 1 m camera, the runs worked out by hand
+from the cover's columns and rows."""
 
 from __future__ import annotations
 
