@@ -94,6 +94,9 @@ class BodyOptions:
     # on sources it was not chosen on it cost walkers (PETS09 13 -> 11 of 19, UCSD 36 -> 34
     # tracks, own seed 999001 30 -> 28 of 35) and judged a non-walker more Pedestrian on own
     # seeds 777001 and 888001; it gained one dev walker (docs/rules.md)
+    side_anchor: bool = False  # a detection whose box reaches the image's left or right side
+    # and is narrower than W has its foot column placed W/2 from its inner edge (track/sides.py):
+    # a walker entering or leaving is measured at its own centre, not at its visible part's
     high_foot_widths: float = 0.0  # a settled track's foot point measured more than this many W
     # above its prediction is dropped (no measurement): the motion's bottom was not the feet
     # (0: off; sim.presets.SYNTHETIC_OPTIONS sets 0.25 for the synthetic scenes)

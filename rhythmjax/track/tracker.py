@@ -29,12 +29,12 @@ from typing import NamedTuple
 import numpy as np
 
 from ..io.files import WINDOW_CANDIDATES
-from ..model.camera_np import camera_tuple
+from ..model.camera_np import camera_tuple, upright_size
 from ..model.params import Config
 from ..model.status import VERDICT_LABELS, TrackState
 from ..vision import detect, stabilise
 from ..vision.window_b import window_b_candidates
-from . import relink
+from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
 from .rows import NAN_VELOCITY, TrackRow, Velocity
@@ -168,8 +168,13 @@ class OnlineTracker:
                              ) if shared and opt.body.split_shared else {}
         shared -= claims | split.keys()
         held = set()  # slots whose object was seen, its foot point unusable: no time-out
+        sample_du = np.zeros(S)  # window B's column less the measured one (side_anchor)
         for s, det in dets.items():
             own = split.get(s, det)  # a sharer split off measures its own re-detection
+            if opt.body.side_anchor:
+                cut = own
+                own = sides.anchor_at_side(cut, float(self._next_W[s]), M.shape[1])
+                sample_du[s] = cut.u - own.u  # window B stays on the visible feet
             if s not in shared and self._foot_too_high(s, own):
                 held.add(s)
             elif s not in shared:
@@ -190,10 +195,14 @@ class OnlineTracker:
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top,
                                          candidate_rows=None if self._offsets is None else [])
                 present[s], reset[s] = True, True
+                if opt.body.side_anchor:
+                    cut, det = det, sides.anchor_at_side(det, self._walker_px(det.u, det.v),
+                                                         M.shape[1])
+                    sample_du[s] = cut.u - det.u
                 z[s], width[s] = (det.u, det.v), det.width
         fin.reset[:], fin.present[:], fin.dt[:] = reset, present, dt
         self._pending.hold(self._steps(frame_in), index, t, dt, z, width, D, glitch, shared,
-                           held)
+                           held, sample_du)
 
     def _flush(self) -> None:
         """Read the last step's results and advance every object's state machine with them.
@@ -201,14 +210,15 @@ class OnlineTracker:
         arithmetic overlaps it; `finished`, `snapshot` and `finish` call it first."""
         self._pending.flush(self._apply_step)
 
-    def _apply_step(self, out: StepOut, index, t, dt, z, width, D, glitch, shared, held):
+    def _apply_step(self, out: StepOut, index, t, dt, z, width, D, glitch, shared, held,
+                    sample_du):
         valid, started = out.valid > 0.5, out.started > 0.5
         self._next_uv, self._next_W = out.next_uv, out.W_next
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._after_step(s, obj, index, t, dt, z[s], width[s], bool(valid[s]),
                                  bool(started[s]), out.mean[s], out.est_uv[s], float(out.W[s]),
-                                 D, glitch or s in shared, s in held)
+                                 D, glitch or s in shared, s in held, float(sample_du[s]))
         self._merge(out.est_uv, out.W, out.mean)
 
     def _foot_too_high(self, s: int, det) -> bool:
@@ -265,6 +275,11 @@ class OnlineTracker:
                 else:
                     self._end(s)
 
+    def _walker_px(self, u: float, v: float) -> float:
+        """W (px): the mean walker width at the foot point (u, v) px through the camera (3)."""
+        w, _, _ = upright_size(self._camera, u, v, float(self.cfg.width.mean), 1.0)
+        return float(w)
+
     def _window_size(self, uv, Wp) -> tuple[float, float, float]:
         """(width, height) px of the detection window at the predicted foot point uv, and W
         (px, the walker width at the predicted ground point, from the jitted step)."""
@@ -275,7 +290,7 @@ class OnlineTracker:
         return self.opt.window.widths * Wp, self.opt.window.heights * height_px, Wp
 
     def _after_step(self, s, obj, index, t, dt, z, width, valid, started, mean, est_uv, W, D,
-                    no_sample, held=False):
+                    no_sample, held=False, sample_du=0.0):
         if obj.state == TrackState.DETECT:
             if not started:  # outside the detection range: back to NONE, nothing recorded
                 self._slots[s] = None
@@ -290,6 +305,8 @@ class OnlineTracker:
             obj.predict_time += 0.0 if held else dt
         measured = bool(np.all(np.isfinite(z)))
         fu, fv = (z if measured and not self.opt.body.sample_estimate else est_uv)
+        if measured and not self.opt.body.sample_estimate:
+            fu = fu + sample_du  # a side-cut detection: window B on its visible feet
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         intensity = math.nan if no_sample or D is None else detect.window_b_intensity(D, fu, fv, W)
         if obj.candidate_rows is not None:  # NaN exactly where `intensity` is
