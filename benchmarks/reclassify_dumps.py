@@ -7,6 +7,8 @@ same form (atomically) for `paired_dumps.py`. Issue 16, twenty-fourth round (doc
 Settings (module constants of `model.rhythm`, read when the classifier is traced):
 - `--detrend line`: each rhythm window's least-squares line removed before Burg (`DETREND`).
 - `--gaps segments`: missing samples left out of Burg's sums (`GAPS`).
+And `--width patch`: gate (10) reads an average walker's width, not the blob's (twenty-seventh
+round: whether the width gate keeps long counting tracks unjudged).
 
     python benchmarks/reclassify_dumps.py RUN.pkl OUT.pkl --source count [--focal-px 500] \\
         --detrend line
@@ -55,15 +57,23 @@ def configs(source: str, focal_px: float = 0.0):
     raise SystemExit(f"unknown source {source!r}: count, dev_count or pets")
 
 
-def rejudged(record: dict, cfg) -> dict:
+def rejudged(record: dict, cfg, width: str = "measured") -> dict:
     """The record's verdicts with the judged columns from `judge_tracks` on its tracks and
-    `counted` recomputed (`count.counting.counted`); every other column as saved."""
+    `counted` recomputed (`count.counting.counted`); every other column as saved. `width`
+    "patch": the W_IMG of the width gate (10) is an average walker's at each measured row's foot
+    point (the gate passes every row) instead of the blob's measured width."""
     from rhythmjax.count.counting import counted, judge_tracks
 
     v = dict(record["verdicts"])
     tracks = record["tracks"]
     if not len(v["track_id"]):
         return v
+    if width == "patch":
+        from rhythmjax.model.camera_np import upright_size
+
+        tracks = dict(tracks)
+        w = upright_size(cfg.camera, tracks["u"], tracks["v"], float(cfg.width.mean), 1.0)[0]
+        tracks["width_px"] = np.where(np.isfinite(tracks["width_px"]), w, np.nan)
     new = judge_tracks(cfg, tracks, candidates="intensity_up20" in tracks)
     if not np.array_equal(new["track_id"], np.asarray(v["track_id"])):
         raise ValueError(f"clip {record['clip']}: the tracks' ids do not match the verdicts'")
@@ -81,6 +91,9 @@ def main(argv=None) -> int:
     ap.add_argument("--focal-px", type=float, default=0.0)
     ap.add_argument("--detrend", choices=("mean", "line"))
     ap.add_argument("--gaps", choices=("interpolate", "segments", "segments_taper"))
+    ap.add_argument("--width", choices=("measured", "patch"), default="measured",
+                    help="W_IMG of the width gate (10): the blob's measured width (the "
+                         "default) or an average walker's at the foot point (the gate passes)")
     ap.add_argument("--check", action="store_true",
                     help="fail unless every verdict and count equals the saved one")
     a = ap.parse_args(argv)
@@ -92,7 +105,7 @@ def main(argv=None) -> int:
     config_of = configs(a.source, a.focal_px)
     before = after = changed = 0
     for r in records:
-        v = rejudged(r, config_of(r["clip"]))
+        v = rejudged(r, config_of(r["clip"]), a.width)
         old = r["verdicts"]
         diff = int(np.sum(np.asarray(v["verdict"]) != np.asarray(old["verdict"])))
         if a.check and (diff or not np.array_equal(v["counted"], old["counted"])):

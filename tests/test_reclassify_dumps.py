@@ -71,3 +71,17 @@ def test_mismatched_ids_are_refused():
     r["verdicts"]["track_id"] = np.array([1, 3])
     with pytest.raises(ValueError, match="hand/0"):
         rc.rejudged(r, CFG)
+
+
+def test_width_patch_lets_the_width_gate_pass(fresh_traces):
+    """A walker's rows measured 200 px wide (a blob of several people; (10) refuses every row, so
+    the paper's filter never observes it) stays unjudged with the measured width and is judged
+    Pedestrian with an average walker's width at its foot points (`--width patch`)."""
+    r = _record(trend=0.0)
+    r["tracks"]["width_px"] = np.full(len(r["tracks"]["frame"]), 200.0)
+    measured = rc.rejudged(r, CFG)
+    patch = rc.rejudged(r, CFG, width="patch")
+    assert measured["verdict"][0] == "unclassified"
+    assert patch["verdict"][0] == "pedestrian"
+    assert abs(float(patch["pace_hz"][0]) - 1.9) <= 0.03
+    assert list(r["tracks"]["width_px"][:1]) == [200.0]  # the record itself untouched
