@@ -53,4 +53,3 @@ def anchor_at_side(det: Detection, walker_px: float, image_width: int,
     else:
         u = (x0 + SOBEL_HALO_PX) + half
     return dataclasses.replace(det, u=float(u))
-
