@@ -98,7 +98,7 @@ class BodyOptions:
     # and is narrower than W has its foot column placed W/2 from its inner edge (track/sides.py):
     # a walker entering or leaving is measured at its own centre, not at its visible part's.
     # Off: own training seeds 5555, 6666 walkers 64 -> 64, but own 777001 32 -> 29 of 35 and one
-    # UCSD anomaly track more judged Pedestrian (the dev clips, where it was seen: 8 -> 10 of 10;
+    # UCSD anomaly track more judged Pedestrian (the dev clips, where it was seen: 8 -> 9 of 10;
     # docs/rules.md, rule 16)
     high_foot_widths: float = 0.0  # a settled track's foot point measured more than this many W
     # above its prediction is dropped (no measurement): the motion's bottom was not the feet
