@@ -33,6 +33,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, missed walkers)", "body.split_depth_margin_widths", 0.1),
     ("sample_estimate", "body.sample_estimate", False),
     ("high_foot_widths", "body.high_foot_widths", 0.0),
+    ("(new: issue 16, rule 16)", "body.side_anchor", False),  # a side-cut detection, off
     ("high_foot_frames", "body.high_foot_frames", 3),
     ("(new: issue 16 item 2)", "body.window_candidates", True),
     ("min_area", "new.min_area", 40),
