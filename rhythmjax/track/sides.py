@@ -3,9 +3,11 @@
 While a walker enters (or leaves) across a side of the image only part of its body is in view,
 and the projections measure the centre of that part: the foot column u lies up to W/2 px from
 the walker's and moves at a fraction of its speed (at entry it starts at the image edge while
-the walker's centre is still outside). The filter then takes the walker for slower than it is,
-and once the whole body is in view its measurements lie beyond the outlier gate (11): the
-walker is only predicted, and its rhythm windows hold missing samples.
+the walker's centre is still outside). The filter then takes the walker for slower than it is;
+once the whole body is in view its detection window, centred on the lagging prediction, holds
+only the body's rear, the front starts a second object, and the two share one blob, which
+measures neither (`dev_multi_01`: 10 frames): the walker is only predicted, and its rhythm
+windows hold missing samples.
 
 Only the edge inside the image is the walker's, so where the detection's box reaches a side
 (within `margin_px`) and is narrower than W, the foot column is placed W/2 from that inner edge:
