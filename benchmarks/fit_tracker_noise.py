@@ -54,19 +54,6 @@ def labelled_rows(tracks: dict, truth, within: float) -> list[np.ndarray]:
     return out
 
 
-def padded(tracks: list[np.ndarray], fps: float):
-    """(z, width, dt, present) of the tracks padded to the longest; a frame between a track's
-    first and last row with no row is missing (present, z NaN)."""
-    T = max(int(t[-1, 0] - t[0, 0]) + 1 for t in tracks)
-    z = np.full((len(tracks), T, 2), np.nan)
-    present = np.zeros((len(tracks), T), bool)
-    for b, t in enumerate(tracks):
-        k = (t[:, 0] - t[0, 0]).astype(int)
-        z[b, k] = t[:, 1:3]
-        present[b, :k[-1] + 1] = True
-    return z, np.full(present.shape, np.nan), np.full(present.shape, 1.0 / fps), present
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", default="5555,6666")
@@ -77,6 +64,7 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
 
     import eval_synthetic as es
+    from fit_count_noise import batch
 
     from fit.noise import fit_noise
     from rhythmjax.model.params import config_from_dict
@@ -89,7 +77,7 @@ def main(argv=None) -> int:
             rows += labelled_rows(tracks, scene.truth, a.within)
         print(f"seed {seed}: {len(rows)} walker tracks so far", flush=True)
     rows = [r for r in rows if np.isfinite(r[:, 1]).sum() >= 2]
-    z, width, dt, present = padded(rows, float(cfg.camera.fps))
+    z, width, dt, present = batch(rows, float(cfg.camera.fps))  # counting's padding
     n_rows = int(np.sum(np.all(np.isfinite(z), axis=-1)))
     print(f"{len(rows)} walker tracks, {n_rows} measured rows on their walker")
     res = fit_noise(cfg.camera, z, width, dt, present, cfg.noise, max_steps=a.max_steps)

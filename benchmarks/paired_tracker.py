@@ -51,19 +51,6 @@ def paired_interval(diff: np.ndarray, n_boot: int = BOOTSTRAP, seed: int = 0):
     return float(diff.sum()), float(np.percentile(sums, 2.5)), float(np.percentile(sums, 97.5))
 
 
-def parse_items(items) -> dict:
-    out = {}
-    for s in items or ():
-        key, eq, raw = s.partition("=")
-        if not eq:
-            raise SystemExit(f"{s!r}: expected KEY=JSON")
-        try:
-            out[key.strip()] = json.loads(raw)
-        except json.JSONDecodeError:
-            out[key.strip()] = raw
-    return out
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", required=True, help="comma-separated own-scene seeds")
@@ -74,16 +61,16 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
 
     import eval_synthetic as es
-    from eval_all_score import apply_set
+    from eval_all_score import apply_set, parse_set
 
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.track.options import with_changes
 
-    sets = [(k.partition(".")[0], k.partition(".")[2], v) for k, v in parse_items(a.set).items()]
+    sets = parse_set(a.set)
     cfg_off = config_from_dict(es.RECOMMENDED)
     cfg_on = config_from_dict(apply_set(es.RECOMMENDED, sets))
     opt_off = es.synthetic_options()
-    opt_on = with_changes(opt_off, parse_items(a.option))
+    opt_on = with_changes(opt_off, {f"{g}.{k}": v for g, k, v in parse_set(a.option)})
     rows = []
     for seed in (int(s) for s in a.seeds.split(",")):
         for i, (s, spec) in enumerate(es.scene_specs(seed, a.scenes, camera=cfg_off.camera)):

@@ -1,6 +1,6 @@
-"""benchmarks/fit_tracker_noise.py: which tracker rows are a walker's measurements, and the padded
-batch the fitting layer reads. Hand-made truth: a walker at u = 100 + 2 k, v = 200 px, 40 px
-wide; a bicycle far away."""
+"""benchmarks/fit_tracker_noise.py: which tracker rows are a walker's measurements (the padded
+batch is fit_count_noise's `batch`, tested in test_count_filter_noise.py). Hand-made truth: a
+walker at u = 100 + 2 k, v = 200 px, 40 px wide; a bicycle far away."""
 
 from __future__ import annotations
 
@@ -54,13 +54,3 @@ def test_walker_rows_kept_near_the_truth_only():
     np.testing.assert_allclose(r[keep, 1], 100.0 + 2.0 * r[keep, 0] + 1.0)
     np.testing.assert_allclose(r[keep, 2], 201.0)
     assert np.isfinite(ftn.labelled_rows(_tracks(), truth, within=0.7)[0][8, 1])  # frame 10
-
-
-def test_padded_batch():
-    a = np.array([[5.0, 1.0, 2.0], [7.0, 3.0, 4.0]])  # frames 5 and 7: frame 6 missing
-    b = np.array([[0.0, 9.0, 9.0]])
-    z, width, dt, present = ftn.padded([a, b], fps=15.0)
-    assert z.shape == (2, 3, 2) and present.tolist() == [[True, True, True], [True, False, False]]
-    assert z[0, 0].tolist() == [1.0, 2.0] and np.all(np.isnan(z[0, 1]))
-    assert z[0, 2].tolist() == [3.0, 4.0]
-    assert np.all(np.isnan(width)) and np.allclose(dt, 1 / 15.0)
