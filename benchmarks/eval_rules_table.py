@@ -58,9 +58,6 @@ RULES = {
     "side_anchor": ("tracker", "body.side_anchor", True, False, TRACKER_SOURCES,
                     "own training seeds 5555, 6666 (the mechanism was found on dev_multi_01, "
                     "so the dev clips only report it; docs/rules.md, rule 16)"),
-    "column": ("tracker", "body.column_fraction", 0.5, 0.0, TRACKER_SOURCES,
-               "nothing fitted (0.5 a priori; the mechanism was found on dev_walk_05, so the "
-               "dev clips only report it; docs/rules.md, rule 21)"),
     "reid": ("count", "stitch.reid", True, False, COUNT_SOURCES,
              "own counting seeds (left off: neutral there; 95875e0)"),
     "still_end": ("patch", "PedestrianLevel._still", "on", "off (ghost drop kept)",
@@ -76,7 +73,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
               "shared_overlap": (), "split_depth": TRACKER_SOURCES,
-              "split_shared": TRACKER_SOURCES, "side_anchor": (), "column": ()}
+              "split_shared": TRACKER_SOURCES, "side_anchor": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -127,27 +127,6 @@ def test_projection_slicing_on_a_block():
     assert detect_in_window(m, np.array([45.0, 60.0]), np.int64(60), halo=0) == det
 
 
-def test_foot_column_from_the_tall_columns_hand_worked():
-    """`column_fraction` (rule 21): u_p from the columns reaching that fraction of the vertical
-    projection's maximum; width, v_p, box and area from `fraction`'s extent as before."""
-    m = np.zeros((120, 120), np.uint8)
-    m[20:101, 50:61] = 1  # a body: rows 20..100 (81 tall), columns 50..60
-    m[76:101, 61:81] = 1  # a suitcase pulled behind: rows 76..100 (25 tall), columns 61..80
-    base = detect_in_window(m, (60, 100), 110, halo=0, fraction=0.1)
-    # the 0.1 slice holds both: columns 50..80, u_p their centre 65
-    assert (base.u, base.v, base.width) == (65.0, 100.0, 31.0)
-    tall = detect_in_window(m, (60, 100), 110, halo=0, fraction=0.1, column_fraction=0.5)
-    # 25 / 81 < 0.5: the suitcase's columns drop out of u_p only; u_p the body's centre 55
-    assert tall.u == 55.0
-    assert (tall.v, tall.width, tall.box, tall.area) == (base.v, base.width, base.box, base.area)
-    # 0.3 keeps the suitcase (25 / 81 = 0.31): u_p as the 0.1 slice's
-    assert detect_in_window(m, (60, 100), 110, halo=0, fraction=0.1,
-                            column_fraction=0.3).u == 65.0
-    # at or below `fraction` the option does nothing
-    assert detect_in_window(m, (60, 100), 110, halo=0, fraction=0.1,
-                            column_fraction=0.1) == base
-
-
 def test_find_objects_two_separated_and_exclusion():
     a, _ = _scene(2, True, x0=40, seed=1)
     b = [f.copy() for f in a]

@@ -34,7 +34,6 @@ TRACKER_DEFAULTS = [
     ("sample_estimate", "body.sample_estimate", False),
     ("high_foot_widths", "body.high_foot_widths", 0.0),
     ("(new: issue 16, rule 16)", "body.side_anchor", False),  # a side-cut detection, off
-    ("(new: issue 16, rule 21)", "body.column_fraction", 0.0),  # u_p from the tall columns
     ("high_foot_frames", "body.high_foot_frames", 3),
     ("(new: issue 16 item 2)", "body.window_candidates", True),
     ("min_area", "new.min_area", 40),

@@ -60,11 +60,6 @@ class BodyOptions:
     # legs, a bag) within this many W are measured together (detect_in_window's body_px; 0: off).
     # Without it a prediction off by part of a body kept only the near half (a foot point on the
     # wrong part): on the synthetic set 20 of 35 walkers had a 64-frame run on one track, 27 with it
-    column_fraction: float = 0.0  # a tracked object's foot column u_p from the columns whose
-    # vertical projection reaches this fraction of its maximum (the body's tall columns) where
-    # it exceeds slice_fraction; width and v_p keep slice_fraction's extent. 0: off (u_p the
-    # centre of slice_fraction's extent). Rule 21 of issue 16 (docs/rules.md): baggage, arms
-    # and shadows are shorter than the body, so a pulled suitcase no longer drags u_p behind
     slice_fraction: float = 0.1  # projection slice, fraction of its maximum (0.3 lost the feet:
     # v noisy); also for new objects
     shared_overlap: float = 0.5  # two tracks' detections overlapping by this fraction of the

@@ -154,8 +154,7 @@ class OnlineTracker:
             det = detect.detect_in_window(M, centre, (box_w, box_h),
                                           fraction=opt.body.slice_fraction, core=cores[s],
                                           body_px=opt.body.parts_widths * Wp
-                                          if opt.body.parts_widths > 0 else None,
-                                          column_fraction=opt.body.column_fraction)
+                                          if opt.body.parts_widths > 0 else None)
             if det is not None:
                 dets[s] = det
                 predicted[s] = Predicted(centre, box_h, cores[s], (uv[0], uv[1]), Wp)

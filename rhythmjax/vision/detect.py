@@ -127,15 +127,13 @@ def _project(m: np.ndarray, axis: int) -> np.ndarray:
 
 
 def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: int,
-                  halo: int, column_fraction: Number = 0.0) -> Detection | None:
-    """Projections of the motion crop `m` (top-left at (x0, y0) px) sliced into a Detection;
-    u_p from the columns reaching `column_fraction` of the maximum where it exceeds `fraction`."""
+                  halo: int) -> Detection | None:
+    """Projections of the motion crop `m` (top-left at (x0, y0) px) sliced into a Detection."""
     cols = _project(m, 0)  # vertical projection: one value per column
     ext = _extent(cols, fraction)
     if ext is None:
         return None
     c0, c1 = ext
-    k0, k1 = _extent(cols, column_fraction) if column_fraction > fraction else ext
     rows = _project(m[:, c0:c1 + 1], 1)  # horizontal projection within the extent
     r0, r1 = _extent(rows, fraction) or (0, 0)  # never None: the extent holds motion
     box = m[r0:r1 + 1, c0:c1 + 1]
@@ -143,7 +141,7 @@ def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: i
     if area < min_area:
         return None
     width = float(max(c1 - c0 + 1 - 2 * halo, 1))
-    return Detection(u=x0 + 0.5 * (k0 + k1), v=float(y0 + r1), width=width,
+    return Detection(u=x0 + 0.5 * (c0 + c1), v=float(y0 + r1), width=width,
                      box=(x0 + c0, y0 + r0, c1 - c0 + 1, r1 - r0 + 1), area=area)
 
 
@@ -158,8 +156,7 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
                      window_size: Number | Sequence[Number] | np.ndarray, *,
                      fraction: Number = 0.3, min_area: int = 10, halo: int = SOBEL_HALO_PX,
                      core: WindowBox | None = None, dilate_px: int = 3,
-                     body_px: Number | None = None, column_fraction: Number = 0.0
-                     ) -> Detection | None:
+                     body_px: Number | None = None) -> Detection | None:
     """Detect the object in a window centred on the predicted foot point `center_uv` = (u, v) px.
 
     `window_size` is (width, height) px or one number for a square; the window is clipped at the
@@ -200,7 +197,7 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
                                body_px)
         if crop is None:
             return None
-    det = _bottom_point(crop, x0, y0, fraction, min_area, halo, column_fraction)
+    det = _bottom_point(crop, x0, y0, fraction, min_area, halo)
     if det is None or det.box[1] <= y0:  # the extent reaches the window's top: no top row
         return det
     return dataclasses.replace(det, top=float(det.box[1]))
