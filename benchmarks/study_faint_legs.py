@@ -8,7 +8,7 @@ fraction of their pixels in the mask and the 75th percentile of |I - B| (grey le
 background before the frame's update. Medians over the frames, per object.
 
     RHYTHMJAX_DATA=../shared/data python benchmarks/study_faint_legs.py dev_crowd_03 \\
-        [--set blobs.legs_weak=0.4]
+        [--set blobs.bg_threshold=12]
 """
 
 from __future__ import annotations

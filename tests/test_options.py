@@ -100,8 +100,6 @@ COUNT_DEFAULTS = [
     ("(new: issue 16 counting)", "blobs.noise_floor", 6.0),
     ("(new: issue 16 counting)", "blobs.hysteresis", 0.0),
     ("(new: issue 16 counting)", "blobs.hysteresis_px", 2),
-    ("(new: issue 16, rule 24)", "blobs.legs_weak", 0.0),  # faint legs grown down, off
-    ("(new: issue 16, rule 24)", "blobs.legs_rows_fraction", 0.1),
     (None, "life.still_s", 5.0),
     (None, "life.still_widths", 0.15),
     (None, "life.still_heights", 0.04),

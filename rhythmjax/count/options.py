@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..track.options import with_changes
-from ..vision.fg_threshold import check_legs_options, check_noise_options
+from ..vision.fg_threshold import check_noise_options
 from .patches import DYNAMICS
 from .slot_filter import OUTLIER_GATES, check_noise
 
@@ -49,21 +49,16 @@ class BlobOptions:
     noise_floor: float = 6.0  # grey levels
     hysteresis: float = 0.0  # in (0, 1): also pixels above this x the threshold ...
     hysteresis_px: int = 2  # ... within this many px of one above it (0: off)
-    legs_weak: float = 0.0  # in (0, 1): pixels above this x the threshold grown down from the
-    # mask (a walker's faint legs under its body; `fg_threshold.grow_down`; rule 24, off) ...
-    legs_rows_fraction: float = 0.1  # ... for at most this fraction of the image height, rows
 
     def __post_init__(self):
         check_noise_options(self.noise_k, self.noise_floor, self.hysteresis, self.hysteresis_px)
-        check_legs_options(self.legs_weak, self.legs_rows_fraction)
 
     def model_kwargs(self) -> dict:
         """The keyword arguments of `vision.blobs.BackgroundModel` these settings give."""
         return {"alpha": self.bg_alpha, "threshold": self.bg_threshold, "open_px": self.open_px,
                 "close_px": self.close_px, "noise_k": self.noise_k,
                 "noise_floor": self.noise_floor, "hysteresis": self.hysteresis,
-                "hysteresis_px": self.hysteresis_px, "legs_weak": self.legs_weak,
-                "legs_rows_fraction": self.legs_rows_fraction}
+                "hysteresis_px": self.hysteresis_px}
 
 
 @dataclass(frozen=True)

@@ -36,14 +36,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .fg_threshold import (
-    above,
-    check_legs_options,
-    check_noise_options,
-    grow_down,
-    hysteresis_mask,
-    noise_sigma,
-)
+from .fg_threshold import above, check_noise_options, hysteresis_mask, noise_sigma
 
 
 CornerBox = tuple[int, int, int, int]  # x0, y0, x1, y1 px, half-open
@@ -79,16 +72,13 @@ class BackgroundModel:
     Noise-adaptive threshold (`fg_threshold`): noise_k > 0 replaces `threshold` by
     max(noise_floor, noise_k x sigma) grey levels (at most 254), sigma estimated per frame on the
     pixels the previous mask called background; hysteresis h in (0, 1) keeps pixels above h x the
-    threshold within hysteresis_px px of one above it (0: off); legs_weak g in (0, 1) grows the
-    mask down through pixels above g x the threshold for up to legs_rows_fraction x the image
-    height rows (`fg_threshold.grow_down`; 0: off). `last_threshold` / `last_sigma`
+    threshold within hysteresis_px px of one above it (0: off). `last_threshold` / `last_sigma`
     hold the latest frame's values (grey levels; sigma NaN when not estimated)."""
 
     def __init__(self, first_gray: np.ndarray, *, alpha: Number = 0.05, threshold: Number = 20,
                  open_px: int = 1, close_px: int = 2, slow_alpha: Number = 0.0025,
                  noise_k: Number = 0.0, noise_floor: Number = 6.0, hysteresis: Number = 0.0,
-                 hysteresis_px: int = 2, legs_weak: Number = 0.0,
-                 legs_rows_fraction: Number = 0.1) -> None:
+                 hysteresis_px: int = 2) -> None:
         _check_image(first_gray, "first_gray")
         if not 0.0 <= alpha <= 1.0:
             raise ValueError(f"alpha must lie in [0, 1], got {alpha}")
@@ -100,9 +90,6 @@ class BackgroundModel:
             raise ValueError(f"open_px and close_px must be integers >= 0, got {open_px}, "
                              f"{close_px}")
         check_noise_options(noise_k, noise_floor, hysteresis, hysteresis_px)
-        check_legs_options(legs_weak, legs_rows_fraction)
-        self.legs_weak = float(legs_weak)
-        self.legs_rows = int(round(float(legs_rows_fraction) * first_gray.shape[0]))
         self.noise_k, self.noise_floor = float(noise_k), float(noise_floor)
         self.hysteresis, self.hysteresis_px = float(hysteresis), int(hysteresis_px)
         self.last_threshold, self.last_sigma = float(threshold), float("nan")
@@ -148,8 +135,6 @@ class BackgroundModel:
             mask = hysteresis_mask(self._scratch, t, self.hysteresis * t, self.hysteresis_px)
         else:
             mask = above(self._scratch, t)  # 1 where |D| > t
-        if self.legs_weak > 0.0:  # faint legs grown down from the mask (rule 24)
-            mask = grow_down(mask, above(self._scratch, self.legs_weak * t), self.legs_rows)
         if self._erode1 is not None:
             mask = cv2.erode(mask, self._erode1)
         if self._dilate is not None:

@@ -13,11 +13,6 @@ noise-adaptive, optionally with hysteresis. D = I - B is float32, grey levels.
   bounded version of Canny's hysteresis (one dilation instead of connected components, which
   cost ~10x more on a noisy low mask): it keeps a low-contrast walker's legs joined to the
   brighter body they touch without accepting noise far from any strong pixel.
-- Legs grown down (`legs_weak` g in (0, 1)): pixels with |D| > g t join the mask where the pixel
-  above them, or one of that pixel's two horizontal neighbours, is in it, row after row, for at
-  most `legs_rows` rows (`grow_down`). A walker whose trousers are close to the road's grey keeps
-  a body above the threshold and legs only above g t; growing down from the body keeps its feet
-  (issue 16, rule 24, docs/rules.md; off by default).
 """
 
 from __future__ import annotations
@@ -73,33 +68,6 @@ def hysteresis_mask(diff: np.ndarray, high: float, low: float, reach_px: int) ->
     if reach_px > 0:
         strong = cv2.dilate(strong, np.ones((2 * reach_px + 1, 2 * reach_px + 1), np.uint8))
     return cv2.bitwise_and(weak, strong)
-
-
-def grow_down(mask: np.ndarray, weak: np.ndarray, max_rows: int) -> np.ndarray:
-    """uint8 0/1: `mask` plus the `weak` pixels (uint8 0/1, same shape) reached from it by up to
-    `max_rows` steps of one row down, each step to the pixel below or diagonally below (a
-    3-neighbour downward connectivity through weak pixels)."""
-    out = mask.copy()
-    front = mask
-    for _ in range(max(0, int(max_rows))):
-        below = np.zeros_like(front)
-        below[1:] = front[:-1]  # one row down
-        below[1:, 1:] |= front[:-1, :-1]  # down and right
-        below[1:, :-1] |= front[:-1, 1:]  # down and left
-        front = cv2.bitwise_and(below, weak)
-        front = cv2.bitwise_and(front, cv2.bitwise_not(out) & 1)
-        if not cv2.countNonZero(front):
-            break
-        out = cv2.bitwise_or(out, front)
-    return out
-
-
-def check_legs_options(legs_weak: float, legs_rows_fraction: float) -> None:
-    """ValueError unless legs_weak lies in [0, 1) (0: off) and legs_rows_fraction in [0, 1]."""
-    if not 0.0 <= legs_weak < 1.0:
-        raise ValueError(f"legs_weak must lie in [0, 1) (0: off), got {legs_weak}")
-    if not 0.0 <= legs_rows_fraction <= 1.0:
-        raise ValueError(f"legs_rows_fraction must lie in [0, 1], got {legs_rows_fraction}")
 
 
 def check_noise_options(noise_k: float, noise_floor: float, hysteresis: float,
