@@ -51,3 +51,23 @@ def test_the_recount_rules():
     assert rd.recounted(r, "speed-se:2").tolist() == [False, True, False, False]
     with pytest.raises(SystemExit, match="unknown rule"):
         rd.recounted(r, "other")
+
+
+def test_the_speed_fit_recount():
+    r = _record()
+    # track 1 at 3 m/s is too fast whatever the fit; track 2's least squares is 2.89 m/s
+    assert rd.recounted(r, "speed-fit:lsq").tolist() == [False, False, False, False]
+    # track 1 at 1 m/s with its last row 15 m ahead (a foot point off the feet): least
+    # squares 1 + 15 x (1.9 - 0.95) / 6.65 = 3.14 m/s (sum of (t - 0.95)^2 = 6.65 s^2), too
+    # fast; Theil-Sen: 19 of the 190 pairs hold the row, the median slope stays 1 m/s
+    t = r["tracks"]["t"][:20]
+    x = 1.0 * t
+    x[-1] += 15.0
+    r["tracks"]["x_est"][:20] = x
+    from rhythmjax.count import ground_speed
+
+    assert ground_speed(t, x, np.zeros(20)) == pytest.approx(1 + 15 * 0.95 / 6.65, rel=1e-12)
+    assert ground_speed(t, x, np.zeros(20), "theil-sen") == pytest.approx(1.0, rel=1e-12)
+    assert rd.recounted(r, "speed-fit:lsq").tolist() == [False, False, False, False]
+    # counted by the Theil-Sen speed; judged tracks and track 2 untouched
+    assert rd.recounted(r, "speed-fit:theil-sen").tolist() == [True, False, False, False]
