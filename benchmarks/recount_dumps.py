@@ -10,7 +10,7 @@ Rules (`--rule`):
 - `speed-se:Z`: an unjudged track is too fast only when its least-squares ground speed less Z
   standard errors still exceeds the top walking speed (`speed_and_se`; the count's speed is the
   same fit, `count.track_speed` "lsq").
-- `speed-fit:FIT`: the unjudged tracks' too-fast test from `count.ground_speed` with `FIT`
+- `speed-fit:FIT`: the unjudged tracks' too-fast test from `count.points_speed` with `FIT`
   ("lsq" or "theil-sen") on the same rows (observed, ground estimate finite): exactly what
   `verdicts.speed_fit` FIT gives the count, the tracks unchanged (issue 16, rule 25).
 
@@ -78,17 +78,17 @@ def recounted(record: dict, rule: str) -> np.ndarray:
             counted[i] = counted[i] or bool(s - z * se <= top)
         return counted
     if rule.startswith("speed-fit:"):
-        from rhythmjax.count import ground_speed
+        from rhythmjax.count import points_speed
 
         fit, tr, top = rule.split(":", 1)[1], record["tracks"], top_speed()
         ids, state = np.asarray(tr["track_id"]), np.asarray(tr["state"])
         t, x, y = (np.asarray(tr[c], np.float64) for c in ("t", "x_est", "y_est"))
+        explained = np.asarray(v.get("explained_by", np.zeros(len(verdict), np.int64))) != 0
         for i, tid in enumerate(np.asarray(v["track_id"])):
-            if verdict[i] != "unclassified" or np.asarray(v.get("explained_by", [0] * len(
-                    verdict)))[i] != 0:
+            if verdict[i] != "unclassified" or explained[i]:
                 continue
             k = (ids == tid) & (state == "observe")
-            counted[i] = not ground_speed(t[k], x[k], y[k], fit) > top
+            counted[i] = not points_speed(t[k], x[k], y[k], fit) > top
         return counted
     raise SystemExit(f"unknown rule {rule!r}: no-peak, speed-se:Z or speed-fit:FIT")
 

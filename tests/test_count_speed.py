@@ -73,8 +73,8 @@ def test_speed_fit_option():
         CountOptions(verdicts=VerdictOptions(speed_fit="median"))
 
 
-def test_ground_speed_of_arrays_leaves_out_non_finite_rows():
-    from rhythmjax.count import ground_speed
+def test_points_speed_of_arrays_leaves_out_non_finite_rows():
+    from rhythmjax.count import points_speed
 
     t = np.arange(10) / 10
     x, y = 1.2 * t, 8 - 1.6 * t
@@ -82,4 +82,4 @@ def test_ground_speed_of_arrays_leaves_out_non_finite_rows():
     want = {f: track_speed(_track(t, x, y), f) for f in ("lsq", "theil-sen")}
     t2, x2, y2 = (np.insert(a, 4, v) for a, v in ((t, 0.45), (x, np.nan), (y, 3.0)))
     for fit, w in want.items():
-        assert ground_speed(t2, x2, y2, fit) == pytest.approx(w, rel=1e-12)
+        assert points_speed(t2, x2, y2, fit) == pytest.approx(w, rel=1e-12)

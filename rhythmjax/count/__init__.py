@@ -8,7 +8,7 @@ from .counting import (
     count_frames as count_frames,
     count_walkers as count_walkers,
     counted as counted,
-    ground_speed as ground_speed,
+    points_speed as points_speed,
     track_speed as track_speed,
     walker_ids as walker_ids,
     walking_top_speed as walking_top_speed,

@@ -72,7 +72,7 @@ from .window_candidates import align_candidates, candidates_by_row
 
 
 __all__ = ["COUNT_RULE", "CountResult", "build_result", "count_frames", "finish_count",
-           "count_walkers", "counted", "ground_speed", "track_speed", "walker_ids",
+           "count_walkers", "counted", "points_speed", "track_speed", "walker_ids",
            "walking_top_speed"]
 
 COUNT_RULE = ("walkers = tracks - non_pedestrians - too_fast = pedestrians + "
@@ -184,15 +184,15 @@ def walking_top_speed(cfg: Config) -> float:
 
 def track_speed(p: Pedestrian, fit: str = "lsq") -> float:
     """Ground speed (m/s) over a track's measured rows (its ground x, y: the EKF state for
-    "3d"): `ground_speed` of its OBSERVE rows (`verdicts.speed_fit`)."""
+    "3d"): `points_speed` of its OBSERVE rows (`verdicts.speed_fit`)."""
     from ..model.status import TrackState
 
     r = np.asarray([(q.t, q.x_est, q.y_est) for q in p.rows
                     if q.state == int(TrackState.OBSERVE)], np.float64).reshape(-1, 3)
-    return ground_speed(r[:, 0], r[:, 1], r[:, 2], fit)
+    return points_speed(r[:, 0], r[:, 1], r[:, 2], fit)
 
 
-def ground_speed(t, x, y, fit: str = "lsq") -> float:
+def points_speed(t, x, y, fit: str = "lsq") -> float:
     """Speed (m/s) of ground points x, y (m) at times t (s), rows with a non-finite value left
     out: the norm of the least-squares slope of x and y against t (`fit` "lsq"), or of the
     Theil-Sen slope, per axis the median of (x_j - x_i) / (t_j - t_i) over all pairs i < j with
