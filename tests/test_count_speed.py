@@ -28,7 +28,9 @@ def test_hand_worked_outlier():
     x, y = 1.2 * t, 8 - 1.6 * t
     y[0] += 5
     p = _track(t, x, y)
-    assert track_speed(p) == pytest.approx(math.hypot(1.2, 1.6 + 5 * 0.45 / 0.825), rel=1e-9)
+    assert track_speed(p, "lsq") == pytest.approx(math.hypot(1.2, 1.6 + 5 * 0.45 / 0.825),
+                                                  rel=1e-9)
+    assert track_speed(p) == track_speed(p, "theil-sen")  # the default (rule 25)
     assert track_speed(p, "lsq") == pytest.approx(4.4905, abs=1e-3)
     assert track_speed(p, "theil-sen") == pytest.approx(2.0, rel=1e-9)
 
@@ -67,7 +69,8 @@ def test_short_and_unknown_fit():
 
 
 def test_speed_fit_option():
-    assert CountOptions().verdicts.speed_fit == "lsq"  # off: see options.VerdictOptions
+    assert CountOptions().verdicts.speed_fit == "theil-sen"  # since rule 25 (VerdictOptions)
+    CountOptions(verdicts=VerdictOptions(speed_fit="lsq"))
     CountOptions(verdicts=VerdictOptions(speed_fit="theil-sen"))
     with pytest.raises(ValueError, match="speed_fit"):
         CountOptions(verdicts=VerdictOptions(speed_fit="median"))

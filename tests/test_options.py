@@ -103,7 +103,7 @@ COUNT_DEFAULTS = [
     (None, "life.still_s", 5.0),
     (None, "life.still_widths", 0.15),
     (None, "life.still_heights", 0.04),
-    (None, "verdicts.speed_fit", "lsq"),  # issue 16: Theil-Sen too-fast speed, off
+    (None, "verdicts.speed_fit", "theil-sen"),  # issue 16, rule 25: Theil-Sen since round 28
     ("(new: issue 16 item 2)", "verdicts.window_candidates", False),  # candidate windows B
     # the foot-point gates of `count.foot_gate` (options a and b), off
     (None, "placement.in_range", False),

@@ -66,7 +66,8 @@ def test_the_speed_fit_recount():
     r["tracks"]["x_est"][:20] = x
     from rhythmjax.count import points_speed
 
-    assert points_speed(t, x, np.zeros(20)) == pytest.approx(1 + 15 * 0.95 / 6.65, rel=1e-12)
+    assert points_speed(t, x, np.zeros(20), "lsq") == pytest.approx(1 + 15 * 0.95 / 6.65,
+                                                                    rel=1e-12)
     assert points_speed(t, x, np.zeros(20), "theil-sen") == pytest.approx(1.0, rel=1e-12)
     assert rd.recounted(r, "speed-fit:lsq").tolist() == [False, False, False, False]
     # counted by the Theil-Sen speed; judged tracks and track 2 untouched

@@ -28,14 +28,15 @@ The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestria
 and its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged
 non-pedestrian - unclassified tracks too fast to walk. A track the classifier cannot judge
 (unclassified: shorter than N samples, or an unusable rhythm window) is a pedestrian of the
-paper's method and is counted, unless its ground speed (`track_speed`: least squares; the
-Theil-Sen slope with `verdicts.speed_fit`, off) exceeds the fastest the
-walking model's test (14) accepts for any rhythm (`walking_top_speed`: pace and stride both at
-+k_sigma3, 2.57 m/s with Table 1): any window of it would be judged non-pedestrian, so it is
-not counted (`too_fast`: short bicycle tracks). A track judged pedestrian is counted; a
-non-pedestrian verdict removes one. Tracks shorter than `verdicts.min_track_frames` frames (after
-stitching) are dropped from every output and count first, and so are tracks that never moved
-(`ghost`: `still.never_moved`, a ghost of the background). `CountResult.counts` holds the
+paper's method and is counted, unless its ground speed (`track_speed`: the Theil-Sen slope,
+robust to a few rows placed off the feet; least squares with `verdicts.speed_fit` "lsq") exceeds
+the fastest the walking model's test (14) accepts for any rhythm (`walking_top_speed`: pace and
+stride both at +k_sigma3, 2.57 m/s with Table 1): any window of it would be judged
+non-pedestrian, so it is not counted (`too_fast`: short bicycle tracks). A track judged
+pedestrian is counted; a non-pedestrian verdict removes one. Tracks shorter than
+`verdicts.min_track_frames` frames (after stitching) are dropped from every output and count
+first, and so are tracks that never moved (`ghost`: `still.never_moved`, a ghost of the
+background). `CountResult.counts` holds the
 numbers of `count_walkers` (tracks, pedestrians, non_pedestrians, unclassified, too_fast,
 unjudged_plausible, walkers and its range walkers_low .. walkers_high: judged only .. judged +
 every unjudged track), the verdicts say per track `track_speed_mps`, `too_fast`, `width_m`,
@@ -182,7 +183,7 @@ def walking_top_speed(cfg: Config) -> float:
         (float(w.stride_mean) + k * float(w.stride_std))
 
 
-def track_speed(p: Pedestrian, fit: str = "lsq") -> float:
+def track_speed(p: Pedestrian, fit: str = "theil-sen") -> float:
     """Ground speed (m/s) over a track's measured rows (its ground x, y: the EKF state for
     "3d"): `points_speed` of its OBSERVE rows (`verdicts.speed_fit`)."""
     from ..model.status import TrackState
@@ -192,7 +193,7 @@ def track_speed(p: Pedestrian, fit: str = "lsq") -> float:
     return points_speed(r[:, 0], r[:, 1], r[:, 2], fit)
 
 
-def points_speed(t, x, y, fit: str = "lsq") -> float:
+def points_speed(t, x, y, fit: str = "theil-sen") -> float:
     """Speed (m/s) of ground points x, y (m) at times t (s), rows with a non-finite value left
     out: the norm of the least-squares slope of x and y against t (`fit` "lsq"), or of the
     Theil-Sen slope, per axis the median of (x_j - x_i) / (t_j - t_i) over all pairs i < j with

@@ -221,10 +221,12 @@ class VerdictOptions:
     online: bool = True  # with an overlay: judge each N-frame window as it completes
     # (the labels drawn); without one it is skipped (saves a compilation)
     classify: bool = True  # judge the tracks at the end (False: all unclassified, no compile)
-    speed_fit: str = "lsq"  # the too-fast rule's track speed (`count.track_speed`): "lsq"
-    # (least squares) | "theil-sen" (median pairwise slope); off: measured on own seed 42024 the
-    # too-fast tracks of walkers come from foot points off the feet, not from the fit, and
-    # Theil-Sen counted 1 more duplicate (per-clip errors 7 -> 8 of 58)
+    speed_fit: str = "theil-sen"  # the too-fast rule's track speed (`count.track_speed`):
+    # "theil-sen" (median pairwise slope) | "lsq" (least squares, the default until issue 16's
+    # twenty-eighth round). A few rows placed off the feet made a least-squares speed too fast
+    # for walkers and too slow for bicycles; on a fresh pool 220001-8 (confirmatory test,
+    # docs/rules.md rule 25) Theil-Sen counted non-walkers 61 -> 46, tracks on no object 116 ->
+    # 110, walkers with a counted track 1211 -> 1220, per-clip errors -0.9 [-1.9, +0.1] points
     window_candidates: bool = False  # candidate windows B (issue 16, item 2): I(k) summed also
     # in window B moved by -0.2, -0.1 and +0.1 W (io.files.WINDOW_CANDIDATES; count.
     # window_candidates), written as the tracks' candidate columns; each rhythm window is judged
