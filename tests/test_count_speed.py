@@ -86,3 +86,23 @@ def test_points_speed_of_arrays_leaves_out_non_finite_rows():
     t2, x2, y2 = (np.insert(a, 4, v) for a, v in ((t, 0.45), (x, np.nan), (y, 3.0)))
     for fit, w in want.items():
         assert points_speed(t2, x2, y2, fit) == pytest.approx(w, rel=1e-12)
+
+
+def test_theil_sen_on_a_long_track_reads_evenly_spaced_rows():
+    from rhythmjax.count import points_speed
+    from rhythmjax.count.counting import THEIL_SEN_ROWS
+
+    rng = np.random.default_rng(5)
+    n = 5 * THEIL_SEN_ROWS + 3  # hours of rows would make ~n^2 / 2 pairs otherwise
+    t = np.arange(n) / 15.0
+    x, y = 0.8 * t + rng.normal(0, 0.3, n), 20 - 1.0 * t + rng.normal(0, 0.3, n)
+    x[::17] += 8.0  # rows off the feet
+    keep = np.linspace(0, n - 1, THEIL_SEN_ROWS).round().astype(np.int64)
+    assert points_speed(t, x, y, "theil-sen") == pytest.approx(
+        _theil_sen_loop(t[keep], np.stack([x[keep], y[keep]], 1)), rel=1e-12)
+    assert points_speed(t, x, y, "theil-sen") == pytest.approx(math.hypot(0.8, 1.0), rel=0.02)
+    # at or under the limit every row is read
+    assert points_speed(t[:THEIL_SEN_ROWS], x[:THEIL_SEN_ROWS], y[:THEIL_SEN_ROWS],
+                        "theil-sen") == pytest.approx(_theil_sen_loop(
+                            t[:THEIL_SEN_ROWS], np.stack([x, y], 1)[:THEIL_SEN_ROWS]),
+                            rel=1e-12)

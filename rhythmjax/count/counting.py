@@ -183,6 +183,10 @@ def walking_top_speed(cfg: Config) -> float:
         (float(w.stride_mean) + k * float(w.stride_std))
 
 
+THEIL_SEN_ROWS = 400  # `points_speed`'s Theil-Sen fit reads at most this many rows (79 800
+# pairs, 1.9 MB a float64 axis); a track's speed from more rows would barely change
+
+
 def track_speed(p: Pedestrian, fit: str = "theil-sen") -> float:
     """Ground speed (m/s) over a track's measured rows (its ground x, y: the EKF state for
     "3d"): `points_speed` of its OBSERVE rows (`verdicts.speed_fit`)."""
@@ -197,8 +201,10 @@ def points_speed(t, x, y, fit: str = "theil-sen") -> float:
     """Speed (m/s) of ground points x, y (m) at times t (s), rows with a non-finite value left
     out: the norm of the least-squares slope of x and y against t (`fit` "lsq"), or of the
     Theil-Sen slope, per axis the median of (x_j - x_i) / (t_j - t_i) over all pairs i < j with
-    t_j > t_i (`fit` "theil-sen", as `model.rhythm.ground_speed` does for a rhythm window); NaN
-    with fewer than 2 rows or a span under 0.5 s."""
+    t_j > t_i (`fit` "theil-sen", as `model.rhythm.ground_speed` does for a rhythm window; over
+    `THEIL_SEN_ROWS` rows evenly spaced in the row order when there are more, so a track of
+    hours costs what one of 27 s at 15 fps does); NaN with fewer than 2 rows or a span under
+    0.5 s."""
     if fit not in SPEED_FITS:
         raise ValueError(f"speed fit must be one of {SPEED_FITS}, got {fit!r}")
     r = np.stack([np.asarray(a, np.float64).ravel() for a in (t, x, y)], axis=1)
@@ -206,6 +212,8 @@ def points_speed(t, x, y, fit: str = "theil-sen") -> float:
     if len(r) < 2 or np.ptp(r[:, 0]) < 0.5:
         return math.nan
     if fit == "theil-sen":
+        if len(r) > THEIL_SEN_ROWS:
+            r = r[np.linspace(0, len(r) - 1, THEIL_SEN_ROWS).round().astype(np.int64)]
         i, j = np.triu_indices(len(r), 1)
         dt = r[j, 0] - r[i, 0]
         ok = dt > 0  # two rows of one instant give no slope
