@@ -93,7 +93,7 @@ def test_theil_sen_on_a_long_track_reads_evenly_spaced_rows():
     from rhythmjax.count.counting import THEIL_SEN_ROWS
 
     rng = np.random.default_rng(5)
-    n = 5 * THEIL_SEN_ROWS + 3  # hours of rows would make ~n^2 / 2 pairs otherwise
+    n = 5 * THEIL_SEN_ROWS + 3  # all n rows would make n (n - 1) / 2 pairs
     t = np.arange(n) / 15.0
     x, y = 0.8 * t + rng.normal(0, 0.3, n), 20 - 1.0 * t + rng.normal(0, 0.3, n)
     x[::17] += 8.0  # rows off the feet
