@@ -57,6 +57,13 @@ def speed_and_se(t, x, y) -> tuple[float, float]:
     return s, se
 
 
+def observed_rows(tracks: dict):
+    """(track ids, observed mask, t, x_est, y_est) of a saved run's tracks table, the rows a
+    track's speed is fitted on (`count.track_speed`: its OBSERVE rows)."""
+    t, x, y = (np.asarray(tracks[c], np.float64) for c in ("t", "x_est", "y_est"))
+    return np.asarray(tracks["track_id"]), np.asarray(tracks["state"]) == "observe", t, x, y
+
+
 def recounted(record: dict, rule: str) -> np.ndarray:
     """The `counted` column of one clip's record under `rule` (module doc)."""
     v = record["verdicts"]
@@ -67,27 +74,25 @@ def recounted(record: dict, rule: str) -> np.ndarray:
         return counted | ((verdict == "non-pedestrian") & (reason == "no-peak") & ~too_fast)
     if rule.startswith("speed-se:"):
         z = float(rule.split(":", 1)[1])
-        tr, top = record["tracks"], top_speed()
-        ids, state = np.asarray(tr["track_id"]), np.asarray(tr["state"])
-        t, x, y = (np.asarray(tr[c], np.float64) for c in ("t", "x_est", "y_est"))
+        ids, observed, t, x, y = observed_rows(record["tracks"])
+        top = top_speed()
         for i, tid in enumerate(np.asarray(v["track_id"])):
             if verdict[i] != "unclassified" or not too_fast[i]:
                 continue
-            k = (ids == tid) & (state == "observe") & np.isfinite(x) & np.isfinite(y)
+            k = (ids == tid) & observed & np.isfinite(x) & np.isfinite(y)
             s, se = speed_and_se(t[k], x[k], y[k])
             counted[i] = counted[i] or bool(s - z * se <= top)
         return counted
     if rule.startswith("speed-fit:"):
         from rhythmjax.count import points_speed
 
-        fit, tr, top = rule.split(":", 1)[1], record["tracks"], top_speed()
-        ids, state = np.asarray(tr["track_id"]), np.asarray(tr["state"])
-        t, x, y = (np.asarray(tr[c], np.float64) for c in ("t", "x_est", "y_est"))
+        fit, top = rule.split(":", 1)[1], top_speed()
+        ids, observed, t, x, y = observed_rows(record["tracks"])
         explained = np.asarray(v.get("explained_by", np.zeros(len(verdict), np.int64))) != 0
         for i, tid in enumerate(np.asarray(v["track_id"])):
             if verdict[i] != "unclassified" or explained[i]:
                 continue
-            k = (ids == tid) & (state == "observe")
+            k = (ids == tid) & observed
             counted[i] = not points_speed(t[k], x[k], y[k], fit) > top
         return counted
     raise SystemExit(f"unknown rule {rule!r}: no-peak, speed-se:Z or speed-fit:FIT")

@@ -1,5 +1,6 @@
 """How much of a walker's legs the counting mask keeps, per truth object of a dev crowd clip
-(issue 16, twenty-eighth round; docs/rules.md, "Faint legs grown down").
+(issue 16, twenty-eighth round; docs/rules.md, "Rule 24: faint legs grown down from the
+counting mask").
 
 The counting front end (`vision.blobs.BackgroundModel` with the config's `blobs` options, the
 defaults unless `--set`) runs over the clip; in every frame where a truth box (the MOT truth,

@@ -4,8 +4,8 @@ held (issue 16, twenty-eighth round; docs/rules.md, "How wide walkers are agains
 W is the image width of the width model's mean walker (0.5 m, Table 1) at a foot point, through
 the source's camera (`vision.window_b.walker_width_px`). Two widths are compared with it:
 
-- the annotation's or the renderer's box width (`--boxes`: PETS09's annotated boxes; the own
-  renderer's truth width), which is what a person drew or the silhouette's extent;
+- the box width: PETS09's annotated boxes (`--pets`) or the own renderer's truth width
+  (`--own`, `--fit`), what a person drew or the silhouette's extent;
 - the tracker's measured width `width_px` (the projection slice of the difference image, what
   the width gate (10) reads) on its rows whose foot point lies within `MATCH_W` W of a true
   walker's foot point (all rows with a measurement, observed or refused).
@@ -105,6 +105,8 @@ def pets_ratios() -> tuple[np.ndarray, np.ndarray, object]:
 
 
 def describe(name: str, measured, truth, mean_m: float, std_m: float, k_sigma1: float) -> str:
+    """One line: the quantiles of both ratios, the share of measured rows gate (10) passes at
+    (mean_m, std_m, k_sigma1), and `held_mean_std` of the measured widths (m)."""
     q = lambda a: "/".join(f"{x:.2f}" for x in np.percentile(a, [10, 25, 50, 75, 90]))
     w = mean_m * np.asarray(measured)
     inside = float(np.mean(np.abs(w - mean_m) <= k_sigma1 * std_m))
