@@ -37,7 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from fit.selfcal_crowd import crowd_mean, masked_median
-from rhythmjax.model.camera import ground_from_image, terms
+from rhythmjax.model.camera import ground_from_image, height_from_top_with, terms
 from rhythmjax.model.params import Camera
 
 
@@ -64,18 +64,12 @@ def height_from_top(camera: Camera, u, v, v_top, depth_m=0.0):
 def head_from_top(camera: Camera, u, v, v_top, depth_m=0.0):
     """(x, y, H, ok): `height_from_top`'s H and ok with the ground point (x, y) m of the head,
     `depth_m` m beyond the foot point's along the ground."""
-    k = terms(camera)
     x, y, ok = ground_from_image(camera, u, v)
     y = y + depth_m
     ok = ok & jnp.isfinite(v_top)
     v_top = jnp.where(ok, v_top, v)  # data, not parameters: no NaN reaches a gradient
-    bf, af = k.b * k.f, k.a * k.f
-    d0 = k.f + y * k.cos_theta + k.h * k.sin_theta
-    q = k.vc - v_top
-    den = bf * k.cos_theta * k.cos_roll + q * k.sin_theta
-    n0 = k.cos_roll * bf * (y * k.sin_theta - k.h * k.cos_theta) - k.sin_roll * af * x
-    ok = ok & (den > 1e-6 * bf)
-    H = (q * d0 - n0) / jnp.where(ok, den, 1.0)
+    H, ok_top = height_from_top_with(jnp, terms(camera), x, y, v_top)
+    ok = ok & ok_top
     return x, y, jnp.where(ok, H, 0.0), ok
 
 

@@ -147,6 +147,22 @@ def upright_size_with(xp, k: Terms, u, v, width_m, height_m):
     return image_width_with(xp, k, width_m, y) * nan, (v - v_top) * nan, ok
 
 
+def height_from_top_with(xp, k: Terms, x, y, v_top):
+    """(H, ok): the height H m of the vertical segment standing on the ground point (x, y) m
+    whose top projects to the image row v_top px, (3) with roll solved for the top's height z:
+    with q = Vc - v_top, d0 = the depth of (x, y), N0 = cos(roll) b f (y sin(theta) - h
+    cos(theta)) - sin(roll) a f x, H = (q d0 - N0) / (b f cos(theta) cos(roll) + q sin(theta)).
+    `ok` is False where v_top is not finite or lies at or beyond the vertical vanishing point
+    (denominator <= 1e-6 b f); H is 0 there (finite)."""
+    bf = k.b * k.f
+    q = k.vc - xp.where(xp.isfinite(v_top), v_top, k.vc)
+    den = bf * k.cos_theta * k.cos_roll + q * k.sin_theta
+    n0 = k.cos_roll * bf * (y * k.sin_theta - k.h * k.cos_theta) - k.sin_roll * k.a * k.f * x
+    ok = xp.isfinite(v_top) & (den > 1e-6 * bf)
+    H = (q * depth_with(k, y) - n0) / xp.where(ok, den, 1.0)
+    return xp.where(ok, H, 0.0), ok
+
+
 # ----------------------------------------------------------------------------------------------
 # the JAX front (what the EKF and the fits use)
 

@@ -17,6 +17,7 @@ from .camera import (
     Terms,
     depth_with,
     ground_with,
+    height_from_top_with,
     image_width_with,
     project_with,
     upright_size_with,
@@ -116,3 +117,15 @@ def upright_size(camera: Camera | tuple, u, v, width_m: float, height_m: float):
     """(w, h, ok) px of an upright width_m x height_m m box standing at the foot point (u, v) px
     (`camera.upright_size_with`); NaN where not ok."""
     return upright_size_with(np, host_terms(camera), _f64(u), _f64(v), width_m, height_m)
+
+
+def height_of_top(camera: Camera | tuple, u, v, v_top):
+    """(H m, ok) of the upright segment standing on the ground point of the foot point (u, v) px
+    whose top is seen at the image row v_top px (`camera.height_from_top_with`, the inverse of
+    `upright_size`'s height): ok where (u, v) is on the ground in front of the camera and v_top
+    is finite below the vertical vanishing point; H = 0 where not."""
+    k = host_terms(camera)
+    x, y, ok = ground_with(np, k, _f64(u), _f64(v))
+    H, ok_top = height_from_top_with(np, k, x, y, _f64(v_top))
+    ok = ok & ok_top
+    return np.where(ok, H, 0.0), ok

@@ -25,7 +25,7 @@ class Verdict(enum.IntEnum):
 
 
 class Reason(enum.IntEnum):
-    """Why a verdict was reached; the ARCHITECTURE vocabulary plus two degradations."""
+    """Why a verdict was reached: the ARCHITECTURE vocabulary, two degradations, the size rule."""
 
     MATCHED = 0  # (15): R_m > R_thr
     NO_PEAK = 1  # (13): no spectral peak above P_thr
@@ -34,6 +34,7 @@ class Reason(enum.IntEnum):
     TOO_SHORT = 4  # fewer than N samples tracked (Sec. 5)
     NO_MEASUREMENTS = 5  # no finite measurement at all
     BAD_SIGNAL = 6  # rhythm window unusable (constant, too many gaps, irregular sampling)
+    TOO_LOW = 7  # judged Pedestrian, but the track's measured height is a non-walker's (rule 26)
 
     @property
     def label(self) -> str:

@@ -161,6 +161,18 @@ class RelinkOptions:
 
 
 @dataclass(frozen=True)
+class SizeOptions:
+    """A judged track's measured height against a walker's (rule 26, issue 16; `track.size`)."""
+
+    min_height_heights: float = 0.0  # a track judged Pedestrian whose median height (the top
+    # row's height above its foot point through the camera, `camera_np.height_of_top`) is below
+    # this many walker heights (`width.height_m`) is Non-pedestrian, reason too-low (0: off,
+    # the paper's verdict; 0.5 a priori, half a walker: a dog is 0.56-0.70 m, docs/rules.md)
+    min_height_rows: int = 10  # ... judged on at least this many rows with a top row (fewer:
+    # the verdict stands)
+
+
+@dataclass(frozen=True)
 class TrackerOptions:
     """Capacity, the settling age, and one record per concern (each frozen)."""
 
@@ -173,6 +185,7 @@ class TrackerOptions:
     new: NewObjectOptions = field(default_factory=NewObjectOptions)
     merge: MergeOptions = field(default_factory=MergeOptions)
     relink: RelinkOptions = field(default_factory=RelinkOptions)
+    size: SizeOptions = field(default_factory=SizeOptions)
 
 
 Options = TypeVar("Options")

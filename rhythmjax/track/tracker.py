@@ -30,7 +30,7 @@ import numpy as np
 
 from ..io.files import WINDOW_CANDIDATES
 from ..model.camera_np import camera_tuple, upright_size
-from ..model.params import Config
+from ..model.params import Config, host_float
 from ..model.status import VERDICT_LABELS, TrackState
 from ..vision import detect, stabilise
 from ..vision.window_b import window_b_candidates
@@ -38,6 +38,7 @@ from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
 from .rows import NAN_VELOCITY, TrackRow, Velocity
+from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
 from .split import Predicted, split_shared
 from .toolkit import PendingStep, SlotSteps, match_window
@@ -386,6 +387,10 @@ class OnlineTracker:
             if obj is not None:
                 self._end(s)
         objs = sorted(self._finished, key=lambda o: o.track_id)
+        walker_m = host_float(self.cfg.width.height)
+        for o in objs:  # rule 26: a Pedestrian too low for a walker (off by default)
+            if o.result is not None:
+                o.result = refuse_low(o.result, self._camera, o.rows, walker_m, self.opt.size)
         return (tracks_columns(objs, candidates=self._offsets is not None),
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 

@@ -1,0 +1,60 @@
+"""A judged track's size against a walker's (rule 26, issue 16; `options.SizeOptions`).
+
+A trotting dog whose leg cycle, aliased, falls inside the walking model (14) passes (13)-(15);
+its height would refuse it. Each measured row of a track has its foot point (u, v) px and the
+top row v_top px of its moving region (the head), so the row's height is that of the upright
+segment standing on the foot point's ground point whose top is seen at v_top
+(`camera_np.height_of_top`, (3) solved for the height). A track judged Pedestrian whose median
+height, over at least `min_height_rows` such rows, is below `min_height_heights` walker heights
+is Non-pedestrian with reason too-low; every other verdict stands (the paper's (13)-(15) decide
+them)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..model.camera_np import height_of_top
+from ..model.params import Camera
+from ..model.status import Reason, Verdict
+from .options import SizeOptions
+
+
+__all__ = ["median_height", "refuse_low", "too_low"]
+
+
+def median_height(camera: Camera | tuple, u, v, v_top) -> tuple[float, int]:
+    """(median height m, rows it is taken over) of a track's rows: foot points (u, v) px and
+    top rows v_top px (NaN where not measured). Rows with a non-finite value, a foot point
+    not on the ground in front of the camera or a top at or beyond the vertical vanishing
+    point are left out; (NaN, 0) when none is left."""
+    H, ok = height_of_top(camera, np.asarray(u, np.float64), np.asarray(v, np.float64),
+                          np.asarray(v_top, np.float64))
+    H = np.asarray(H)[np.asarray(ok)]
+    return (float(np.median(H)) if H.size else math.nan), int(H.size)
+
+
+def too_low(verdict: int, height_m: float, rows: int, walker_height_m: float,
+            options: SizeOptions) -> bool:
+    """True where rule 26 turns a track's `verdict` (`status.Verdict`) to Non-pedestrian: it
+    is Pedestrian, the rule is on, the median height `height_m` (m) is taken over at least
+    `options.min_height_rows` rows and lies below `options.min_height_heights` walker heights
+    of `walker_height_m` m."""
+    return (options.min_height_heights > 0 and int(verdict) == Verdict.PEDESTRIAN
+            and rows >= options.min_height_rows and math.isfinite(height_m)
+            and height_m < options.min_height_heights * walker_height_m)
+
+
+def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m: float,
+               options: SizeOptions) -> dict:
+    """`result` (a track's deciding window's outcome: `toolkit.RESULT_FIELDS`) with verdict
+    Non-pedestrian and reason too-low where `too_low` says so for the track's `rows`
+    (`rows.TrackRow`: u, v, v_top); `result` itself otherwise (nothing computed when off)."""
+    if options.min_height_heights <= 0 or int(result["verdict"]) != Verdict.PEDESTRIAN:
+        return result
+    cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
+    height, n = median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2])
+    if not too_low(result["verdict"], height, n, walker_height_m, options):
+        return result
+    return {**result, "verdict": int(Verdict.NON_PEDESTRIAN), "reason": int(Reason.TOO_LOW)}
