@@ -55,6 +55,6 @@ def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m
         return result
     cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
     height, n = median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2])
-    if not too_low(result["verdict"], height, n, walker_height_m, options):
+    if not too_low(int(result["verdict"]), height, n, walker_height_m, options):
         return result
     return {**result, "verdict": int(Verdict.NON_PEDESTRIAN), "reason": int(Reason.TOO_LOW)}

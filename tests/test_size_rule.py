@@ -1,0 +1,136 @@
+"""Rule 26 (`track.size`, off by default): a track judged Pedestrian whose median measured
+height is below `size.min_height_heights` walker heights is Non-pedestrian (too-low). The
+height of a top row (`camera_np.height_of_top`) against a hand-worked level camera, the
+projection it inverts (with roll) and the fit's JAX form; the rule's cases; the tracker."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from fit.selfcal_height import height_from_top
+from rhythmjax.model.camera_np import HostCamera, height_of_top, project_3d
+from rhythmjax.model.params import Camera, Config
+from rhythmjax.model.status import Reason, Verdict
+from rhythmjax.sim import scene as synth
+from rhythmjax.track.options import SizeOptions, TrackerOptions, with_changes
+from rhythmjax.track.rows import TrackRow
+from rhythmjax.track.size import median_height, refuse_low, too_low
+from rhythmjax.track.tracker import OnlineTracker
+
+
+TILTED = HostCamera(f=0.008, h=7.0, theta=0.4, a=1e5, b=1.1e5, uc=320.0, vc=240.0, roll=0.05)
+ON = SizeOptions(min_height_heights=0.5, min_height_rows=10)
+
+
+def test_level_camera_height_by_hand():
+    """theta = roll = 0: a ground row is v = Vc + b f h / (f + y) and a point z m up is at
+    Vc + b f (h - z) / (f + y), so z = h (v - v_top) / (v - Vc): h = 2 m, Vc = 240, v = 340,
+    v_top = 190 gives 3.0 m."""
+    level = HostCamera(f=0.008, h=2.0, theta=0.0, a=1e5, b=1e5, uc=320.0, vc=240.0)
+    H, ok = height_of_top(level, 320.0, 340.0, 190.0)
+    assert bool(ok) and abs(float(H) - 3.0) < 1e-12
+
+
+@pytest.mark.parametrize("z", [0.3, 0.6, 1.7, 2.5])
+def test_height_inverts_the_projection_with_roll(z):
+    """The top of a z m segment projected by (3) with roll (`project_3d`) reads back as z m
+    (float64 round trip, 1e-9 m), at three ground points across the image."""
+    x, y = np.array([-2.0, 1.0, 3.0]), np.array([8.0, 15.0, 30.0])
+    u, v = project_3d(TILTED, x, y, 0.0 * x)
+    _, v_top = project_3d(TILTED, x, y, z + 0.0 * x)
+    H, ok = height_of_top(TILTED, u, v, v_top)
+    assert ok.all() and np.max(np.abs(H - z)) < 1e-9
+
+
+def test_not_ok_rows_are_left_out():
+    """A missing top row, a missing foot point, a foot point above the horizon (row -132 here)
+    and a top at the vertical vanishing point give ok False and H = 0."""
+    u, v = project_3d(TILTED, 0.0, 10.0, 0.0)
+    vanishing = TILTED.vc + TILTED.b * TILTED.f / math.tan(TILTED.theta)  # straight down
+    H, ok = height_of_top(TILTED, np.array([u, math.nan, u, u]), np.array([v, v, -200.0, v]),
+                          np.array([math.nan, v - 50, -80.0, vanishing]))
+    assert not ok.any() and (H == 0).all()
+    h, n = median_height(TILTED, [u, u], [v, v], [math.nan, math.nan])
+    assert math.isnan(h) and n == 0
+
+
+def test_the_fit_reads_the_same_height():
+    """`fit.selfcal_height.height_from_top` (JAX, float64 data) against `height_of_top` (NumPy,
+    float64) on the same float32 camera: within 2e-6 m (the JAX camera's sines and cosines are
+    float32, 1e-7 relative; a wrong term would be off by centimetres)."""
+    cam = Camera(f=TILTED.f, h=TILTED.h, theta=TILTED.theta, a=TILTED.a, b=TILTED.b,
+                 uc=TILTED.uc, vc=TILTED.vc, roll=TILTED.roll)
+    u, v = project_3d(TILTED, np.array([-1.0, 2.0]), np.array([9.0, 20.0]), np.zeros(2))
+    v_top = v - np.array([120.0, 40.0])
+    with jax.enable_x64(True):
+        H_fit, ok_fit = height_from_top(cam, jnp.asarray(u), jnp.asarray(v), jnp.asarray(v_top))
+    host = TILTED._replace(**{k: float(np.float32(getattr(TILTED, k)))
+                              for k in HostCamera._fields})
+    H, ok = height_of_top(host, u, v, v_top)  # the float32 camera the JAX one holds
+    assert ok.all() and bool(np.all(ok_fit)) and np.max(np.abs(np.asarray(H_fit) - H)) < 2e-6
+
+
+@pytest.mark.parametrize("verdict, height, rows, options, low", [
+    (Verdict.PEDESTRIAN, 0.6, 10, ON, True),           # a dog's height, enough rows
+    (Verdict.PEDESTRIAN, 0.85, 50, ON, False),         # exactly half of 1.7 m: not below
+    (Verdict.PEDESTRIAN, 0.84, 50, ON, True),
+    (Verdict.PEDESTRIAN, 0.6, 9, ON, False),           # too few rows: the verdict stands
+    (Verdict.PEDESTRIAN, math.nan, 50, ON, False),
+    (Verdict.NON_PEDESTRIAN, 0.6, 50, ON, False),      # only a Pedestrian is turned
+    (Verdict.UNCLASSIFIED, 0.6, 50, ON, False),
+    (Verdict.PEDESTRIAN, 0.6, 50, SizeOptions(), False),  # off by default
+])
+def test_too_low_cases(verdict, height, rows, options, low):
+    assert too_low(verdict, height, rows, 1.7, options) is low
+
+
+def _rows(top_m, n, camera=TILTED):
+    """n measured rows of a walker at 10-14 m whose top is `top_m` m above its feet, and a
+    predicted row (no foot point, no top)."""
+    y = np.linspace(10.0, 14.0, n)
+    u, v = project_3d(camera, 0.5 + 0 * y, y, 0 * y)
+    _, v_top = project_3d(camera, 0.5 + 0 * y, y, top_m + 0 * y)
+    rows = [TrackRow(i, i / 15, float(a), float(b), 20.0, 1.0, 0.5, float(c), 2, float(d))
+            for i, (a, b, c, d) in enumerate(zip(u, v, y, v_top))]
+    return rows + [TrackRow(n, n / 15, math.nan, math.nan, math.nan, math.nan, 0.5, 14.0, 3)]
+
+
+@pytest.mark.parametrize("top_m, n, turned", [(0.6, 12, True), (1.7, 12, False),
+                                              (0.6, 9, False)])
+def test_refuse_low_turns_a_low_pedestrian(top_m, n, turned):
+    result = {"verdict": int(Verdict.PEDESTRIAN), "reason": int(Reason.MATCHED), "pace_hz": 2.0}
+    out = refuse_low(result, TILTED, _rows(top_m, n), 1.7, ON)
+    if turned:
+        assert out["verdict"] == Verdict.NON_PEDESTRIAN and out["reason"] == Reason.TOO_LOW
+        assert out["pace_hz"] == 2.0 and result["verdict"] == Verdict.PEDESTRIAN  # a copy
+    else:
+        assert out is result
+    assert refuse_low(result, TILTED, _rows(0.6, 12), 1.7, SizeOptions()) is result
+
+
+def test_the_tracker_applies_the_rule():
+    """One rendered walker judged Pedestrian by default; with the rule at 2 walker heights
+    (3.4 m, taller than anyone; on any row with a top: at 12 m from this 1 m camera the head
+    is above the image on most rows) every Pedestrian track turns Non-pedestrian, reason
+    too-low, its pace kept."""
+    cfg = Config()
+    act = synth.walker(-3.4, 12.0, 0.0, pace_hz=1.9, step_length_m=0.62)
+    scene = synth.render_scene(3, synth.SceneSpec(n_frames=120, actors=(act,),
+                                                  camera=cfg.camera))
+    out = []
+    for options in (TrackerOptions(), with_changes(TrackerOptions(),
+                                                   {"size.min_height_heights": 2.0,
+                                                    "size.min_height_rows": 1})):
+        tr = OnlineTracker(cfg, options)
+        for i, f in enumerate(scene.frames):
+            tr.update(i, i / 15.0, f)
+        out.append(tr.finish()[1])
+    off, on = out
+    ped = [i for i, v in enumerate(off["verdict"]) if v == "pedestrian"]
+    assert ped, off["verdict"]
+    for i in ped:
+        assert on["verdict"][i] == "non-pedestrian" and on["reason"][i] == "too-low"
+        assert on["pace_hz"][i] == off["pace_hz"][i]
