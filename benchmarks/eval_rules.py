@@ -32,10 +32,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   is split between its sharers, each re-detected in a window as wide as its predicted body box
   (`track/split.py`; docs/rules.md, why walkers are missed); split_depth: its depth split,
   `body.split_depth_widths` 0.5 (the default, with split_shared) vs 0.
-- min_height: the tracker's `judged.min_height_heights` 0.5 vs 0 (rule 26: a track judged
+- min_height: the tracker's `size.min_height_heights` 0.5 vs 0 (rule 26: a track judged
   Pedestrian whose median measured height is below half a walker's is Non-pedestrian).
-- outrun: the tracker's `judged.outrun_s` 1 vs 0 (rule 27: a track judged Pedestrian ends
-  once its filter speed has stayed above the fastest walk (14) accepts for 1 s).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

@@ -5,7 +5,7 @@ eval_all.py scores the own scenes by track: a track is given to the object it fo
 a walker through its deciding rhythm window and then switched to a passing bicycle gives the
 bicycle a Pedestrian verdict. This prints, per own seed, each non-walker judged Pedestrian by
 track with the object the track followed during its deciding window
-(`sim.evaluate.window_objects`) and its height (rule 26's median, `track.judged.median_height`).
+(`sim.evaluate.window_objects`) and its height (rule 26's median, `track.size.median_height`).
 
     python benchmarks/study_switches.py SEED [SEED ...] [--scenes 10]
 
@@ -31,7 +31,7 @@ from rhythmjax.sim.evaluate import deciding_windows, match_tracks, window_object
 from rhythmjax.sim.presets import synthetic_options  # noqa: E402
 from rhythmjax.sim.scene import render_scene  # noqa: E402
 from rhythmjax.track import track_frames  # noqa: E402
-from rhythmjax.track.judged import median_height  # noqa: E402
+from rhythmjax.track.size import median_height  # noqa: E402
 
 
 def switched(by_track: dict, by_window: dict, verdicts: dict) -> list[tuple[int, str, str]]:

@@ -49,9 +49,8 @@ TRACKER_DEFAULTS = [
     ("relink_gate_h", "relink.gate_h", 0.25),
     ("relink_gate_per_s", "relink.gate_per_s", 0.5),
     ("max_objects", "max_objects", 8),
-    ("(new: issue 16, rule 26)", "judged.min_height_heights", 0.0),  # a too-low Pedestrian, off
-    ("(new: issue 16, rule 26)", "judged.min_height_rows", 10),
-    ("(new: issue 16, rule 27)", "judged.outrun_s", 0.0),  # a judged track outrunning a walk
+    ("(new: issue 16, rule 26)", "size.min_height_heights", 0.0),  # a too-low Pedestrian, off
+    ("(new: issue 16, rule 26)", "size.min_height_rows", 10),
 ]
 TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]
 

@@ -161,8 +161,8 @@ class RelinkOptions:
 
 
 @dataclass(frozen=True)
-class JudgedOptions:
-    """What a track judged Pedestrian must also show (rules 26 and 27, issue 16; `judged.py`)."""
+class SizeOptions:
+    """A judged track's measured height against a walker's (rule 26, issue 16; `track.size`)."""
 
     min_height_heights: float = 0.0  # a track judged Pedestrian whose median height (the top
     # row's height above its foot point through the camera, `camera_np.height_of_top`) is below
@@ -170,10 +170,6 @@ class JudgedOptions:
     # the paper's verdict; 0.5 a priori, half a walker: a dog is 0.56-0.70 m, docs/rules.md)
     min_height_rows: int = 10  # ... judged on at least this many rows with a top row (fewer:
     # the verdict stands)
-    outrun_s: float = 0.0  # a track judged Pedestrian ends once its filter's ground speed has
-    # stayed above the fastest walk (14) accepts (`params.walking_top_speed`, 2.57 m/s with
-    # Table 1) for this many s: it has switched to something faster (a bicycle crossing the
-    # walker); the object there starts a new track (0: off; 1.0, the PREDICT time-out, rule 27)
 
 
 @dataclass(frozen=True)
@@ -189,7 +185,7 @@ class TrackerOptions:
     new: NewObjectOptions = field(default_factory=NewObjectOptions)
     merge: MergeOptions = field(default_factory=MergeOptions)
     relink: RelinkOptions = field(default_factory=RelinkOptions)
-    judged: JudgedOptions = field(default_factory=JudgedOptions)
+    size: SizeOptions = field(default_factory=SizeOptions)
 
 
 Options = TypeVar("Options")

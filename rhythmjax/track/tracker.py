@@ -30,15 +30,15 @@ import numpy as np
 
 from ..io.files import WINDOW_CANDIDATES
 from ..model.camera_np import camera_tuple, upright_size
-from ..model.params import Config, host_float, walking_top_speed
+from ..model.params import Config, host_float
 from ..model.status import VERDICT_LABELS, TrackState
 from ..vision import detect, stabilise
 from ..vision.window_b import window_b_candidates
 from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
-from .judged import fast_since, outran, refuse_low
 from .options import TrackerOptions
 from .rows import NAN_VELOCITY, TrackRow, Velocity
+from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
 from .split import Predicted, split_shared
 from .toolkit import PendingStep, SlotSteps, match_window
@@ -53,7 +53,6 @@ class _Object:
     windows_done: int = 0
     result: dict | None = None  # the deciding (or first) window's outcome
     decided: bool = False
-    fast_since: float = math.nan  # rule 27: when its current run of rows faster than a walk began
     last_uv: tuple[float, float] = (math.nan, math.nan)  # foot point used for window B, px
     last_W: float = math.nan  # window-B width W, px
     close_frames: int = 0  # frames in a row its estimate coincided with an older track's
@@ -99,7 +98,6 @@ class OnlineTracker:
         self.glitch_frames: list[int] = []
         self.relinked = 0  # tracks continued by `_relink`
         self._camera = camera_tuple(cfg.camera)
-        self._top_speed = walking_top_speed(cfg)  # m/s, rule 27's limit
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
         self._offsets = (tuple(float(off) for _, off in WINDOW_CANDIDATES)
@@ -320,12 +318,6 @@ class OnlineTracker:
                                  float(mean[0]), float(mean[2]), int(obj.state), float(top)))
         obj.vel.append(Velocity(float(mean[1]), float(mean[3])))
         match_window(self.cfg, obj)
-        if obj.decided and self.opt.judged.outrun_s > 0:  # rule 27 (off by default)
-            obj.fast_since = fast_since(obj.fast_since, t, math.hypot(mean[1], mean[3]),
-                                        self._top_speed)
-            if outran(obj.fast_since, t, self.opt.judged):
-                self._end(s)
-                return
         out_of_range = not (self._range[0] <= mean[2] <= self._range[1])
         if out_of_range or obj.predict_time > self._timeout:
             self._end(s, lost=not out_of_range)
@@ -398,7 +390,7 @@ class OnlineTracker:
         walker_m = host_float(self.cfg.width.height)
         for o in objs:  # rule 26: a Pedestrian too low for a walker (off by default)
             if o.result is not None:
-                o.result = refuse_low(o.result, self._camera, o.rows, walker_m, self.opt.judged)
+                o.result = refuse_low(o.result, self._camera, o.rows, walker_m, self.opt.size)
         return (tracks_columns(objs, candidates=self._offsets is not None),
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 

@@ -1,5 +1,5 @@
-"""Rule 26 (`track.judged`, off by default): a track judged Pedestrian whose median measured
-height is below `judged.min_height_heights` walker heights is Non-pedestrian (too-low). The
+"""Rule 26 (`track.size`, off by default): a track judged Pedestrian whose median measured
+height is below `size.min_height_heights` walker heights is Non-pedestrian (too-low). The
 height of a top row (`camera_np.height_of_top`) against a hand-worked level camera, the
 projection it inverts (with roll) and the fit's JAX form; the rule's cases; the tracker."""
 
@@ -15,14 +15,14 @@ from rhythmjax.model.camera_np import HostCamera, height_of_top, project_3d
 from rhythmjax.model.params import Camera, Config
 from rhythmjax.model.status import Reason, Verdict
 from rhythmjax.sim import scene as synth
-from rhythmjax.track.options import JudgedOptions, TrackerOptions, with_changes
+from rhythmjax.track.options import SizeOptions, TrackerOptions, with_changes
 from rhythmjax.track.rows import TrackRow
-from rhythmjax.track.judged import median_height, refuse_low, too_low
+from rhythmjax.track.size import median_height, refuse_low, too_low
 from rhythmjax.track.tracker import OnlineTracker
 
 
 TILTED = HostCamera(f=0.008, h=7.0, theta=0.4, a=1e5, b=1.1e5, uc=320.0, vc=240.0, roll=0.05)
-ON = JudgedOptions(min_height_heights=0.5, min_height_rows=10)
+ON = SizeOptions(min_height_heights=0.5, min_height_rows=10)
 
 
 def test_level_camera_height_by_hand():
@@ -81,7 +81,7 @@ def test_the_fit_reads_the_same_height():
     (Verdict.PEDESTRIAN, math.nan, 50, ON, False),
     (Verdict.NON_PEDESTRIAN, 0.6, 50, ON, False),      # only a Pedestrian is turned
     (Verdict.UNCLASSIFIED, 0.6, 50, ON, False),
-    (Verdict.PEDESTRIAN, 0.6, 50, JudgedOptions(), False),  # off by default
+    (Verdict.PEDESTRIAN, 0.6, 50, SizeOptions(), False),  # off by default
 ])
 def test_too_low_cases(verdict, height, rows, options, low):
     assert too_low(verdict, height, rows, 1.7, options) is low
@@ -108,7 +108,7 @@ def test_refuse_low_turns_a_low_pedestrian(top_m, n, turned):
         assert out["pace_hz"] == 2.0 and result["verdict"] == Verdict.PEDESTRIAN  # a copy
     else:
         assert out is result
-    assert refuse_low(result, TILTED, _rows(0.6, 12), 1.7, JudgedOptions()) is result
+    assert refuse_low(result, TILTED, _rows(0.6, 12), 1.7, SizeOptions()) is result
 
 
 def test_the_tracker_applies_the_rule():
@@ -122,8 +122,8 @@ def test_the_tracker_applies_the_rule():
                                                   camera=cfg.camera))
     out = []
     for options in (TrackerOptions(), with_changes(TrackerOptions(),
-                                                   {"judged.min_height_heights": 2.0,
-                                                    "judged.min_height_rows": 1})):
+                                                   {"size.min_height_heights": 2.0,
+                                                    "size.min_height_rows": 1})):
         tr = OnlineTracker(cfg, options)
         for i, f in enumerate(scene.frames):
             tr.update(i, i / 15.0, f)
