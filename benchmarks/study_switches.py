@@ -65,7 +65,7 @@ def main(argv: list[str]) -> int:
                 for t, kind, seen in switched(by_track, by_window, verdicts):
                     rows = tid == t
                     h, n = median_height(cfg.camera, tracks["u"][rows], tracks["v"][rows],
-                                         tracks["v_top"][rows])
+                                         tracks["v_top"][rows], float(cfg.width.height))
                     print(f"seed {seed} scene {s} track {t}: {kind} by track, {seen} in its "
                           f"deciding window; height {h:.2f} m over {n} rows", flush=True)
     return 0

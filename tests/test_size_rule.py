@@ -53,8 +53,22 @@ def test_not_ok_rows_are_left_out():
     H, ok = height_of_top(TILTED, np.array([u, math.nan, u, u]), np.array([v, v, -200.0, v]),
                           np.array([math.nan, v - 50, -80.0, vanishing]))
     assert not ok.any() and (H == 0).all()
-    h, n = median_height(TILTED, [u, u], [v, v], [math.nan, math.nan])
+    h, n = median_height(TILTED, [u, u], [v, v], [math.nan, math.nan], 1.7)
     assert math.isnan(h) and n == 0
+
+
+def test_rows_where_a_walkers_head_leaves_the_image_are_not_read():
+    """The paper's 1 m camera (tilted 15 deg, 512 px rows): a 1.7 m walker's head is above the
+    image nearer than about 14 m, so a top row read there is not its head. A 0.6 m top at 8 m
+    and at 30 m: only the 30 m rows give a height (0.6 m); with a 0.5 m walker every row
+    does."""
+    cam = Config().camera
+    y = np.array([8.0, 8.0, 30.0, 30.0, 30.0])
+    u, v = project_3d(cam, 0 * y, y, 0 * y)
+    _, v_top = project_3d(cam, 0 * y, y, 0.6 + 0 * y)
+    h, n = median_height(cam, u, v, v_top, 1.7)
+    assert n == 3 and abs(h - 0.6) < 1e-5  # float32 camera constants
+    assert median_height(cam, u, v, v_top, 0.5)[1] == 5
 
 
 def test_the_fit_reads_the_same_height():
@@ -112,25 +126,28 @@ def test_refuse_low_turns_a_low_pedestrian(top_m, n, turned):
 
 
 def test_the_tracker_applies_the_rule():
-    """One rendered walker judged Pedestrian by default; with the rule at 2 walker heights
-    (3.4 m, taller than anyone; on any row with a top: at 12 m from this 1 m camera the head
-    is above the image on most rows) every Pedestrian track turns Non-pedestrian, reason
-    too-low, its pace kept."""
+    """One rendered walker at 18 m (its head inside the image of this 1 m camera) is judged
+    Pedestrian by default and measures 1.7 m (within 0.05 m); with the rule at 2 walker heights
+    (3.4 m, taller than anyone) its Pedestrian track turns Non-pedestrian, reason too-low, its
+    pace kept."""
     cfg = Config()
-    act = synth.walker(-3.4, 12.0, 0.0, pace_hz=1.9, step_length_m=0.62)
+    act = synth.walker(-3.4, 18.0, 0.0, pace_hz=1.9, step_length_m=0.62)
     scene = synth.render_scene(3, synth.SceneSpec(n_frames=120, actors=(act,),
                                                   camera=cfg.camera))
     out = []
     for options in (TrackerOptions(), with_changes(TrackerOptions(),
-                                                   {"size.min_height_heights": 2.0,
-                                                    "size.min_height_rows": 1})):
+                                                   {"size.min_height_heights": 2.0})):
         tr = OnlineTracker(cfg, options)
         for i, f in enumerate(scene.frames):
             tr.update(i, i / 15.0, f)
-        out.append(tr.finish()[1])
-    off, on = out
+        out.append(tr.finish()[:2])
+    (tracks, off), (_, on) = out
     ped = [i for i, v in enumerate(off["verdict"]) if v == "pedestrian"]
     assert ped, off["verdict"]
     for i in ped:
+        rows = tracks["track_id"] == off["track_id"][i]
+        h, n = median_height(cfg.camera, tracks["u"][rows], tracks["v"][rows],
+                             tracks["v_top"][rows], 1.7)
+        assert n >= 10 and abs(h - 1.7) < 0.05
         assert on["verdict"][i] == "non-pedestrian" and on["reason"][i] == "too-low"
         assert on["pace_hz"][i] == off["pace_hz"][i]

@@ -4,9 +4,10 @@ A trotting dog whose leg cycle, aliased, falls inside the walking model (14) pas
 its height would refuse it. Each measured row of a track has its foot point (u, v) px and the
 top row v_top px of its moving region (the head), so the row's height is that of the upright
 segment standing on the foot point's ground point whose top is seen at v_top
-(`camera_np.height_of_top`, (3) solved for the height). A track judged Pedestrian whose median
-height, over at least `min_height_rows` such rows, is below `min_height_heights` walker heights
-is Non-pedestrian with reason too-low; every other verdict stands (the paper's (13)-(15) decide
+(`camera_np.height_of_top`, (3) solved for the height). Only rows where a walker's head would
+be inside the image count (`median_height`). A track judged Pedestrian whose median height, over
+at least `min_height_rows` such rows, is below `min_height_heights` walker heights is
+Non-pedestrian with reason too-low; every other verdict stands (the paper's (13)-(15) decide
 them)."""
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..model.camera_np import height_of_top
+from ..model.camera_np import height_of_top, upright_size
 from ..model.params import Camera
 from ..model.status import Reason, Verdict
 from .options import SizeOptions
@@ -24,14 +25,21 @@ from .options import SizeOptions
 __all__ = ["median_height", "refuse_low", "too_low"]
 
 
-def median_height(camera: Camera | tuple, u, v, v_top) -> tuple[float, int]:
+def median_height(camera: Camera | tuple, u, v, v_top, walker_height_m: float
+                  ) -> tuple[float, int]:
     """(median height m, rows it is taken over) of a track's rows: foot points (u, v) px and
-    top rows v_top px (NaN where not measured). Rows with a non-finite value, a foot point
-    not on the ground in front of the camera or a top at or beyond the vertical vanishing
-    point are left out; (NaN, 0) when none is left."""
-    H, ok = height_of_top(camera, np.asarray(u, np.float64), np.asarray(v, np.float64),
-                          np.asarray(v_top, np.float64))
-    H = np.asarray(H)[np.asarray(ok)]
+    top rows v_top px (NaN where not measured). Only rows where a walker `walker_height_m` m
+    tall standing on the foot point would have its top inside the image (row >= 0, through
+    the camera: `camera_np.upright_size`) count: elsewhere a walker's measured top is the
+    image's edge or a part below its head, too low, and a height is read for nothing. Rows
+    with a non-finite value, a foot point not on the ground in front of the camera or a top
+    at or beyond the vertical vanishing point are left out too; (NaN, 0) when none is left."""
+    u, v, v_top = (np.asarray(q, np.float64) for q in (u, v, v_top))
+    _, walker_px, seen = upright_size(camera, u, v, 1.0, walker_height_m)
+    with np.errstate(invalid="ignore"):
+        seen = seen & (v - walker_px >= 0)
+    H, ok = height_of_top(camera, u, v, v_top)
+    H = np.asarray(H)[np.asarray(ok) & seen]
     return (float(np.median(H)) if H.size else math.nan), int(H.size)
 
 
@@ -54,7 +62,7 @@ def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m
     if options.min_height_heights <= 0 or int(result["verdict"]) != Verdict.PEDESTRIAN:
         return result
     cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
-    height, n = median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2])
+    height, n = median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2], walker_height_m)
     if not too_low(int(result["verdict"]), height, n, walker_height_m, options):
         return result
     return {**result, "verdict": int(Verdict.NON_PEDESTRIAN), "reason": int(Reason.TOO_LOW)}
