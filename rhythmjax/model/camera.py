@@ -154,10 +154,10 @@ def height_from_top_with(xp, k: Terms, x, y, v_top):
     cos(theta)) - sin(roll) a f x, H = (q d0 - N0) / (b f cos(theta) cos(roll) + q sin(theta)).
     `ok` is False where v_top is not finite or lies at or beyond the vertical vanishing point
     (denominator <= 1e-6 b f); H is 0 there (finite)."""
-    bf = k.b * k.f
+    bf, af = k.b * k.f, k.a * k.f
     q = k.vc - xp.where(xp.isfinite(v_top), v_top, k.vc)
     den = bf * k.cos_theta * k.cos_roll + q * k.sin_theta
-    n0 = k.cos_roll * bf * (y * k.sin_theta - k.h * k.cos_theta) - k.sin_roll * k.a * k.f * x
+    n0 = k.cos_roll * bf * (y * k.sin_theta - k.h * k.cos_theta) - k.sin_roll * af * x
     ok = xp.isfinite(v_top) & (den > 1e-6 * bf)
     H = (q * depth_with(k, y) - n0) / xp.where(ok, den, 1.0)
     return xp.where(ok, H, 0.0), ok
