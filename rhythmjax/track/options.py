@@ -167,9 +167,10 @@ class SizeOptions:
     min_height_heights: float = 0.0  # a track judged Pedestrian whose median height (the top
     # row's height above its foot point through the camera, `camera_np.height_of_top`) is below
     # this many walker heights (`width.height_m`) is Non-pedestrian, reason too-low (0: off,
-    # the paper's verdict; 0.5 a priori, half a walker: a dog is 0.56-0.70 m, docs/rules.md)
-    min_height_rows: int = 10  # ... judged on at least this many rows with a top row (fewer:
-    # the verdict stands)
+    # the paper's verdict; 0.5 a priori, half a walker: the own dogs measure 0.5-0.7 m). Off:
+    # it kept dogs out but lost a walker on each of its two decisions (docs/rules.md, rule 26)
+    min_height_rows: int = 10  # ... read on at least this many rows (those with a top row where
+    # a walker's head would be inside the image, `size.median_height`; fewer: the verdict stands)
 
 
 @dataclass(frozen=True)
