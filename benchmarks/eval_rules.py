@@ -34,8 +34,6 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   `body.split_depth_widths` 0.5 (the default, with split_shared) vs 0.
 - min_height: the tracker's `size.min_height_heights` 0.5 vs 0 (rule 26: a track judged
   Pedestrian whose median measured height is below half a walker's is Non-pedestrian).
-- switch: the tracker's `switch.enabled` True vs False (rule 28: a track judged Pedestrian
-  split where its foot points turn faster than a walk; both pieces judged afresh).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

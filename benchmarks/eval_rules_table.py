@@ -65,9 +65,6 @@ RULES = {
     "min_height": ("tracker", "size.min_height_heights", 0.5, 0.0, TRACKER_SOURCES,
                    "nothing fitted (half a walker, a priori); heights looked at on own training "
                    "seeds 5555, 6666 (docs/rules.md, rule 26)"),
-    "switch": ("tracker", "switch.enabled", True, False, TRACKER_SOURCES,
-               "nothing fitted (1 s, 8 rows a priori); the mechanism seen on own 6666, 20240603, "
-               "999001 (docs/rules.md, rule 28)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -79,8 +76,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
               "shared_overlap": (), "split_depth": TRACKER_SOURCES,
-              "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": (),
-              "switch": ()}
+              "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

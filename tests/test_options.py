@@ -51,9 +51,6 @@ TRACKER_DEFAULTS = [
     ("max_objects", "max_objects", 8),
     ("(new: issue 16, rule 26)", "size.min_height_heights", 0.0),  # a too-low Pedestrian, off
     ("(new: issue 16, rule 26)", "size.min_height_rows", 10),
-    ("(new: issue 16, rule 28)", "switch.enabled", False),  # a Pedestrian split at a switch
-    ("(new: issue 16, rule 28)", "switch.window_s", 1.0),
-    ("(new: issue 16, rule 28)", "switch.min_rows", 8),
 ]
 TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]
 

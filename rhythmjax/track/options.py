@@ -174,18 +174,6 @@ class SizeOptions:
 
 
 @dataclass(frozen=True)
-class SwitchOptions:
-    """A track judged Pedestrian split where it switched onto something faster than a walk
-    (rule 28, issue 16; `track.switch`)."""
-
-    enabled: bool = False  # at the end, split a Pedestrian track at the first measured row
-    # after which its foot points move faster than (14) allows any walker (2.57 m/s with
-    # Table 1) and before which they do not; both pieces judged afresh (off: the paper's tracks)
-    window_s: float = 1.0  # ... each speed a least-squares fit over this many s of rows ...
-    min_rows: int = 8  # ... holding at least this many measured foot points
-
-
-@dataclass(frozen=True)
 class TrackerOptions:
     """Capacity, the settling age, and one record per concern (each frozen)."""
 
@@ -199,7 +187,6 @@ class TrackerOptions:
     merge: MergeOptions = field(default_factory=MergeOptions)
     relink: RelinkOptions = field(default_factory=RelinkOptions)
     size: SizeOptions = field(default_factory=SizeOptions)
-    switch: SwitchOptions = field(default_factory=SwitchOptions)
 
 
 Options = TypeVar("Options")

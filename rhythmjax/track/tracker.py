@@ -30,8 +30,8 @@ import numpy as np
 
 from ..io.files import WINDOW_CANDIDATES
 from ..model.camera_np import camera_tuple, upright_size
-from ..model.params import Config, host_float, walking_top_speed
-from ..model.status import VERDICT_LABELS, TrackState, Verdict
+from ..model.params import Config, host_float
+from ..model.status import VERDICT_LABELS, TrackState
 from ..vision import detect, stabilise
 from ..vision.window_b import window_b_candidates
 from . import relink, sides
@@ -41,7 +41,6 @@ from .rows import NAN_VELOCITY, TrackRow, Velocity
 from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
 from .split import Predicted, split_shared
-from .switch import ground_track, switch_row
 from .toolkit import PendingStep, SlotSteps, match_window
 
 
@@ -98,9 +97,7 @@ class OnlineTracker:
         self._pending = PendingStep(STEP_OUT)  # the last frame's step, not yet read
         self.glitch_frames: list[int] = []
         self.relinked = 0  # tracks continued by `_relink`
-        self.switches = 0  # tracks split by `_split_at_switch` (rule 28)
         self._camera = camera_tuple(cfg.camera)
-        self._top_speed = walking_top_speed(cfg)  # m/s, rule 28's limit
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
         self._offsets = (tuple(float(off) for _, off in WINDOW_CANDIDATES)
@@ -389,9 +386,6 @@ class OnlineTracker:
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._end(s)
-        if self.opt.switch.enabled:  # rule 28 (off by default)
-            for o in list(self._finished):
-                self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
         walker_m = host_float(self.cfg.width.height)
         for o in objs:  # rule 26: a Pedestrian too low for a walker (off by default)
@@ -399,33 +393,6 @@ class OnlineTracker:
                 o.result = refuse_low(o.result, self._camera, o.rows, walker_m, self.opt.size)
         return (tracks_columns(objs, candidates=self._offsets is not None),
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
-
-    def _split_at_switch(self, obj: _Object) -> None:
-        """Rule 28 (`switch.py`): a track judged Pedestrian whose foot points turn faster than
-        a walk at row k keeps rows ..k-1; rows k.. become a new track; both are judged afresh
-        on their own rows (the same windows as online, then the final window rule)."""
-        if obj.result is None or int(obj.result["verdict"]) != Verdict.PEDESTRIAN:
-            return
-        cols = np.asarray([(r.t, r.u, r.v) for r in obj.rows], np.float64)
-        x, y, measured = ground_track(self._camera, cols[:, 1], cols[:, 2])
-        opt = self.opt.switch
-        k = switch_row(cols[:, 0], x, y, measured, self._top_speed, opt.window_s, opt.min_rows)
-        if k is None:
-            return
-        cands = obj.candidate_rows
-        rest = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[k:],
-                       vel=obj.vel[k:], candidate_rows=None if cands is None else cands[k:])
-        self._next_id += 1
-        obj.rows, obj.vel = obj.rows[:k], obj.vel[:k]
-        obj.candidate_rows = None if cands is None else cands[:k]
-        for piece in (obj, rest):
-            piece.result, piece.decided, piece.win_start, piece.windows_done = None, False, 0, 0
-            n = self.cfg.thresholds.n
-            while not piece.decided and len(piece.rows) >= piece.win_start + n:
-                match_window(self.cfg, piece)
-            match_window(self.cfg, piece, final=True)
-        self._finished.append(rest)
-        self.switches += 1
 
 
 def _box(uv, w, h) -> detect.WindowBox:
