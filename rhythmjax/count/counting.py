@@ -36,10 +36,9 @@ non-pedestrian, so it is not counted (`too_fast`: short bicycle tracks). A track
 pedestrian is counted; a non-pedestrian verdict removes one. Tracks shorter than
 `verdicts.min_track_frames` frames (after stitching) are dropped from every output and count
 first, and so are tracks that never moved (`ghost`: `still.never_moved`, a ghost of the
-background). `CountResult.counts` holds the
-numbers of `count_walkers` (tracks, pedestrians, non_pedestrians, unclassified, too_fast,
-unjudged_plausible, walkers and its range walkers_low .. walkers_high: judged only .. judged +
-every unjudged track), the verdicts say per track `track_speed_mps`, `too_fast`, `width_m`,
+background). `CountResult.counts` holds the numbers of `count_walkers` (tracks, pedestrians,
+non_pedestrians, unclassified, too_fast, unjudged_plausible, walkers and its range walkers_low
+.. walkers_high: judged only .. judged + every unjudged track), the verdicts say per track `track_speed_mps`, `too_fast`, `width_m`,
 `width_ok` (the unjudged tracks' best guess by speed and size) and `counted`, and `COUNT_RULE`
 says the rule in words (written to counts.json). With `explain.enabled` (off: it removed
 distinct walkers on the sources it was not chosen on, docs/rules.md) a counted unclassified
