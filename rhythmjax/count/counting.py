@@ -24,27 +24,26 @@ track's first foot point lies where the earlier one's ground state at constant v
 (`stitch.reid_distance`: the single-object tracker's `track.relink` gate, same ellipse).
 `stitch.max_dv_mps` (off; docs/rules.md) also asks a pair's ground velocities to agree.
 
-The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestrian it tracked,
-and its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged
-non-pedestrian - unclassified tracks too fast to walk. A track the classifier cannot judge
-(unclassified: shorter than N samples, or an unusable rhythm window) is a pedestrian of the
-paper's method and is counted, unless its ground speed (`track_speed`: the Theil-Sen slope,
-robust to a few rows placed off the feet; least squares with `verdicts.speed_fit` "lsq") exceeds
-the fastest the walking model's test (14) accepts for any rhythm (`walking_top_speed`: pace and
-stride both at +k_sigma3, 2.57 m/s with Table 1): any window of it would be judged
-non-pedestrian, so it is not counted (`too_fast`: short bicycle tracks). A track judged
-pedestrian is counted; a non-pedestrian verdict removes one. Tracks shorter than
-`verdicts.min_track_frames` frames (after stitching) are dropped from every output and count
-first, and so are tracks that never moved (`ghost`: `still.never_moved`, a ghost of the
+The counting rule (`count_walkers`; PAPERS.md: the paper counted every pedestrian it tracked, and
+its errors were mostly bicyclists counted twice): walkers = tracks - tracks judged non-pedestrian -
+unclassified tracks too fast to walk. A track the classifier cannot judge (unclassified: shorter
+than N samples, or an unusable rhythm window) is a pedestrian of the paper's method and is counted,
+unless its ground speed (`track_speed`: the Theil-Sen slope, robust to a few rows placed off the
+feet; least squares with `verdicts.speed_fit` "lsq") exceeds the fastest the walking model's test
+(14) accepts for any rhythm (`walking_top_speed`: pace and stride both at +k_sigma3, 2.57 m/s with
+Table 1): any window of it would be judged non-pedestrian, so it is not counted (`too_fast`: short
+bicycle tracks). A track judged pedestrian is counted; a non-pedestrian verdict removes one. Tracks
+shorter than `verdicts.min_track_frames` frames (after stitching) are dropped from every output and
+count first, and so are tracks that never moved (`ghost`: `still.never_moved`, a ghost of the
 background). `CountResult.counts` holds the numbers of `count_walkers` (tracks, pedestrians,
-non_pedestrians, unclassified, too_fast, unjudged_plausible, walkers and its range walkers_low
-.. walkers_high: judged only .. judged + every unjudged track), the verdicts say per track `track_speed_mps`, `too_fast`, `width_m`,
-`width_ok` (the unjudged tracks' best guess by speed and size) and `counted`, and `COUNT_RULE`
-says the rule in words (written to counts.json). With `explain.enabled` (off: it removed
-distinct walkers on the sources it was not chosen on, docs/rules.md) a counted unclassified
-track that a stronger counted track explains (a duplicate on the ground or its continuation:
-`explain.explain_tracks`) is not counted either (verdicts `explained_by`, `explained_as`;
-counts `explained`).
+non_pedestrians, unclassified, too_fast, unjudged_plausible, walkers and its range walkers_low ..
+walkers_high: judged only .. judged + every unjudged track), the verdicts say per track
+`track_speed_mps`, `too_fast`, `width_m`, `width_ok` (the unjudged tracks' best guess by speed and
+size) and `counted`, and `COUNT_RULE` says the rule in words (written to counts.json). With
+`explain.enabled` (off: it removed distinct walkers on the sources it was not chosen on,
+docs/rules.md) a counted unclassified track that a stronger counted track explains (a duplicate on
+the ground or its continuation: `explain.explain_tracks`) is not counted either (verdicts
+`explained_by`, `explained_as`; counts `explained`).
 """
 
 from __future__ import annotations
