@@ -33,7 +33,10 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   (`track/split.py`; docs/rules.md, why walkers are missed); split_depth: its depth split,
   `body.split_depth_widths` 0.5 (the default, with split_shared) vs 0.
 - min_height: the tracker's `size.min_height_heights` 0.5 vs 0 (rule 26: a track judged
-  Pedestrian whose median measured height is below half a walker's is Non-pedestrian).
+  Pedestrian whose median measured height over its deciding window's rows is below half a
+  walker's is Non-pedestrian; 26c); min_height_track: the same over every row of the track (26b).
+- recheck: the tracker's `recheck.enabled` (rule 29: a Pedestrian track split at its first later
+  window faster than any walk or with a peak faster than any walking pace).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

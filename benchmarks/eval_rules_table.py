@@ -64,19 +64,28 @@ RULES = {
                   COUNT_SOURCES, "none: set from geometry (1ad0850, issue 16 item 4)"),
     "min_height": ("tracker", "size.min_height_heights", 0.5, 0.0, TRACKER_SOURCES,
                    "nothing fitted (half a walker, a priori); heights looked at on own training "
-                   "seeds 5555, 6666 (docs/rules.md, rule 26)"),
+                   "seeds 5555, 6666 (docs/rules.md, rule 26); the deciding window's rows "
+                   "(26c, size.min_height_scope 'window') since the thirtieth round"),
+    "min_height_track": ("tracker", "size.min_height_heights", 0.5, 0.0, TRACKER_SOURCES,
+                         "as min_height, every row of the track (26b, size.min_height_scope "
+                         "'track'; decided on own seeds 230001-260001)"),
+    "recheck": ("tracker", "recheck.enabled", True, False, TRACKER_SOURCES,
+                "nothing fitted (the walking model's bounds); later windows looked at on own "
+                "seeds 5555, 6666, 20240603, 777001, 888001, 999001, 230001-280001 (rule 29)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
 # tracker keys a rule's ON side sets besides its own (its OFF side is the defaults)
-TRACKER_WITH = {"split_depth": {"body.split_shared": True}}
+TRACKER_WITH = {"split_depth": {"body.split_shared": True},
+                "min_height_track": {"size.min_height_scope": "track"}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
               "shared_overlap": (), "split_depth": TRACKER_SOURCES,
-              "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": ()}
+              "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": (),
+              "min_height_track": (), "recheck": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

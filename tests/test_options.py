@@ -51,6 +51,8 @@ TRACKER_DEFAULTS = [
     ("max_objects", "max_objects", 8),
     ("(new: issue 16, rule 26)", "size.min_height_heights", 0.0),  # a too-low Pedestrian, off
     ("(new: issue 16, rule 26)", "size.min_height_rows", 10),
+    ("(new: issue 16, rule 26c)", "size.min_height_scope", "window"),
+    ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
 ]
 TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]
 

@@ -1,7 +1,8 @@
 """Rule 26 (`track.size`, off by default): a track judged Pedestrian whose median measured
-height is below `size.min_height_heights` walker heights is Non-pedestrian (too-low). The
-height of a top row (`camera_np.height_of_top`) against a hand-worked level camera, the
-projection it inverts (with roll) and the fit's JAX form; the rule's cases; the tracker."""
+height (over its deciding window's rows, 26c) is below `size.min_height_heights` walker heights
+is Non-pedestrian (too-low). The height of a top row (`camera_np.height_of_top`) against a
+hand-worked level camera, the projection it inverts (with roll) and the fit's JAX form; the
+rule's cases; the tracker."""
 
 import math
 
@@ -123,6 +124,27 @@ def test_refuse_low_turns_a_low_pedestrian(top_m, n, turned):
     else:
         assert out is result
     assert refuse_low(result, TILTED, _rows(0.6, 12), 1.7, SizeOptions()) is result
+
+
+def test_window_scope_reads_the_deciding_window_only():
+    """Rule 26c: a track whose first 12 rows are a 1.7 m walker (its deciding window, rows
+    0..12) and whose next 20 rows are a 0.6 m dog (a re-acquisition onto it) keeps its
+    Pedestrian verdict with the window scope (median 1.7 m over the window) and turns
+    Non-pedestrian with the track scope (median 0.6 m over all 32 rows); a result with no window
+    is read over every row with either scope."""
+    walker, dog = _rows(1.7, 12)[:-1], _rows(0.6, 20)[:-1]
+    rows = walker + dog
+    result = {"verdict": int(Verdict.PEDESTRIAN), "reason": int(Reason.MATCHED),
+              "window": (0, 12)}
+    track = SizeOptions(min_height_heights=0.5, min_height_scope="track")
+    assert refuse_low(result, TILTED, rows, 1.7, ON) is result
+    assert refuse_low(result, TILTED, rows, 1.7, track)["reason"] == Reason.TOO_LOW
+    no_window = {k: v for k, v in result.items() if k != "window"}
+    assert refuse_low(no_window, TILTED, rows, 1.7, ON)["reason"] == Reason.TOO_LOW
+    on_dog = {**result, "window": (12, 32)}  # a window judged on the dog: turned
+    assert refuse_low(on_dog, TILTED, rows, 1.7, ON)["reason"] == Reason.TOO_LOW
+    with pytest.raises(ValueError, match="min_height_scope"):
+        SizeOptions(min_height_scope="rows")
 
 
 def test_the_tracker_applies_the_rule():

@@ -57,7 +57,7 @@ import numpy as np
 
 from ..io.files import CANDIDATE_COLUMNS
 from ..io.mot import VELOCITY_COLUMNS
-from ..model.params import Config
+from ..model.params import Config, walking_top_speed
 from ..track.columns import candidate_table
 from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
@@ -169,16 +169,6 @@ def ghost(level: PedestrianLevel, p: Pedestrian) -> bool:
         return False
     size = level.shape.size(*(float(q) for q in np.median(uv, axis=0)))
     return never_moved(uv, size, level.block, lf.still_widths, lf.still_heights)
-
-
-def walking_top_speed(cfg: Config) -> float:
-    """The fastest ground speed (m/s) the walking model's test (14) accepts for any rhythm:
-    speed = pace x stride with both within k_sigma3 of the model, so at most
-    (pace_mean + k_sigma3 pace_std) x (stride_mean + k_sigma3 stride_std) (2.57 m/s with the
-    paper's Table 1). A window moving faster is judged non-pedestrian whatever its spectrum."""
-    w, k = cfg.walking, float(cfg.thresholds.k_sigma3)
-    return (float(w.pace_mean) + k * float(w.pace_std)) * \
-        (float(w.stride_mean) + k * float(w.stride_std))
 
 
 THEIL_SEN_ROWS = 400  # `points_speed`'s Theil-Sen fit reads at most this many rows (79 800

@@ -231,6 +231,23 @@ SECTIONS = {"camera": _CAMERA_KEYS, "noise": _NOISE_KEYS, "width": _WIDTH_KEYS,
             "walking": _WALKING_KEYS, "thresholds": _THRESHOLD_KEYS}
 
 
+def walking_top_speed(cfg: Config) -> float:
+    """The fastest ground speed (m/s) the walking model's test (14) accepts for any rhythm:
+    speed = pace x stride with both within k_sigma3 of the model, so at most
+    (pace_mean + k_sigma3 pace_std) x (stride_mean + k_sigma3 stride_std) (2.57 m/s with the
+    paper's Table 1). A window moving faster is judged non-pedestrian whatever its spectrum."""
+    w, k = cfg.walking, float(cfg.thresholds.k_sigma3)
+    return (float(w.pace_mean) + k * float(w.pace_std)) * \
+        (float(w.stride_mean) + k * float(w.stride_std))
+
+
+def walking_top_pace(cfg: Config) -> float:
+    """The fastest pace (Hz) the walking model's test (14) accepts: pace_mean + k_sigma3
+    pace_std (2.60 Hz with the paper's Table 1)."""
+    return float(cfg.walking.pace_mean) + float(cfg.thresholds.k_sigma3) * \
+        float(cfg.walking.pace_std)
+
+
 def config_to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
     """The JSON-ready nested dict of a Config; keys carry units (ARCHITECTURE.md, config)."""
     c, n, w, k, t = cfg.camera, cfg.noise, cfg.width, cfg.walking, cfg.thresholds

@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 
-__all__ = ["BodyOptions", "MergeOptions", "MotionOptions", "NewObjectOptions", "RelinkOptions",
-           "TrackerOptions", "WindowOptions", "with_changes"]
+__all__ = ["BodyOptions", "MergeOptions", "MotionOptions", "NewObjectOptions", "RecheckOptions",
+           "RelinkOptions", "SizeOptions", "TrackerOptions", "WindowOptions", "with_changes"]
 
 
 @dataclass(frozen=True)
@@ -160,6 +160,9 @@ class RelinkOptions:
     gate_per_s: float = 0.5  # ... growing by this fraction per second since then
 
 
+HEIGHT_SCOPES = ("window", "track")  # `size.min_height_scope`
+
+
 @dataclass(frozen=True)
 class SizeOptions:
     """A judged track's measured height against a walker's (rule 26, issue 16; `track.size`)."""
@@ -171,6 +174,25 @@ class SizeOptions:
     # it kept dogs out but lost a walker on each of its two decisions (docs/rules.md, rule 26)
     min_height_rows: int = 10  # ... read on at least this many rows (those with a top row where
     # a walker's head would be inside the image, `size.median_height`; fewer: the verdict stands)
+    min_height_scope: str = "window"  # the rows read: "window", those of the track's deciding
+    # rhythm window (rule 26c: a track re-acquired onto another object keeps the height of the
+    # one its verdict was judged on); "track", every row (rule 26b)
+
+    def __post_init__(self):
+        if self.min_height_scope not in HEIGHT_SCOPES:
+            raise ValueError(f"size.min_height_scope must be one of {HEIGHT_SCOPES}, "
+                             f"got {self.min_height_scope!r}")
+
+
+@dataclass(frozen=True)
+class RecheckOptions:
+    """A Pedestrian track's later rhythm windows (rule 29, issue 16; `track.recheck`)."""
+
+    enabled: bool = True  # at the end, a track judged Pedestrian is split at the first of its
+    # windows after the deciding one that moves faster than any walk (14) accepts (2.57 m/s)
+    # or has a peak faster than its fastest pace (2.60 Hz): an identity switch onto a bicycle
+    # or a dog after the verdict; both pieces are judged afresh (False: the paper's, one
+    # verdict per track; on since issue 16's thirtieth round, docs/rules.md, rule 29)
 
 
 @dataclass(frozen=True)
@@ -187,6 +209,7 @@ class TrackerOptions:
     merge: MergeOptions = field(default_factory=MergeOptions)
     relink: RelinkOptions = field(default_factory=RelinkOptions)
     size: SizeOptions = field(default_factory=SizeOptions)
+    recheck: RecheckOptions = field(default_factory=RecheckOptions)
 
 
 Options = TypeVar("Options")

@@ -8,7 +8,9 @@ segment standing on the foot point's ground point whose top is seen at v_top
 be inside the image count (`median_height`). A track judged Pedestrian whose median height, over
 at least `min_height_rows` such rows, is below `min_height_heights` walker heights is
 Non-pedestrian with reason too-low; every other verdict stands (the paper's (13)-(15) decide
-them)."""
+them). The rows read are those of the deciding rhythm window (rule 26c, `min_height_scope`
+"window"): a track that re-acquisition or a crossing carried onto another object after its
+verdict keeps the height of the object the verdict was judged on."""
 
 from __future__ import annotations
 
@@ -56,11 +58,16 @@ def too_low(verdict: int, height_m: float, rows: int, walker_height_m: float,
 
 def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m: float,
                options: SizeOptions) -> dict:
-    """`result` (a track's deciding window's outcome: `toolkit.RESULT_FIELDS`) with verdict
-    Non-pedestrian and reason too-low where `too_low` says so for the track's `rows`
-    (`rows.TrackRow`: u, v, v_top); `result` itself otherwise (nothing computed when off)."""
+    """`result` (a track's deciding window's outcome: `toolkit.RESULT_FIELDS`, with its
+    "window" (first, end) row indices) with verdict Non-pedestrian and reason too-low where
+    `too_low` says so for the track's `rows` (`rows.TrackRow`: u, v, v_top): those of the
+    deciding window with `options.min_height_scope` "window" (every row when the result names
+    none), all of them with "track"; `result` itself otherwise (nothing computed when off)."""
     if options.min_height_heights <= 0 or int(result["verdict"]) != Verdict.PEDESTRIAN:
         return result
+    if options.min_height_scope == "window" and "window" in result:
+        first, end = result["window"]
+        rows = rows[first:end]
     cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
     height, n = median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2], walker_height_m)
     if not too_low(int(result["verdict"]), height, n, walker_height_m, options):

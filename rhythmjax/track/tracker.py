@@ -37,6 +37,7 @@ from ..vision.window_b import window_b_candidates
 from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
+from .recheck import switch_row
 from .rows import NAN_VELOCITY, TrackRow, Velocity
 from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
@@ -97,6 +98,7 @@ class OnlineTracker:
         self._pending = PendingStep(STEP_OUT)  # the last frame's step, not yet read
         self.glitch_frames: list[int] = []
         self.relinked = 0  # tracks continued by `_relink`
+        self.switches = 0  # tracks split by `_split_at_switch` (rule 29)
         self._camera = camera_tuple(cfg.camera)
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
@@ -386,6 +388,9 @@ class OnlineTracker:
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._end(s)
+        if self.opt.recheck.enabled:  # rule 29 (off by default)
+            for o in list(self._finished):
+                self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
         walker_m = host_float(self.cfg.width.height)
         for o in objs:  # rule 26: a Pedestrian too low for a walker (off by default)
@@ -393,6 +398,29 @@ class OnlineTracker:
                 o.result = refuse_low(o.result, self._camera, o.rows, walker_m, self.opt.size)
         return (tracks_columns(objs, candidates=self._offsets is not None),
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
+
+    def _split_at_switch(self, obj: _Object) -> None:
+        """Rule 29 (`recheck.py`): a track judged Pedestrian one of whose later windows is no
+        walker's keeps rows ..k-1 (k: that window's first row); rows k.. become a new track;
+        both are judged afresh on their own rows (the same windows as online, then the final
+        window rule)."""
+        k = switch_row(self.cfg, obj)
+        if k is None:
+            return
+        cands = obj.candidate_rows
+        rest = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[k:],
+                       vel=obj.vel[k:], candidate_rows=None if cands is None else cands[k:])
+        self._next_id += 1
+        obj.rows, obj.vel = obj.rows[:k], obj.vel[:k]
+        obj.candidate_rows = None if cands is None else cands[:k]
+        n = self.cfg.thresholds.n
+        for piece in (obj, rest):
+            piece.result, piece.decided, piece.win_start, piece.windows_done = None, False, 0, 0
+            while not piece.decided and len(piece.rows) >= piece.win_start + n:
+                match_window(self.cfg, piece)
+            match_window(self.cfg, piece, final=True)
+        self._finished.append(rest)
+        self.switches += 1
 
 
 def _box(uv, w, h) -> detect.WindowBox:

@@ -1,0 +1,57 @@
+"""Where a track judged Pedestrian went on with something else (rule 29, issue 16;
+`options.RecheckOptions`, on by default).
+
+Once a rhythm window has said Pedestrian the tracker stops judging windows (Sec. 4.2), so a
+track that then follows a bicycle or a dog passing its walker (after a PREDICT stretch, a
+crossing or a re-acquisition) carries the walker's verdict onto it. At the end, the windows of
+N rows after the deciding one (starting at its end, one every `thresholds.hop_samples` rows,
+judged by (13)-(15) exactly as online: `toolkit.match_window`) are read until one is not a
+walker's (`not_a_walk`): its measured speed (12) exceeds the fastest walk the walking model
+(14) accepts for any rhythm (`params.walking_top_speed`, 2.57 m/s with Table 1), or it has a
+peak above P_thr (13) at a pace above the model's fastest (`params.walking_top_pace`, 2.60 Hz).
+Both limits are the paper's own model at +k_sigma3; nothing is fitted. The track is cut at
+that window's first row (`switch_row`); the tracker judges both pieces afresh."""
+
+from __future__ import annotations
+
+import copy
+import math
+
+from ..model.params import Config, walking_top_pace, walking_top_speed
+from ..model.status import Reason, Verdict
+from .toolkit import RhythmWindows, match_window
+
+
+__all__ = ["not_a_walk", "switch_row"]
+
+
+def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
+    """True where a window's outcome (`toolkit.RESULT_FIELDS`) is not a walker's: its speed
+    (m/s) is above `top_speed`, or it found a peak (reason other than no-peak) whose pace (Hz)
+    is above `top_pace`."""
+    speed, pace = float(result["speed_mps"]), float(result["pace_hz"])
+    if math.isfinite(speed) and speed > top_speed:
+        return True
+    peak = int(result["reason"]) != Reason.NO_PEAK
+    return peak and math.isfinite(pace) and pace > top_pace
+
+
+def switch_row(cfg: Config, obj: RhythmWindows) -> int | None:
+    """The first row of the first window after `obj`'s deciding Pedestrian window (its
+    result["window"]) that `not_a_walk` refuses; None where the track is not judged Pedestrian,
+    names no window, or no later window is refused. `obj` is not changed (a copy is judged)."""
+    res = obj.result
+    if res is None or int(res["verdict"]) != Verdict.PEDESTRIAN or "window" not in res:
+        return None
+    top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg)
+    probe = copy.copy(obj)
+    probe.win_start, n = int(res["window"][1]), cfg.thresholds.n
+    while probe.win_start + n <= len(probe.rows):
+        start = probe.win_start
+        probe.result, probe.decided = None, False
+        match_window(cfg, probe)
+        if probe.result is not None and not_a_walk(probe.result, top_speed, top_pace):
+            return int(probe.result["window"][0])
+        if probe.win_start == start:
+            break
+    return None

@@ -1,0 +1,113 @@
+"""Rule 29 (`track.recheck`, on by default): a track judged Pedestrian is cut at its first
+later window that is no walker's: faster than any walk (14) accepts or with a peak faster than
+its fastest pace. The window test's cases, the cut row on hand-made tracks (a walker, then a
+bicycle; a walker throughout) and the tracker with the rule on a lone walker."""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from rhythmjax.model.camera_np import project_3d
+from rhythmjax.model.params import Config, walking_top_pace, walking_top_speed
+from rhythmjax.model.status import Reason, TrackState, Verdict
+from rhythmjax.sim import scene as synth
+from rhythmjax.track.options import TrackerOptions, with_changes
+from rhythmjax.track.recheck import not_a_walk, switch_row
+from rhythmjax.track.rows import TrackRow
+from rhythmjax.track.toolkit import match_window
+from rhythmjax.track.tracker import OnlineTracker
+
+
+CFG = Config()
+FPS = 15.0
+
+
+def test_the_walking_models_bounds_by_hand():
+    """Table 1: pace 2.05 +- 0.183 Hz, stride 0.72 +- 0.09 m, k_sigma3 3: the fastest pace
+    2.599 Hz, the fastest walk 2.599 x 0.99 = 2.573 m/s."""
+    assert walking_top_pace(CFG) == pytest.approx(2.05 + 3 * 0.183, abs=1e-6)
+    assert walking_top_speed(CFG) == pytest.approx((2.05 + 3 * 0.183) * (0.72 + 3 * 0.09),
+                                                   abs=1e-6)
+
+
+@pytest.mark.parametrize("speed, pace, reason, refused", [
+    (1.4, 2.0, Reason.MATCHED, False),          # a walk
+    (2.6, 2.0, Reason.NO_MODEL_MATCH, True),    # faster than any walk (2.573 m/s)
+    (2.5, 2.0, Reason.NO_MODEL_MATCH, False),
+    (1.3, 4.2, Reason.NO_MODEL_MATCH, True),    # a trotting dog's pace (above 2.599 Hz)
+    (1.3, 2.55, Reason.NO_MODEL_MATCH, False),
+    (1.3, 4.2, Reason.NO_PEAK, False),          # no peak: its pace is no measurement
+    (math.nan, math.nan, Reason.NO_PEAK, False),
+])
+def test_not_a_walk_cases(speed, pace, reason, refused):
+    result = {"speed_mps": speed, "pace_hz": pace, "reason": int(reason)}
+    assert not_a_walk(result, walking_top_speed(CFG), walking_top_pace(CFG)) is refused
+
+
+def _track(speeds_mps, seed=0):
+    """A track's rows on the paper's 1 m camera: one row a frame, the object moving away along
+    y from 8 m at speeds_mps[k] m/s in frame k, its I(k) a 2.0 Hz sine (a walker's pace) plus
+    noise of 0.1, every row observed."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(len(speeds_mps)) / FPS
+    y = 8.0 + np.concatenate([[0.0], np.cumsum(np.asarray(speeds_mps)[1:] / FPS)])
+    u, v = project_3d(CFG.camera, 0.5 + 0 * y, y, 0 * y)
+    sig = 20.0 + 5.0 * np.sin(2 * np.pi * 2.0 * t) + rng.normal(0, 0.1, t.size)
+    rows = [TrackRow(k, float(t[k]), float(u[k]), float(v[k]), 20.0, float(sig[k]), 0.5,
+                     float(y[k]), int(TrackState.OBSERVE)) for k in range(t.size)]
+    return SimpleNamespace(rows=rows, win_start=0, windows_done=0, result=None, decided=False)
+
+
+def _judged(obj):
+    """`obj` after the online windows: judged until one says Pedestrian."""
+    while not obj.decided and len(obj.rows) >= obj.win_start + CFG.thresholds.n:
+        match_window(CFG, obj)
+    return obj
+
+
+def test_a_bicycle_after_the_verdict_is_cut_off():
+    """64 rows of a walk at 1.3 m/s (judged Pedestrian in window 0..64) then 96 rows at 4 m/s:
+    the first later window (rows 64..128, hop N/2) moves at about 4 m/s and is refused, so the
+    cut is at row 64; the same track walking throughout has no cut, and the object itself is
+    left as it was."""
+    obj = _judged(_track([1.3] * 64 + [4.0] * 96))
+    assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN and obj.result["window"] == (0, 64)
+    before = (obj.win_start, obj.windows_done, obj.result)
+    assert switch_row(CFG, obj) == 64
+    assert (obj.win_start, obj.windows_done, obj.result) == before
+    walker = _judged(_track([1.3] * 160))
+    assert int(walker.result["verdict"]) == Verdict.PEDESTRIAN
+    assert switch_row(CFG, walker) is None
+
+
+def test_no_cut_without_a_pedestrian_verdict_or_later_window():
+    """A track judged Non-pedestrian (too fast from the start), and a walker too short for a
+    window after its deciding one, are never cut."""
+    fast = _judged(_track([4.0] * 160))
+    assert int(fast.result["verdict"]) != Verdict.PEDESTRIAN and switch_row(CFG, fast) is None
+    short = _judged(_track([1.3] * 100))
+    assert int(short.result["verdict"]) == Verdict.PEDESTRIAN and switch_row(CFG, short) is None
+
+
+def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone():
+    """One rendered walker going away from 8 m, 180 frames: its track (156 rows, judged
+    Pedestrian in rows 0..64) has a later window (rows 64..128), and
+    the tracks and verdicts are the same with the rule on as off: the tracker splits nothing."""
+    act = synth.walker(-0.5, 8.0, math.pi / 2, pace_hz=1.9, step_length_m=0.62)
+    scene = synth.render_scene(5, synth.SceneSpec(n_frames=180, actors=(act,),
+                                                  camera=CFG.camera))
+    out = []
+    for options in (with_changes(TrackerOptions(), {"recheck.enabled": False}),
+                    TrackerOptions()):
+        tr = OnlineTracker(CFG, options)
+        for i, f in enumerate(scene.frames):
+            tr.update(i, i / FPS, f)
+        out.append((tr.finish()[:2], tr.switches))
+    ((tracks_off, off), _), ((tracks_on, on), splits) = out
+    assert "pedestrian" in list(off["verdict"]) and splits == 0
+    first = off["track_id"][list(off["verdict"]).index("pedestrian")]
+    assert np.sum(tracks_off["track_id"] == first) >= 64 + CFG.thresholds.n  # a later window
+    assert list(on["verdict"]) == list(off["verdict"])
+    np.testing.assert_array_equal(tracks_on["track_id"], tracks_off["track_id"])
