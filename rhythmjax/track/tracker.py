@@ -388,7 +388,7 @@ class OnlineTracker:
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._end(s)
-        if self.opt.recheck.enabled:  # rule 29 (off by default)
+        if self.opt.recheck.enabled:  # rule 29: a switch after the verdict cut off (on)
             for o in list(self._finished):
                 self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
