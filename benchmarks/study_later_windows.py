@@ -18,7 +18,6 @@ Figures: docs/rules.md, "Later windows: a Pedestrian track cut where it stops be
 from __future__ import annotations
 
 import argparse
-import copy
 import sys
 from pathlib import Path
 
@@ -28,43 +27,33 @@ import jax
 sys.path.insert(0, str(Path(__file__).parent))
 
 import eval_synthetic as es  # noqa: E402
+from study_switches import tracked_scenes  # noqa: E402
 
 from rhythmjax.model.params import config_from_dict, walking_top_pace, walking_top_speed  # noqa: E402
 from rhythmjax.model.status import Reason, Verdict  # noqa: E402
-from rhythmjax.sim.evaluate import deciding_windows, match_tracks, window_objects  # noqa: E402
+from rhythmjax.sim.evaluate import window_objects  # noqa: E402
 from rhythmjax.sim.presets import synthetic_options  # noqa: E402
-from rhythmjax.sim.scene import render_scene  # noqa: E402
-from rhythmjax.track import track_frames  # noqa: E402
 from rhythmjax.track.options import with_changes  # noqa: E402
-from rhythmjax.track.recheck import not_a_walk  # noqa: E402
-from rhythmjax.track.toolkit import match_window  # noqa: E402
+from rhythmjax.track.recheck import later_windows, not_a_walk  # noqa: E402
 
 
 def kind(obj) -> str:
     return "none" if obj is None else obj.kind[:3]
 
 
-def later_windows(cfg, obj, tracks, truth) -> list[tuple]:
-    """Each window of `obj` after its deciding one: (first row, object followed, reason,
-    verdict, pace, stride, speed, refused)."""
+def describe(cfg, obj, tracks, truth) -> list[tuple]:
+    """Each window of `obj` after its deciding one (`recheck.later_windows`): (first row,
+    object followed, reason, verdict, pace, stride, speed, refused by `not_a_walk`)."""
     top = (walking_top_speed(cfg), walking_top_pace(cfg))
-    probe = copy.copy(obj)
-    probe.win_start, n, out = int(obj.result["window"][1]), cfg.thresholds.n, []
-    while probe.win_start + n <= len(probe.rows):
-        start = probe.win_start
-        probe.result, probe.decided = None, False
-        match_window(cfg, probe)
-        r = probe.result
-        if r is not None:
-            a, b = r["window"]
-            span = {obj.track_id: (int(obj.rows[a][0]), int(obj.rows[b - 1][0]))}
-            seen = window_objects(tracks, truth, span).get(obj.track_id)
-            out.append((a, kind(seen), Reason(int(r["reason"])).label,
-                        Verdict(int(r["verdict"])).label, round(float(r["pace_hz"]), 2),
-                        round(float(r["stride_m"]), 2), round(float(r["speed_mps"]), 2),
-                        not_a_walk(r, *top)))
-        if probe.win_start == start:
-            break
+    out = []
+    for r in later_windows(cfg, obj):
+        a, b = r["window"]
+        span = {obj.track_id: (int(obj.rows[a][0]), int(obj.rows[b - 1][0]))}
+        seen = window_objects(tracks, truth, span).get(obj.track_id)
+        out.append((a, kind(seen), Reason(int(r["reason"])).label,
+                    Verdict(int(r["verdict"])).label, round(float(r["pace_hz"]), 2),
+                    round(float(r["stride_m"]), 2), round(float(r["speed_mps"]), 2),
+                    not_a_walk(r, *top)))
     return out
 
 
@@ -76,20 +65,15 @@ def main(argv: list[str]) -> int:
     cfg = config_from_dict(es.RECOMMENDED)
     options = with_changes(synthetic_options(), {"recheck.enabled": False})
     with jax.enable_x64(True):
-        for seed in a.seeds:
-            for s, spec in es.scene_specs(seed, a.scenes, camera=cfg.camera):
-                scene = render_scene(s, spec)
-                frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
-                tracks, _, objs, _ = track_frames(cfg, frames, progress=False, options=options)
-                by_track = match_tracks(tracks, scene.truth)
-                by_window = window_objects(tracks, scene.truth, deciding_windows(objs))
-                for o in objs:
-                    if o.result is None or int(o.result["verdict"]) != Verdict.PEDESTRIAN:
-                        continue
-                    print(seed, s, o.track_id, "scored on", kind(by_track.get(o.track_id)),
-                          "deciding window on", kind(by_window.get(o.track_id)),
-                          tuple(o.result["window"]), len(o.rows),
-                          later_windows(cfg, o, tracks, scene.truth), flush=True)
+        for seed, s, scene, tracks, _, objs, by_track, by_window in tracked_scenes(
+                cfg, a.seeds, a.scenes, options):
+            for o in objs:
+                if o.result is None or int(o.result["verdict"]) != Verdict.PEDESTRIAN:
+                    continue
+                print(seed, s, o.track_id, "scored on", kind(by_track.get(o.track_id)),
+                      "deciding window on", kind(by_window.get(o.track_id)),
+                      tuple(o.result["window"]), len(o.rows),
+                      describe(cfg, o, tracks, scene.truth), flush=True)
     return 0
 
 

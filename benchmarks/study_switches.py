@@ -46,6 +46,21 @@ def switched(by_track: dict, by_window: dict, verdicts: dict) -> list[tuple[int,
     return out
 
 
+def tracked_scenes(cfg, seeds, n_scenes: int, options):
+    """Per own scene of `seeds` (`eval_synthetic.scene_specs`, `n_scenes` each), tracked with
+    `options`: (seed, scene seed, scene, tracks, verdicts, objects, by_track, by_window), the
+    last two the object each track is scored on (`match_tracks`) and the one its deciding
+    window followed (`window_objects`)."""
+    for seed in seeds:
+        for s, spec in es.scene_specs(seed, n_scenes, camera=cfg.camera):
+            scene = render_scene(s, spec)
+            frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
+            tracks, verdicts, objs, _ = track_frames(cfg, frames, progress=False,
+                                                     options=options)
+            yield (seed, s, scene, tracks, verdicts, objs, match_tracks(tracks, scene.truth),
+                   window_objects(tracks, scene.truth, deciding_windows(objs)))
+
+
 def main(argv: list[str]) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("seeds", type=int, nargs="+")
@@ -53,21 +68,15 @@ def main(argv: list[str]) -> int:
     a = p.parse_args(argv)
     cfg = config_from_dict(es.RECOMMENDED)
     with jax.enable_x64(True):
-        for seed in a.seeds:
-            for s, spec in es.scene_specs(seed, a.scenes, camera=cfg.camera):
-                scene = render_scene(s, spec)
-                frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
-                tracks, verdicts, objs, _ = track_frames(cfg, frames, progress=False,
-                                                         options=synthetic_options())
-                by_track = match_tracks(tracks, scene.truth)
-                by_window = window_objects(tracks, scene.truth, deciding_windows(objs))
-                tid = np.asarray(tracks["track_id"])
-                for t, kind, seen in switched(by_track, by_window, verdicts):
-                    rows = tid == t
-                    h, n = median_height(cfg.camera, tracks["u"][rows], tracks["v"][rows],
-                                         tracks["v_top"][rows], float(cfg.width.height))
-                    print(f"seed {seed} scene {s} track {t}: {kind} by track, {seen} in its "
-                          f"deciding window; height {h:.2f} m over {n} rows", flush=True)
+        for seed, s, _, tracks, verdicts, _, by_track, by_window in tracked_scenes(
+                cfg, a.seeds, a.scenes, synthetic_options()):
+            tid = np.asarray(tracks["track_id"])
+            for t, kind, seen in switched(by_track, by_window, verdicts):
+                rows = tid == t
+                h, n = median_height(cfg.camera, tracks["u"][rows], tracks["v"][rows],
+                                     tracks["v_top"][rows], float(cfg.width.height))
+                print(f"seed {seed} scene {s} track {t}: {kind} by track, {seen} in its "
+                      f"deciding window; height {h:.2f} m over {n} rows", flush=True)
     return 0
 
 

@@ -22,7 +22,7 @@ from ..model.status import Reason, Verdict
 from .toolkit import RhythmWindows, match_window
 
 
-__all__ = ["not_a_walk", "switch_row"]
+__all__ = ["later_windows", "not_a_walk", "switch_row"]
 
 
 def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
@@ -36,22 +36,33 @@ def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
     return peak and math.isfinite(pace) and pace > top_pace
 
 
-def switch_row(cfg: Config, obj: RhythmWindows) -> int | None:
-    """The first row of the first window after `obj`'s deciding Pedestrian window (its
-    result["window"]) that `not_a_walk` refuses; None where the track is not judged Pedestrian,
-    names no window, or no later window is refused. `obj` is not changed (a copy is judged)."""
-    res = obj.result
-    if res is None or int(res["verdict"]) != Verdict.PEDESTRIAN or "window" not in res:
-        return None
-    top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg)
+def later_windows(cfg: Config, obj: RhythmWindows):
+    """Each window after `obj`'s deciding window (its result["window"]) judged as online
+    (`match_window`: N rows, one every `thresholds.hop_samples` from the deciding window's end,
+    windows with too many missing samples skipped): yields each outcome (`RESULT_FIELDS` plus
+    "window"); nothing where `obj` names no deciding window. `obj` is not changed (a copy is
+    judged)."""
+    if obj.result is None or "window" not in obj.result:
+        return
     probe = copy.copy(obj)
-    probe.win_start, n = int(res["window"][1]), cfg.thresholds.n
+    probe.win_start, n = int(obj.result["window"][1]), cfg.thresholds.n
     while probe.win_start + n <= len(probe.rows):
         start = probe.win_start
         probe.result, probe.decided = None, False
         match_window(cfg, probe)
-        if probe.result is not None and not_a_walk(probe.result, top_speed, top_pace):
-            return int(probe.result["window"][0])
+        if probe.result is not None:
+            yield probe.result
         if probe.win_start == start:
-            break
+            return
+
+
+def switch_row(cfg: Config, obj: RhythmWindows) -> int | None:
+    """The first row of the first of `later_windows` that `not_a_walk` refuses; None where the
+    track is not judged Pedestrian or no later window is refused."""
+    if obj.result is None or int(obj.result["verdict"]) != Verdict.PEDESTRIAN:
+        return None
+    top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg)
+    for result in later_windows(cfg, obj):
+        if not_a_walk(result, top_speed, top_pace):
+            return int(result["window"][0])
     return None

@@ -401,9 +401,9 @@ class OnlineTracker:
 
     def _split_at_switch(self, obj: _Object) -> None:
         """Rule 29 (`recheck.py`): a track judged Pedestrian one of whose later windows is no
-        walker's keeps rows ..k-1 (k: that window's first row); rows k.. become a new track;
-        both are judged afresh on their own rows (the same windows as online, then the final
-        window rule)."""
+        walker's keeps rows ..k-1 (k: that window's first row) and its verdict (its deciding
+        window ends at or before k); rows k.. become a new track, judged afresh on its own rows
+        (the same windows as online, then the final window rule)."""
         k = switch_row(self.cfg, obj)
         if k is None:
             return
@@ -413,12 +413,9 @@ class OnlineTracker:
         self._next_id += 1
         obj.rows, obj.vel = obj.rows[:k], obj.vel[:k]
         obj.candidate_rows = None if cands is None else cands[:k]
-        n = self.cfg.thresholds.n
-        for piece in (obj, rest):
-            piece.result, piece.decided, piece.win_start, piece.windows_done = None, False, 0, 0
-            while not piece.decided and len(piece.rows) >= piece.win_start + n:
-                match_window(self.cfg, piece)
-            match_window(self.cfg, piece, final=True)
+        while not rest.decided and len(rest.rows) >= rest.win_start + self.cfg.thresholds.n:
+            match_window(self.cfg, rest)
+        match_window(self.cfg, rest, final=True)
         self._finished.append(rest)
         self.switches += 1
 
