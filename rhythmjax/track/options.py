@@ -191,8 +191,8 @@ class RecheckOptions:
     enabled: bool = True  # at the end, a track judged Pedestrian is split at the first of its
     # windows after the deciding one that moves faster than any walk (14) accepts (2.57 m/s)
     # or has a peak faster than its fastest pace (2.60 Hz): an identity switch onto a bicycle
-    # or a dog after the verdict; both pieces are judged afresh (False: the paper's, one
-    # verdict per track; on since issue 16's thirtieth round, docs/rules.md, rule 29)
+    # or a dog after the verdict; the rows from it are a new track judged afresh (False: the
+    # paper's, one verdict per track; on since issue 16's thirtieth round, docs/rules.md, rule 29)
 
 
 @dataclass(frozen=True)

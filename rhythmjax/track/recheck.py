@@ -10,7 +10,8 @@ walker's (`not_a_walk`): its measured speed (12) exceeds the fastest walk the wa
 (14) accepts for any rhythm (`params.walking_top_speed`, 2.57 m/s with Table 1), or it has a
 peak above P_thr (13) at a pace above the model's fastest (`params.walking_top_pace`, 2.60 Hz).
 Both limits are the paper's own model at +k_sigma3; nothing is fitted. The track is cut at
-that window's first row (`switch_row`); the tracker judges both pieces afresh."""
+that window's first row (`switch_row`); the rows before keep the verdict, the tracker judges
+the rows from it afresh as a new track."""
 
 from __future__ import annotations
 
