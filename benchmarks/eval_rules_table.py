@@ -72,12 +72,21 @@ RULES = {
     "recheck": ("tracker", "recheck.enabled", True, False, TRACKER_SOURCES,
                 "nothing fitted (the walking model's bounds); later windows looked at on own "
                 "seeds 5555, 6666, 20240603, 777001, 888001, 999001, 230001-280001 (rule 29)"),
+    "recheck_all": ("tracker", "recheck.tail", True, False, TRACKER_SOURCES,
+                    "nothing fitted (rule 29's bounds); the last and earlier windows looked at on "
+                    "own seeds 5555, 6666, 16, 20240603, 777001, 888001, 999001, 230001-280001 "
+                    "(rule 30; ON also sets recheck.earlier)"),
+    "recheck_tail": ("tracker", "recheck.tail", True, False, TRACKER_SOURCES,
+                     "nothing fitted (rule 29's bounds); the last windows looked at on own seeds "
+                     "5555, 6666, 16, 20240603, 777001, 888001, 999001, 230001-280001, "
+                     "370001-420001 (rule 30a)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
 # tracker keys a rule's ON side sets besides its own (its OFF side is the defaults)
 TRACKER_WITH = {"split_depth": {"body.split_shared": True},
-                "min_height_track": {"size.min_height_scope": "track"}}
+                "min_height_track": {"size.min_height_scope": "track"},
+                "recheck_all": {"recheck.earlier": True}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -85,7 +94,8 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
               "shared_overlap": (), "split_depth": TRACKER_SOURCES,
               "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": (),
-              "min_height_track": (), "recheck": TRACKER_SOURCES}
+              "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
+              "recheck_tail": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -53,6 +53,8 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 26)", "size.min_height_rows", 10),
     ("(new: issue 16, rule 26c)", "size.min_height_scope", "window"),
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
+    ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
+    ("(new: issue 16, rule 30)", "recheck.earlier", False),  # windows before the verdict
 ]
 TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]
 

@@ -1,7 +1,9 @@
 """Rule 29 (`track.recheck`, on by default): a track judged Pedestrian is cut at its first
 later window that is no walker's: faster than any walk (14) accepts or with a peak faster than
-its fastest pace. The window test's cases, the cut row on hand-made tracks (a walker, then a
-bicycle; a walker throughout) and the tracker with the rule on a lone walker."""
+its fastest pace. Rule 30 (`recheck.tail`, `recheck.earlier`): the same test on the window of
+the track's last N rows and on the windows before the deciding one. The window test's cases,
+the cut rows on hand-made tracks (a walker, then a bicycle; a bicycle, then a walker; a walker
+throughout), the rows kept, and the tracker with the rules on a lone walker."""
 
 import math
 from types import SimpleNamespace
@@ -14,7 +16,7 @@ from rhythmjax.model.params import Config, walking_top_pace, walking_top_speed
 from rhythmjax.model.status import Reason, TrackState, Verdict
 from rhythmjax.sim import scene as synth
 from rhythmjax.track.options import TrackerOptions, with_changes
-from rhythmjax.track.recheck import not_a_walk, switch_row
+from rhythmjax.track.recheck import earlier_switch_row, keep_rows, not_a_walk, switch_row
 from rhythmjax.track.rows import TrackRow
 from rhythmjax.track.toolkit import match_window
 from rhythmjax.track.tracker import OnlineTracker
@@ -91,16 +93,57 @@ def test_no_cut_without_a_pedestrian_verdict_or_later_window():
     assert int(short.result["verdict"]) == Verdict.PEDESTRIAN and switch_row(CFG, short) is None
 
 
-def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone():
+def test_the_last_window_finds_a_switch_with_no_later_window():
+    """64 rows of a walk (judged Pedestrian in 0..64), then 40 rows at 4 m/s: no later window
+    fits (64 + N > 104 rows), so rule 29 alone cuts nothing; the window of the last N rows
+    (40..104, 40 of its rows at 4 m/s, measured about 3.5 m/s) is refused, and the cut is at the
+    deciding window's end (64), not at that window's first row (40). 30 rows at 4 m/s (the last
+    window measured about 2.5 m/s, under 2.573) and a walk of 104 rows are not cut."""
+    obj = _judged(_track([1.3] * 64 + [4.0] * 40))
+    assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN and obj.result["window"] == (0, 64)
+    assert switch_row(CFG, obj) is None
+    assert switch_row(CFG, obj, tail=True) == 64
+    assert switch_row(CFG, _judged(_track([1.3] * 64 + [4.0] * 30)), tail=True) is None
+    assert switch_row(CFG, _judged(_track([1.3] * 104)), tail=True) is None
+
+
+def test_an_earlier_window_finds_a_bicycle_before_the_walker():
+    """64 rows at 4 m/s, then 96 of a walk: the online windows 0..64 (4 m/s) and 32..96 are
+    Non-pedestrian, 64..128 says Pedestrian; the first is refused, so the cut is at the
+    deciding window's first row, 64. A walk judged in its first window has no earlier one."""
+    obj = _judged(_track([4.0] * 64 + [1.3] * 96))
+    assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN
+    assert obj.result["window"] == (64, 128)
+    assert earlier_switch_row(CFG, obj) == 64
+    walker = _judged(_track([1.3] * 160))
+    assert walker.result["window"] == (0, 64) and earlier_switch_row(CFG, walker) is None
+
+
+def test_keep_rows_shifts_the_deciding_window():
+    """Rows 64.. of the track above kept: 96 rows, the first is the old row 64, the deciding
+    window now rows 0..64, verdict unchanged; keeping rows that cut the window raises, naming
+    the track."""
+    obj = _judged(_track([4.0] * 64 + [1.3] * 96))
+    obj.vel, obj.track_id = list(range(160)), 7
+    old_rows, verdict = list(obj.rows), int(obj.result["verdict"])
+    keep_rows(obj, slice(64, None))
+    assert obj.rows == old_rows[64:] and obj.vel == list(range(64, 160))
+    assert obj.result["window"] == (0, 64) and int(obj.result["verdict"]) == verdict
+    with pytest.raises(ValueError, match="track 7"):
+        keep_rows(obj, slice(None, 50))
+
+
+@pytest.mark.parametrize("changes", [{}, {"recheck.tail": True, "recheck.earlier": True}])
+def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone(changes):
     """One rendered walker going away from 8 m, 180 frames: its track (156 rows, judged
     Pedestrian in rows 0..64) has a later window (rows 64..128), and
-    the tracks and verdicts are the same with the rule on as off: the tracker splits nothing."""
+    the tracks and verdicts are the same with the rules on as off: the tracker splits nothing."""
     act = synth.walker(-0.5, 8.0, math.pi / 2, pace_hz=1.9, step_length_m=0.62)
     scene = synth.render_scene(5, synth.SceneSpec(n_frames=180, actors=(act,),
                                                   camera=CFG.camera))
     out = []
     for options in (with_changes(TrackerOptions(), {"recheck.enabled": False}),
-                    TrackerOptions()):
+                    with_changes(TrackerOptions(), changes)):
         tr = OnlineTracker(CFG, options)
         for i, f in enumerate(scene.frames):
             tr.update(i, i / FPS, f)

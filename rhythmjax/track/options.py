@@ -193,6 +193,14 @@ class RecheckOptions:
     # or has a peak faster than its fastest pace (2.60 Hz): an identity switch onto a bicycle
     # or a dog after the verdict; the rows from it are a new track judged afresh (False: the
     # paper's, one verdict per track; on since issue 16's thirtieth round, docs/rules.md, rule 29)
+    tail: bool = True  # rule 30a (with `enabled`): where the windows after the deciding one
+    # leave the track's last rows unjudged, the window of its last N rows is judged too (a
+    # switch less than N rows before the end); cut at its first row or the deciding window's
+    # end, whichever is later (on since issue 16's thirty-first round, docs/rules.md, rule 30a)
+    earlier: bool = False  # rule 30 (off): the windows before the deciding one are judged too;
+    # one refused cuts the track at the deciding window's first row (the rows before, a
+    # bicycle's or a dog's before the walker's, become a new track judged afresh); failed on
+    # PETS09 at 7 fps, where walkers' windows peak at 2.8-3.3 Hz (docs/rules.md, rule 30)
 
 
 @dataclass(frozen=True)

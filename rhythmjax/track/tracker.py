@@ -37,7 +37,7 @@ from ..vision.window_b import window_b_candidates
 from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
-from .recheck import switch_row
+from .recheck import earlier_switch_row, keep_rows, switch_row
 from .rows import NAN_VELOCITY, TrackRow, Velocity
 from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
@@ -388,7 +388,7 @@ class OnlineTracker:
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._end(s)
-        if self.opt.recheck.enabled:  # rule 29: a switch after the verdict cut off (on)
+        if self.opt.recheck.enabled:  # rules 29, 30a: a switch after the verdict cut off (on)
             for o in list(self._finished):
                 self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
@@ -403,20 +403,31 @@ class OnlineTracker:
         """Rule 29 (`recheck.py`): a track judged Pedestrian one of whose later windows is no
         walker's keeps rows ..k-1 (k: that window's first row) and its verdict (its deciding
         window ends at or before k); rows k.. become a new track, judged afresh on its own rows
-        (the same windows as online, then the final window rule)."""
-        k = switch_row(self.cfg, obj)
-        if k is None:
-            return
+        (the same windows as online, then the final window rule); with `recheck.tail` (rule
+        30a) the window of the last N rows is read too. Rule 30 (`recheck.earlier`, off):
+        where a window before the deciding one is no walker's, rows ..k-1 (k: the deciding
+        window's first row) become the new track and the rest keeps id and verdict."""
+        opt = self.opt.recheck
+        k = earlier_switch_row(self.cfg, obj) if opt.earlier else None
+        if k is not None:
+            self._judge_afresh(obj, slice(None, k))
+            keep_rows(obj, slice(k, None))
+        k = switch_row(self.cfg, obj, tail=opt.tail)
+        if k is not None:
+            self._judge_afresh(obj, slice(k, None))
+            keep_rows(obj, slice(None, k))
+
+    def _judge_afresh(self, obj: _Object, rows: slice) -> None:
+        """A new track of `obj`'s `rows` (a new id), judged on its own rows as online, then by
+        the final window rule, added to the finished tracks."""
         cands = obj.candidate_rows
-        rest = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[k:],
-                       vel=obj.vel[k:], candidate_rows=None if cands is None else cands[k:])
+        part = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[rows],
+                       vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows])
         self._next_id += 1
-        obj.rows, obj.vel = obj.rows[:k], obj.vel[:k]
-        obj.candidate_rows = None if cands is None else cands[:k]
-        while not rest.decided and len(rest.rows) >= rest.win_start + self.cfg.thresholds.n:
-            match_window(self.cfg, rest)
-        match_window(self.cfg, rest, final=True)
-        self._finished.append(rest)
+        while not part.decided and len(part.rows) >= part.win_start + self.cfg.thresholds.n:
+            match_window(self.cfg, part)
+        match_window(self.cfg, part, final=True)
+        self._finished.append(part)
         self.switches += 1
 
 
