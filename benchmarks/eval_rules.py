@@ -39,7 +39,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   window faster than any walk or with a peak faster than any walking pace).
 - recheck_all: the tracker's `recheck.tail` and `recheck.earlier` (rule 30: the same test on the
   window of a Pedestrian track's last N rows and on the windows before its deciding one);
-  recheck_tail: `recheck.tail` alone (rule 30a).
+  recheck_tail: `recheck.tail` alone (rule 30a); recheck_speed: `recheck.earlier` "speed"
+  (rule 30b: the windows before the deciding one, by the speed test alone).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

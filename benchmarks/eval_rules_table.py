@@ -80,13 +80,17 @@ RULES = {
                      "nothing fitted (rule 29's bounds); the last windows looked at on own seeds "
                      "5555, 6666, 16, 20240603, 777001, 888001, 999001, 230001-280001, "
                      "370001-420001 (rule 30a)"),
+    "recheck_speed": ("tracker", "recheck.earlier", "speed", "off", TRACKER_SOURCES,
+                      "nothing fitted (rule 29's speed bound); the earlier windows looked at on "
+                      "own seeds 5555, 6666, 16, 20240603, 777001, 888001, 999001, "
+                      "230001-280001, 450001-540001 and PETS09 (rule 30b)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
 # tracker keys a rule's ON side sets besides its own (its OFF side is the defaults)
 TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "min_height_track": {"size.min_height_scope": "track"},
-                "recheck_all": {"recheck.earlier": True}}
+                "recheck_all": {"recheck.earlier": "any"}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -95,7 +99,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "shared_overlap": (), "split_depth": TRACKER_SOURCES,
               "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": (),
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
-              "recheck_tail": TRACKER_SOURCES}
+              "recheck_tail": TRACKER_SOURCES, "recheck_speed": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -78,7 +78,7 @@ def main(argv: list[str]) -> int:
                    help="rule 29 on: the last window and the windows before the deciding one")
     a = p.parse_args(argv)
     cfg = config_from_dict(es.RECOMMENDED)
-    rules = ({"recheck.enabled": True, "recheck.tail": False, "recheck.earlier": False}
+    rules = ({"recheck.enabled": True, "recheck.tail": False, "recheck.earlier": "off"}
              if a.rest else {"recheck.enabled": False})
     options = with_changes(synthetic_options(), rules)
     with jax.enable_x64(True):

@@ -54,7 +54,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 26c)", "size.min_height_scope", "window"),
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
     ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
-    ("(new: issue 16, rule 30)", "recheck.earlier", False),  # windows before the verdict
+    ("(new: issue 16, rule 30)", "recheck.earlier", "off"),  # windows before the verdict
 ]
 TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]
 

@@ -1,9 +1,10 @@
 """Rule 29 (`track.recheck`, on by default): a track judged Pedestrian is cut at its first
 later window that is no walker's: faster than any walk (14) accepts or with a peak faster than
-its fastest pace. Rule 30 (`recheck.tail`, `recheck.earlier`): the same test on the window of
-the track's last N rows and on the windows before the deciding one. The window test's cases,
-the cut rows on hand-made tracks (a walker, then a bicycle; a bicycle, then a walker; a walker
-throughout), the rows kept, and the tracker with the rules on a lone walker."""
+its fastest pace. Rules 30a (`recheck.tail`) and 30, 30b (`recheck.earlier`): the same test on
+the window of the track's last N rows and on the windows before the deciding one. The window
+test's cases, the cut rows on hand-made tracks (a walker, then a bicycle; a bicycle, then a
+walker; a fast pace, then a walk; a walker throughout), the rows kept, and the tracker with the
+rules on a lone walker."""
 
 import math
 from types import SimpleNamespace
@@ -48,15 +49,17 @@ def test_not_a_walk_cases(speed, pace, reason, refused):
     assert not_a_walk(result, walking_top_speed(CFG), walking_top_pace(CFG)) is refused
 
 
-def _track(speeds_mps, seed=0):
+def _track(speeds_mps, seed=0, paces_hz=None):
     """A track's rows on the paper's 1 m camera: one row a frame, the object moving away along
-    y from 8 m at speeds_mps[k] m/s in frame k, its I(k) a 2.0 Hz sine (a walker's pace) plus
-    noise of 0.1, every row observed."""
+    y from 8 m at speeds_mps[k] m/s in frame k, its I(k) a sine at paces_hz[k] Hz (default 2.0,
+    a walker's pace) plus noise of 0.1, every row observed."""
     rng = np.random.default_rng(seed)
     t = np.arange(len(speeds_mps)) / FPS
     y = 8.0 + np.concatenate([[0.0], np.cumsum(np.asarray(speeds_mps)[1:] / FPS)])
     u, v = project_3d(CFG.camera, 0.5 + 0 * y, y, 0 * y)
-    sig = 20.0 + 5.0 * np.sin(2 * np.pi * 2.0 * t) + rng.normal(0, 0.1, t.size)
+    paces = np.full(t.size, 2.0) if paces_hz is None else np.asarray(paces_hz, float)
+    phase = 2 * np.pi * np.concatenate([[0.0], np.cumsum(paces[1:] / FPS)])
+    sig = 20.0 + 5.0 * np.sin(phase) + rng.normal(0, 0.1, t.size)
     rows = [TrackRow(k, float(t[k]), float(u[k]), float(v[k]), 20.0, float(sig[k]), 0.5,
                      float(y[k]), int(TrackState.OBSERVE)) for k in range(t.size)]
     return SimpleNamespace(rows=rows, win_start=0, windows_done=0, result=None, decided=False)
@@ -119,6 +122,25 @@ def test_an_earlier_window_finds_a_bicycle_before_the_walker():
     assert walker.result["window"] == (0, 64) and earlier_switch_row(CFG, walker) is None
 
 
+def test_the_speed_alone_leaves_a_fast_pace_before_the_verdict():
+    """Rule 30b (`pace=False`): 64 rows at 1.3 m/s with a 3.2 Hz I(k) (a trotting dog's pace,
+    above 2.599 Hz), then 96 rows of a 2 Hz walk: the first window is refused by its peak
+    (rule 30 cuts at the deciding window's first row) but not by its speed (no cut); the
+    bicycle before the walker above is cut either way."""
+    obj = _judged(_track([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96))
+    assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN
+    first = int(obj.result["window"][0])
+    assert first > 0 and earlier_switch_row(CFG, obj) == first
+    assert earlier_switch_row(CFG, obj, pace=False) is None
+    bicycle = _judged(_track([4.0] * 64 + [1.3] * 96))
+    assert earlier_switch_row(CFG, bicycle, pace=False) == 64
+
+
+def test_a_bad_earlier_test_names_the_option():
+    with pytest.raises(ValueError, match="recheck.earlier"):
+        with_changes(TrackerOptions(), {"recheck.earlier": "yes"})
+
+
 def test_keep_rows_shifts_the_deciding_window():
     """Rows 64.. of the track above kept: 96 rows, the first is the old row 64, the deciding
     window now rows 0..64, verdict unchanged; keeping rows that cut the window raises, naming
@@ -133,7 +155,7 @@ def test_keep_rows_shifts_the_deciding_window():
         keep_rows(obj, slice(None, 50))
 
 
-@pytest.mark.parametrize("changes", [{}, {"recheck.tail": True, "recheck.earlier": True}])
+@pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}])
 def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone(changes):
     """One rendered walker going away from 8 m, 180 frames: its track (156 rows, judged
     Pedestrian in rows 0..64) has a later window (rows 64..128), and

@@ -184,6 +184,9 @@ class SizeOptions:
                              f"got {self.min_height_scope!r}")
 
 
+EARLIER_TESTS = ("off", "speed", "any")  # `recheck.earlier`
+
+
 @dataclass(frozen=True)
 class RecheckOptions:
     """A Pedestrian track's later rhythm windows (rule 29, issue 16; `track.recheck`)."""
@@ -197,10 +200,16 @@ class RecheckOptions:
     # leave the track's last rows unjudged, the window of its last N rows is judged too (a
     # switch less than N rows before the end); cut at its first row or the deciding window's
     # end, whichever is later (on since issue 16's thirty-first round, docs/rules.md, rule 30a)
-    earlier: bool = False  # rule 30 (off): the windows before the deciding one are judged too;
-    # one refused cuts the track at the deciding window's first row (the rows before, a
-    # bicycle's or a dog's before the walker's, become a new track judged afresh); failed on
-    # PETS09 at 7 fps, where walkers' windows peak at 2.8-3.3 Hz (docs/rules.md, rule 30)
+    earlier: str = "off"  # the windows before the deciding one judged too, one refused cutting
+    # the track at the deciding window's first row (the rows before, a bicycle's or a dog's
+    # before the walker's, become a new track judged afresh): "any", by rule 29's speed or pace
+    # (rule 30: failed on PETS09 at 7 fps, where walkers' windows peak at 2.8-3.3 Hz); "speed",
+    # by its speed alone (rule 30b); "off" (docs/rules.md, rules 30, 30b)
+
+    def __post_init__(self):
+        if self.earlier not in EARLIER_TESTS:
+            raise ValueError(f"recheck.earlier must be one of {EARLIER_TESTS}, "
+                             f"got {self.earlier!r}")
 
 
 @dataclass(frozen=True)

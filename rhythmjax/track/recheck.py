@@ -16,9 +16,10 @@ the rows from it afresh as a new track.
 Rule 30a (`RecheckOptions.tail`, on) judges with the same test the window of the track's last N
 rows where the windows above leave rows unjudged (a switch less than N rows before the end), cut
 at its first row or the deciding window's end, whichever is later. Rule 30's other half
-(`RecheckOptions.earlier`, off: it cut walkers' tracks on PETS09 at 7 fps, docs/rules.md) judges
-the windows before the deciding one (a bicycle's or a dog's rows before the walker's,
-`earlier_switch_row`), cut at the deciding window's first row."""
+(`RecheckOptions.earlier` "any", off: it cut walkers' tracks on PETS09 at 7 fps, docs/rules.md)
+judges the windows before the deciding one (a bicycle's or a dog's rows before the walker's,
+`earlier_switch_row`), cut at the deciding window's first row; rule 30b ("speed") the same by
+the speed test alone."""
 
 from __future__ import annotations
 
@@ -115,13 +116,14 @@ def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False) -> int | 
     return None
 
 
-def earlier_switch_row(cfg: Config, obj: RhythmWindows) -> int | None:
+def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True) -> int | None:
     """Rule 30: the deciding window's first row where one of `earlier_windows` is refused by
-    `not_a_walk` (the rows before it followed something else); None where the track is not
-    judged Pedestrian, its deciding window starts at row 0, or no earlier window is refused."""
+    `not_a_walk` (the rows before it followed something else; pace False, rule 30b: by its
+    speed alone); None where the track is not judged Pedestrian, its deciding window starts at
+    row 0, or no earlier window is refused."""
     if not _pedestrian(obj):
         return None
-    top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg)
+    top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg) if pace else math.inf
     if any(not_a_walk(r, top_speed, top_pace) for r in earlier_windows(cfg, obj)):
         return int(obj.result["window"][0])
     return None

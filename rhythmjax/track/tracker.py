@@ -404,11 +404,12 @@ class OnlineTracker:
         walker's keeps rows ..k-1 (k: that window's first row) and its verdict (its deciding
         window ends at or before k); rows k.. become a new track, judged afresh on its own rows
         (the same windows as online, then the final window rule); with `recheck.tail` (rule
-        30a) the window of the last N rows is read too. Rule 30 (`recheck.earlier`, off):
+        30a) the window of the last N rows is read too. Rules 30, 30b (`recheck.earlier`, off):
         where a window before the deciding one is no walker's, rows ..k-1 (k: the deciding
         window's first row) become the new track and the rest keeps id and verdict."""
         opt = self.opt.recheck
-        k = earlier_switch_row(self.cfg, obj) if opt.earlier else None
+        k = (None if opt.earlier == "off"
+             else earlier_switch_row(self.cfg, obj, pace=opt.earlier == "any"))
         if k is not None:
             self._judge_afresh(obj, slice(None, k))
             keep_rows(obj, slice(k, None))
