@@ -97,7 +97,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
               "shared_overlap": (), "split_depth": TRACKER_SOURCES,
-              "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": (),
+              "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": TRACKER_SOURCES,
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
               "recheck_tail": TRACKER_SOURCES, "recheck_speed": ()}
 COUNT_VARIANTS = {

@@ -49,7 +49,7 @@ TRACKER_DEFAULTS = [
     ("relink_gate_h", "relink.gate_h", 0.25),
     ("relink_gate_per_s", "relink.gate_per_s", 0.5),
     ("max_objects", "max_objects", 8),
-    ("(new: issue 16, rule 26)", "size.min_height_heights", 0.0),  # a too-low Pedestrian, off
+    ("(new: issue 16, rule 26)", "size.min_height_heights", 0.5),  # a too-low Pedestrian
     ("(new: issue 16, rule 26)", "size.min_height_rows", 10),
     ("(new: issue 16, rule 26c)", "size.min_height_scope", "window"),
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged

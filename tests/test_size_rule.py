@@ -1,8 +1,8 @@
-"""Rule 26 (`track.size`, off by default): a track judged Pedestrian whose median measured
-height (over its deciding window's rows, 26c) is below `size.min_height_heights` walker heights
-is Non-pedestrian (too-low). The height of a top row (`camera_np.height_of_top`) against a
-hand-worked level camera, the projection it inverts (with roll) and the fit's JAX form; the
-rule's cases; the tracker."""
+"""Rule 26 (`track.size`, on by default since issue 16's thirty-first round): a track judged
+Pedestrian whose median measured height (over its deciding window's rows, 26c) is below
+`size.min_height_heights` walker heights is Non-pedestrian (too-low). The height of a top row
+(`camera_np.height_of_top`) against a hand-worked level camera, the projection it inverts (with
+roll) and the fit's JAX form; the rule's cases; the tracker."""
 
 import math
 
@@ -96,7 +96,8 @@ def test_the_fit_reads_the_same_height():
     (Verdict.PEDESTRIAN, math.nan, 50, ON, False),
     (Verdict.NON_PEDESTRIAN, 0.6, 50, ON, False),      # only a Pedestrian is turned
     (Verdict.UNCLASSIFIED, 0.6, 50, ON, False),
-    (Verdict.PEDESTRIAN, 0.6, 50, SizeOptions(), False),  # off by default
+    (Verdict.PEDESTRIAN, 0.6, 50, SizeOptions(), True),  # on by default (0.5)
+    (Verdict.PEDESTRIAN, 0.6, 50, SizeOptions(min_height_heights=0.0), False),  # 0: off
 ])
 def test_too_low_cases(verdict, height, rows, options, low):
     assert too_low(verdict, height, rows, 1.7, options) is low
@@ -123,7 +124,8 @@ def test_refuse_low_turns_a_low_pedestrian(top_m, n, turned):
         assert out["pace_hz"] == 2.0 and result["verdict"] == Verdict.PEDESTRIAN  # a copy
     else:
         assert out is result
-    assert refuse_low(result, TILTED, _rows(0.6, 12), 1.7, SizeOptions()) is result
+    off = SizeOptions(min_height_heights=0.0)
+    assert refuse_low(result, TILTED, _rows(0.6, 12), 1.7, off) is result
 
 
 def test_window_scope_reads_the_deciding_window_only():

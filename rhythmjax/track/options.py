@@ -167,11 +167,12 @@ HEIGHT_SCOPES = ("window", "track")  # `size.min_height_scope`
 class SizeOptions:
     """A judged track's measured height against a walker's (rule 26, issue 16; `track.size`)."""
 
-    min_height_heights: float = 0.0  # a track judged Pedestrian whose median height (the top
+    min_height_heights: float = 0.5  # a track judged Pedestrian whose median height (the top
     # row's height above its foot point through the camera, `camera_np.height_of_top`) is below
     # this many walker heights (`width.height_m`) is Non-pedestrian, reason too-low (0: off,
-    # the paper's verdict; 0.5 a priori, half a walker: the own dogs measure 0.5-0.7 m). Off:
-    # it kept dogs out but lost a walker on each of its two decisions (docs/rules.md, rule 26)
+    # the paper's verdict; 0.5 a priori, half a walker: the own dogs measure 0.5-0.7 m). On
+    # since issue 16's thirty-first round, with rules 29 and 30a on (docs/rules.md, rule 26d);
+    # it reads heights through the camera, so a wrong camera can refuse walkers
     min_height_rows: int = 10  # ... read on at least this many rows (those with a top row where
     # a walker's head would be inside the image, `size.median_height`; fewer: the verdict stands)
     min_height_scope: str = "window"  # the rows read: "window", those of the track's deciding

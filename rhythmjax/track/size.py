@@ -1,4 +1,5 @@
-"""A judged track's size against a walker's (rule 26, issue 16; `options.SizeOptions`).
+"""A judged track's size against a walker's (rule 26, issue 16; `options.SizeOptions`, on by
+default since the thirty-first round).
 
 A trotting dog whose leg cycle, aliased, falls inside the walking model (14) passes (13)-(15);
 its height would refuse it. Each measured row of a track has its foot point (u, v) px and the
