@@ -186,6 +186,32 @@ def test_all_tracks_too_short_gives_the_window_hint(walker_avi, tmp_path, capsys
     assert any("window_s" in n and "N = 150" in n for n in summary["notes"]), summary["notes"]
 
 
+def test_walkers_refused_as_too_low_give_the_camera_hint(tmp_path, capsys):
+    """A walker crossing at 18 m (its head inside the image of the paper's camera): with the
+    size rule at 2 walker heights (3.4 m, taller than anyone) its Pedestrian track is refused
+    too-low, and the summary names the camera and the option; at the default (0.5) no such
+    note."""
+    act = synth.walker(-3.4, 18.0, 0.0, pace_hz=1.9, step_length_m=0.62)
+    scene = synth.render_scene(3, synth.SceneSpec(n_frames=120, actors=(act,),
+                                                  camera=Config().camera))
+    clip = str(tmp_path / "far.avi")
+    w = cv2.VideoWriter(clip, cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (512, 512), False)
+    for f in scene.frames:
+        w.write(f)
+    w.release()
+    out = tmp_path / "o"
+    assert main(["run", clip, "-o", str(out), "--no-overlay", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["verdicts"]["pedestrian"] >= 1
+    assert not any("too-low" in n for n in summary.get("notes", []))
+    assert main(["run", clip, "-o", str(out), "--no-overlay", "--json",
+                 "--set", "size.min_height_heights=2.0"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    notes = [n for n in summary["notes"] if "too-low" in n]
+    assert summary["verdicts"]["pedestrian"] == 0 and len(notes) == 1, summary
+    assert "size.min_height_heights=0" in notes[0] and "camera" in notes[0]
+
+
 def test_fps_on_the_command_line_applies_before_the_config_is_checked(walker_avi, tmp_path,
                                                                       capsys):
     """A window of 1.07 s is N = 16 at the config's default 15 fps (< AR order 15 + 2) but N =

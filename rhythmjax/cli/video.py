@@ -119,11 +119,23 @@ def window_note(cfg, verdicts) -> str | None:
             "less")
 
 
+def size_note(verdicts) -> str | None:
+    """A one-line hint when tracks judged Pedestrian by their rhythm were refused as too low
+    for a walker (rule 26, `size.min_height_heights`): the height is read through the camera,
+    so a wrong camera refuses people."""
+    low = sum(r == "too-low" for r in verdicts["reason"])
+    if not low:
+        return None
+    return (f"{low} track(s) with a walker's rhythm measured lower than half a walker through the "
+            "camera were judged non-pedestrian (reason too-low: dogs); if they are people, check "
+            "the camera (f, h, theta) or give --set size.min_height_heights=0")
+
+
 def _report(args, summary, verdicts, cfg=None) -> None:
-    hint = None if cfg is None else window_note(cfg, verdicts)
-    if hint:
-        summary.setdefault("notes", []).append(hint)
-        say(args, f"note: {hint}")
+    for hint in (None if cfg is None else window_note(cfg, verdicts), size_note(verdicts)):
+        if hint:
+            summary.setdefault("notes", []).append(hint)
+            say(args, f"note: {hint}")
     if args.json:
         emit_json(summary)
         return
