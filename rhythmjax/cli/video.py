@@ -126,9 +126,9 @@ def size_note(verdicts) -> str | None:
     low = sum(r == "too-low" for r in verdicts["reason"])
     if not low:
         return None
-    return (f"{low} track(s) with a walker's rhythm measured lower than half a walker through the "
-            "camera were judged non-pedestrian (reason too-low: dogs); if they are people, check "
-            "the camera (f, h, theta) or give --set size.min_height_heights=0")
+    return (f"{low} track(s) with a walker's rhythm but, through the camera, less than half a "
+            "walker's height were judged non-pedestrian (reason too-low, as a dog); if they are "
+            "people, check the camera (f, h, theta) or give --set size.min_height_heights=0")
 
 
 def _report(args, summary, verdicts, cfg=None) -> None:

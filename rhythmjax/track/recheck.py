@@ -60,7 +60,7 @@ def later_windows(cfg: Config, obj: RhythmWindows, *, tail: bool = False):
     """Each window after `obj`'s deciding window (its result["window"]) judged as online
     (`match_window`: N rows, one every `thresholds.hop_samples` from the deciding window's end,
     windows with too many missing samples skipped): yields each outcome (`RESULT_FIELDS` plus
-    "window"); nothing where `obj` names no deciding window. tail (rule 30): where these leave
+    "window"); nothing where `obj` names no deciding window. tail (rule 30a): where these leave
     the track's last rows unjudged, the window of its last N rows follows (it may overlap the
     deciding window). `obj` is not changed (copies are judged)."""
     if obj.result is None or "window" not in obj.result:
