@@ -237,8 +237,7 @@ def walking_top_speed(cfg: Config) -> float:
     (pace_mean + k_sigma3 pace_std) x (stride_mean + k_sigma3 stride_std) (2.57 m/s with the
     paper's Table 1). A window moving faster is judged non-pedestrian whatever its spectrum."""
     w, k = cfg.walking, float(cfg.thresholds.k_sigma3)
-    return (float(w.pace_mean) + k * float(w.pace_std)) * \
-        (float(w.stride_mean) + k * float(w.stride_std))
+    return walking_top_pace(cfg) * (float(w.stride_mean) + k * float(w.stride_std))
 
 
 def walking_top_pace(cfg: Config) -> float:
