@@ -13,9 +13,13 @@ Rules (`--rule`):
 - `speed-fit:FIT`: the unjudged tracks' too-fast test from `count.points_speed` with `FIT`
   ("lsq" or "theil-sen") on the same rows (observed, ground estimate finite): exactly what
   `verdicts.speed_fit` FIT gives the count, the tracks unchanged (issue 16, rule 25).
+- `head-speed`: the too-fast test reads the speed under the heads where a track's foot rows
+  are mostly not its feet (`verdicts.head_speed`, rule 31: `count.head_feet.head_ground_points`
+  with the camera of `--camera`: `count:FOCAL_PX` for the own scenes, `dev`, `pets`).
 
     python benchmarks/recount_dumps.py RUN.pkl OUT.pkl --rule no-peak
     python benchmarks/recount_dumps.py RUN.pkl OUT.pkl --rule speed-fit:theil-sen
+    python benchmarks/recount_dumps.py RUN.pkl OUT.pkl --rule head-speed --camera count:500
     python benchmarks/paired_dumps.py RUN.pkl OUT.pkl
 
 Nothing is chosen here: it recounts.
@@ -64,8 +68,51 @@ def observed_rows(tracks: dict):
     return np.asarray(tracks["track_id"]), np.asarray(tracks["state"]) == "observe", t, x, y
 
 
-def recounted(record: dict, rule: str) -> np.ndarray:
-    """The `counted` column of one clip's record under `rule` (module doc)."""
+def config_of(camera: str):
+    """The Config `count_dump.py` ran a source with: `count:FOCAL_PX` (the own scenes' preset
+    with a f = b f = FOCAL_PX; 0: the preset's), `dev` (the dev clips' camera), `pets`."""
+    import copy
+    import json
+    import sys
+
+    from rhythmjax.model.params import config_from_dict
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    if camera == "pets":
+        import eval_real_video as ev
+
+        return config_from_dict(ev.pets_config_dict())
+    if camera == "dev":
+        import eval_all as ea
+
+        clip = next(c for c in ea._dev_index() if c.get("count"))
+        return config_from_dict(ea.dev_camera(json.loads((ea.DEV_ROOT / clip["truth"])
+                                                         .read_text())))
+    if not camera.startswith("count:"):
+        raise SystemExit(f"unknown camera {camera!r}: count:FOCAL_PX, dev or pets")
+    from rhythmjax.sim.presets import SYNTHETIC_CONFIG
+
+    d, focal = copy.deepcopy(SYNTHETIC_CONFIG), float(camera.split(":", 1)[1])
+    if focal > 0:
+        d["camera"] = {"a_px_per_m": focal / 0.008, "b_px_per_m": focal / 0.008}
+    return config_from_dict(d)
+
+
+def track_rows(tracks: dict, tid: int) -> list:
+    """The `TrackRow`s of track `tid` of a saved tracks table (state names as ints)."""
+    from rhythmjax.model.status import TrackState
+    from rhythmjax.track.rows import TrackRow
+
+    k = np.flatnonzero(np.asarray(tracks["track_id"]) == tid)
+    state = [int(TrackState[str(s).upper()]) for s in np.asarray(tracks["state"])[k]]
+    cols = [np.asarray(tracks[c], np.float64)[k] for c in ("t", "u", "v", "v_top")]
+    return [TrackRow(frame=0, t=t, u=u, v=v, width_px=np.nan, intensity=np.nan, x_est=np.nan,
+                     y_est=np.nan, state=s, v_top=vt) for s, t, u, v, vt in zip(state, *cols)]
+
+
+def recounted(record: dict, rule: str, cfg=None) -> np.ndarray:
+    """The `counted` column of one clip's record under `rule` (module doc; `cfg`: the run's
+    Config, for `head-speed`)."""
     v = record["verdicts"]
     counted = np.asarray(v["counted"], bool).copy()
     verdict, reason = np.asarray(v["verdict"]), np.asarray(v["reason"])
@@ -95,7 +142,24 @@ def recounted(record: dict, rule: str) -> np.ndarray:
             k = (ids == tid) & observed
             counted[i] = not points_speed(t[k], x[k], y[k], fit) > top
         return counted
-    raise SystemExit(f"unknown rule {rule!r}: no-peak, speed-se:Z or speed-fit:FIT")
+    if rule == "head-speed":
+        from rhythmjax.count import points_speed
+        from rhythmjax.count.head_feet import head_ground_points
+        from rhythmjax.count.patches import ShapeModel
+
+        shape, top = ShapeModel.from_config(cfg, "3d"), top_speed()
+        explained = np.asarray(v.get("explained_by", np.zeros(len(verdict), np.int64))) != 0
+        for i, tid in enumerate(np.asarray(v["track_id"])):
+            if verdict[i] != "unclassified" or explained[i]:
+                continue
+            pts = head_ground_points(shape, track_rows(record["tracks"], tid),
+                                     int(record["image_size"][1]))
+            if pts is not None:
+                s = points_speed(pts[:, 0], pts[:, 1], pts[:, 2])
+                if not np.isnan(s):
+                    counted[i] = not s > top
+        return counted
+    raise SystemExit(f"unknown rule {rule!r}: no-peak, speed-se:Z, speed-fit:FIT or head-speed")
 
 
 def main(argv=None) -> int:
@@ -103,12 +167,15 @@ def main(argv=None) -> int:
     ap.add_argument("run")
     ap.add_argument("out")
     ap.add_argument("--rule", required=True)
+    ap.add_argument("--camera", default="count:0",
+                    help="head-speed: the run's camera (count:FOCAL_PX, dev, pets)")
     a = ap.parse_args(argv)
+    cfg = config_of(a.camera) if a.rule == "head-speed" else None
     with open(a.run, "rb") as f:
         records = pickle.load(f)
     before = after = 0
     for r in records:
-        c = recounted(r, a.rule)
+        c = recounted(r, a.rule, cfg)
         before += int(np.sum(r["verdicts"]["counted"]))
         after += int(c.sum())
         r["verdicts"] = {**r["verdicts"], "counted": c}

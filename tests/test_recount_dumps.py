@@ -72,3 +72,36 @@ def test_the_speed_fit_recount():
     assert rd.recounted(r, "speed-fit:lsq").tolist() == [False, False, False, False]
     # counted by the Theil-Sen speed; judged tracks and track 2 untouched
     assert rd.recounted(r, "speed-fit:theil-sen").tolist() == [True, False, False, False]
+
+
+def test_the_head_speed_recount_reproduces_the_library():
+    """`head-speed` on a saved tracks table (state names as strings): a walker tracked on its
+    hips at 20 m (`tests/test_count_head_speed.walker_rows`) whose foot-row speed read too fast
+    is counted, as `count.faster_than` with `count.head_speed` decides; a track on its feet
+    keeps its verdict."""
+    sys.path.insert(0, os.path.dirname(__file__))
+    from test_count_head_speed import HIPS_M, walker_rows
+
+    from rhythmjax.count.counting import faster_than, head_speed
+    from rhythmjax.count.patches import ShapeModel
+    from rhythmjax.count.pedestrian import Pedestrian
+
+    cfg = rd.config_of("count:800")  # the own scenes' preset at 800 px: the default camera
+    hips, _ = walker_rows(foot_z=np.full(30, HIPS_M))
+    feet, _ = walker_rows()
+    tracks = {"track_id": np.repeat([1, 2], 30), "state": np.array(["observe"] * 60),
+              **{c: np.array([getattr(q, c) for q in hips + feet], float)
+                 for c in ("t", "u", "v", "v_top")}}
+    verdicts = {"track_id": np.array([1, 2]),
+                "verdict": np.array(["unclassified"] * 2, dtype=object),
+                "reason": np.array(["too-short"] * 2, dtype=object),
+                "too_fast": np.array([True, True]), "counted": np.array([False, False])}
+    record = {"tracks": tracks, "verdicts": verdicts, "image_size": (512, 512)}
+    assert rd.recounted(record, "head-speed", cfg).tolist() == [True, False]
+    shape = ShapeModel.from_config(cfg, "3d")
+    heads = []
+    for rows in (hips, feet):
+        p = Pedestrian(slot=0, born=0)
+        p.rows = rows
+        heads.append(head_speed(shape, p, 512))
+    assert faster_than([9.0, 9.0], heads, rd.top_speed()).tolist() == [False, True]

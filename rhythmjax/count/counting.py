@@ -32,18 +32,20 @@ unless its ground speed (`track_speed`: the Theil-Sen slope, robust to a few row
 feet; least squares with `verdicts.speed_fit` "lsq") exceeds the fastest the walking model's test
 (14) accepts for any rhythm (`walking_top_speed`: pace and stride both at +k_sigma3, 2.57 m/s with
 Table 1): any window of it would be judged non-pedestrian, so it is not counted (`too_fast`: short
-bicycle tracks). A track judged pedestrian is counted; a non-pedestrian verdict removes one. Tracks
-shorter than `verdicts.min_track_frames` frames (after stitching) are dropped from every output and
-count first, and so are tracks that never moved (`ghost`: `still.never_moved`, a ghost of the
-background). `CountResult.counts` holds the numbers of `count_walkers` (tracks, pedestrians,
-non_pedestrians, unclassified, too_fast, unjudged_plausible, walkers and its range walkers_low ..
-walkers_high: judged only .. judged + every unjudged track), the verdicts say per track
-`track_speed_mps`, `too_fast`, `width_m`, `width_ok` (the unjudged tracks' best guess by speed and
-size) and `counted`, and `COUNT_RULE` says the rule in words (written to counts.json). With
-`explain.enabled` (off: it removed distinct walkers on the sources it was not chosen on,
-docs/rules.md) a counted unclassified track that a stronger counted track explains (a duplicate on
-the ground or its continuation: `explain.explain_tracks`) is not counted either (verdicts
-`explained_by`, `explained_as`; counts `explained`).
+bicycle tracks). With `verdicts.head_speed` (off) a track whose foot rows are mostly not its feet (a
+walker whose legs the mask lost) is timed under its heads instead (`head_speed`,
+`head_feet.head_ground_points`; verdicts `head_speed_mps`). A track judged pedestrian is counted; a
+non-pedestrian verdict removes one. Tracks shorter than `verdicts.min_track_frames` frames (after
+stitching) are dropped from every output and count first, and so are tracks that never moved
+(`ghost`: `still.never_moved`, a ghost of the background). `CountResult.counts` holds the numbers of
+`count_walkers` (tracks, pedestrians, non_pedestrians, unclassified, too_fast, unjudged_plausible,
+walkers and its range walkers_low .. walkers_high: judged only .. judged + every unjudged track),
+the verdicts say per track `track_speed_mps`, `too_fast`, `width_m`, `width_ok` (the unjudged
+tracks' best guess by speed and size) and `counted`, and `COUNT_RULE` says the rule in words
+(written to counts.json). With `explain.enabled` (off: it removed distinct walkers on the sources it
+was not chosen on, docs/rules.md) a counted unclassified track that a stronger counted track
+explains (a duplicate on the ground or its continuation: `explain.explain_tracks`) is not counted
+either (verdicts `explained_by`, `explained_as`; counts `explained`).
 """
 
 from __future__ import annotations
@@ -62,7 +64,9 @@ from ..track.columns import candidate_table
 from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
 from .explain import explain_tracks, measured_points
+from .head_feet import head_ground_points
 from .options import SPEED_FITS, CountOptions
+from .patches import ShapeModel
 from .pedestrian_level import END_REASONS, Pedestrian, PedestrianLevel
 from .rows import BlobRow, BoxRow, GroundRow
 from .still import never_moved, peek_background
@@ -71,8 +75,8 @@ from .window_candidates import align_candidates, candidates_by_row
 
 
 __all__ = ["COUNT_RULE", "CountResult", "build_result", "count_frames", "finish_count",
-           "count_walkers", "counted", "points_speed", "track_speed", "walker_ids",
-           "walking_top_speed"]
+           "count_walkers", "counted", "faster_than", "head_speed", "points_speed",
+           "track_speed", "walker_ids", "walking_top_speed"]
 
 COUNT_RULE = ("walkers = tracks - non_pedestrians - too_fast = pedestrians + "
               "unjudged_plausible: every confirmed track is a pedestrian of the paper's method; "
@@ -212,6 +216,21 @@ def points_speed(t, x, y, fit: str = "theil-sen") -> float:
     return float(np.hypot(*v))
 
 
+def head_speed(shape: ShapeModel, p: Pedestrian, n_rows: int, fit: str = "theil-sen") -> float:
+    """Ground speed (m/s) under a track's heads (`points_speed` of
+    `head_feet.head_ground_points`, the image `n_rows` high) where its foot rows are mostly not
+    its feet; NaN where they are, or too few heads for a speed."""
+    pts = head_ground_points(shape, p.rows, n_rows)
+    return math.nan if pts is None else points_speed(pts[:, 0], pts[:, 1], pts[:, 2], fit)
+
+
+def faster_than(speed, head, top: float) -> np.ndarray:
+    """Per track, whether it moves faster than `top` (m/s): its speed under its heads where
+    there is one (`head`, finite), else its own ground speed (`speed`; NaN: not too fast)."""
+    speed, head = np.asarray(speed, np.float64), np.asarray(head, np.float64)
+    return np.where(np.isnan(head), speed > top, head > top)
+
+
 def track_width(level: PedestrianLevel, p: Pedestrian) -> float:
     """The median over a track's measured rows of its measured width (`widths.measured_width`,
     px) in metres at its foot point: width_px / W x width.mean (W px: the patch of an average
@@ -287,6 +306,11 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
     fit = level.opt.verdicts.speed_fit
     speed = np.asarray([track_speed(p, fit) for p in peds], np.float64)
     verdicts["track_speed_mps"], verdicts["too_fast"] = speed, speed > top
+    if level.opt.verdicts.head_speed:  # rule 31: the speed under the heads where it stands
+        n_rows = level.image_shape[0]
+        head = np.asarray([head_speed(level.shape, p, n_rows, fit) for p in peds], np.float64)
+        verdicts["head_speed_mps"] = head
+        verdicts["too_fast"] = faster_than(speed, head, top)
     verdicts["width_m"] = np.asarray([track_width(level, p) for p in peds], np.float64)
     w = cfg.width
     verdicts["width_ok"] = np.abs(verdicts["width_m"] - float(w.mean)) <= \

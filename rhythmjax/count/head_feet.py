@@ -21,7 +21,12 @@ Only where a pedestrian starts (`refinement.new_pedestrians`): its patch then st
 feet, and the blobs it overlaps there (the shoes, where they show) are related to it, so the
 paper's placement (the lowest related pixel, `patches.place_patch`) follows the feet from the
 next frame on. Placing every frame from the head where `place_patch` finds no foot row was
-measured too and not kept (docs/rules.md). Units: px; rows grow downwards.
+measured too and not kept (docs/rules.md).
+
+The same reading serves the counting rule's too-fast test (`verdicts.head_speed`,
+`head_ground_points`): a track whose foot rows are mostly a walker's hips reads its walker 2-4
+times too far away and so too fast; under its heads its ground points are the walker's.
+Units: px, m, s; rows grow downwards.
 """
 
 from __future__ import annotations
@@ -30,10 +35,12 @@ import math
 
 import numpy as np
 
-from .patches import ShapeModel
+from ..model.status import TrackState
+from ..track.rows import TrackRow
+from .patches import ShapeModel, ground_point
 
 
-__all__ = ["MIN_SLOPE", "TALL_HEIGHTS", "head_foot_row", "too_tall"]
+__all__ = ["MIN_SLOPE", "TALL_HEIGHTS", "head_foot_row", "head_ground_points", "too_tall"]
 
 MIN_SLOPE = 0.25  # |d(head row)/d(foot row)| below this: no foot row from the head (module doc)
 TALL_HEIGHTS = 1.25  # the option's value when on: a part 25 % taller than the height prior's
@@ -74,3 +81,29 @@ def too_tall(shape: ShapeModel, u: float, v_bottom: float, span: float, tall: fl
     _, h = shape.size(float(u), float(v_bottom))
     return not (math.isfinite(h) and h > 0.0) or span > tall * h
 
+
+
+def head_ground_points(shape: ShapeModel, rows: list[TrackRow], n_rows: int,
+                       tall: float = TALL_HEIGHTS) -> np.ndarray | None:
+    """(k, 3) array of t (s), x, y (m): the ground points under the heads of a track's OBSERVE
+    rows whose foot point (u, v) and top row v_top are measured, where the foot row is not the
+    feet: at least half of those rows stand a part taller than `tall` walker heights on their
+    foot row (`too_tall`, span v - v_top). Each point is the ground point of (u, foot row of
+    a walker whose head is on v_top: `head_foot_row`); rows without one are left out. None
+    where the track has no such row or fewer than half of them are too tall (its foot rows are
+    its feet: its own ground points stand)."""
+    obs = int(TrackState.OBSERVE)
+    seen = [(float(q.t), float(q.u), float(q.v), float(q.v_top)) for q in rows
+            if q.state == obs and math.isfinite(q.u) and math.isfinite(q.v)
+            and math.isfinite(q.v_top)]
+    n_tall = sum(too_tall(shape, u, v, v - v_top, tall) for _, u, v, v_top in seen)
+    if not seen or 2 * n_tall < len(seen):
+        return None
+    out = []
+    for t, u, _, v_top in seen:
+        foot = head_foot_row(shape, u, v_top, n_rows)
+        if foot is not None:
+            x, y, ok = ground_point(shape.camera, u, foot)
+            if bool(ok):
+                out.append((t, float(x), float(y)))
+    return np.asarray(out, np.float64).reshape(-1, 3)
