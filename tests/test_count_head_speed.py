@@ -115,8 +115,8 @@ def test_head_speed_of_a_pedestrian_and_the_too_fast_test():
     assert got.tolist() == [False, True, True, False, False]
 
 
-def test_option_is_off_by_default():
-    assert CountOptions().verdicts.head_speed is False
+def test_option_is_on_by_default():
+    assert CountOptions().verdicts.head_speed is True  # since issue 16's thirty-second round
 
 
 DEV = Path(os.environ.get("RHYTHMJAX_DATA", Path(__file__).resolve().parents[2] / "shared"
@@ -126,10 +126,10 @@ CROWD = DEV / "dev_crowd_03.avi"
 
 @pytest.mark.skipif(not CROWD.exists(), reason="dev clips not present")
 def test_dev_crowd_counts_walkers_tracked_on_their_upper_bodies():
-    """dev_crowd_03 (8 walkers, trousers near the road's grey): the defaults count 4; with the
-    option two more tracks count (measured 2026-12-05: 4 -> 6), each with a head speed of a
-    walk (1.85 and 2.00 m/s) where its foot rows read 4.2 and 5.8 m/s. The rule only re-times
-    tracks: the tracks are the same either way."""
+    """dev_crowd_03 (8 walkers, trousers near the road's grey): without the option 4 are
+    counted; with it (the default) two more tracks count (measured 2026-12-05: 4 -> 6), each
+    with a head speed of a walk (1.85 and 2.00 m/s) where its foot rows read 4.2 and 5.8 m/s.
+    The rule only re-times tracks: the tracks are the same either way."""
     from rhythmjax.model.config_setup import config_for
     from rhythmjax.vision.video import VideoSource
 
@@ -140,9 +140,9 @@ def test_dev_crowd_counts_walkers_tracked_on_their_upper_bodies():
     frames = list(VideoSource(str(CROWD), fps=truth["fps"]))
     cfg = config_for({"camera": camera}, image_size=(cam["width_px"], cam["height_px"]),
                      fps=truth["fps"])
-    off = count_frames(cfg, iter(frames), n_frames=len(frames))
-    on = count_frames(cfg, iter(frames), n_frames=len(frames),
-                      options=with_changes(CountOptions(), {"verdicts.head_speed": True}))
+    off = count_frames(cfg, iter(frames), n_frames=len(frames),
+                       options=with_changes(CountOptions(), {"verdicts.head_speed": False}))
+    on = count_frames(cfg, iter(frames), n_frames=len(frames))
     assert np.array_equal(off.tracks["u"], on.tracks["u"], equal_nan=True)
     assert (off.counts["walkers"], on.counts["walkers"]) == (4, 6)
     head = np.asarray(on.verdicts["head_speed_mps"], float)

@@ -111,7 +111,7 @@ COUNT_DEFAULTS = [
     (None, "life.still_heights", 0.04),
     (None, "verdicts.speed_fit", "theil-sen"),  # issue 16, rule 25: Theil-Sen since round 28
     ("(new: issue 16 item 2)", "verdicts.window_candidates", False),  # candidate windows B
-    ("(new: issue 16, rule 31)", "verdicts.head_speed", False),  # the speed under the heads
+    ("(new: issue 16, rule 31)", "verdicts.head_speed", True),  # the speed under the heads
     # the foot-point gates of `count.foot_gate` (options a and b), off
     (None, "placement.in_range", False),
     (None, "placement.gate_heights", 0.0),

@@ -45,19 +45,20 @@ def cmd_count(args) -> int:
 
     Three levels (Masoud & Papanikolopoulos): background subtraction, blobs tracked through a
     blob graph, pedestrians as rectangular patches the size of an average pedestrian (0.5 m x
-    1.7 m seen through the config's camera) with Kalman dynamics (--dynamics: 3d = the core
-    EKF on the ground plane; 3d-shape or 2d = constant velocity in the image). Every track's
+    1.7 m seen through the config's camera) with Kalman dynamics (--dynamics: 3d = the core EKF
+    on the ground plane; 3d-shape or 2d = constant velocity in the image). Every track's
     window-B rhythm signal is then judged by the rhythm classifier (as `rhythmjax classify`).
     Fragments of one walker (lost behind another, at a crossing) are first stitched into one
     track when the later one starts where and as fast as the earlier one was going (ground
     plane). The walkers counted are all tracks minus those judged non-pedestrian (bicycles,
     which the paper counted twice): a track too short to judge (unclassified) still counts,
-    unless it moves faster than the walking model accepts for any rhythm (too_fast: 2.6 m/s
-    with the paper's Table 1). So walkers = judged pedestrian + unjudged_plausible, within the
-    range walkers_low (judged pedestrian only) to walkers_high (+ every unjudged track). The
-    background starts from the first frame (--set blobs.bg_init_s=S: from the median of the
-    first S s; off, docs/rules.md); a track whose foot point stays put for 5 s ends there (its
-    patch becomes background) and one that never moved is dropped (a ghost of something
+    unless it moves faster than the walking model accepts for any rhythm (too_fast: 2.6 m/s with
+    the paper's Table 1; a track whose foot rows are mostly a walker's hips, its legs lost in
+    the mask, is timed under its heads). So walkers = judged pedestrian + unjudged_plausible,
+    within the range walkers_low (judged pedestrian only) to walkers_high (+ every unjudged
+    track). The background starts from the first frame (--set blobs.bg_init_s=S: from the median
+    of the first S s; off, docs/rules.md); a track whose foot point stays put for 5 s ends there
+    (its patch becomes background) and one that never moved is dropped (a ghost of something
     present when the background was learnt).
 
     Writes DIR/mot.txt (MOTChallenge: frame (1-based), id, bb_left, bb_top, bb_width,
@@ -69,7 +70,8 @@ def cmd_count(args) -> int:
     tracks format, which `rhythmjax classify` re-judges: width_px is the measured width of the
     blob under the patch, for the width gate (10); plus vx, vy, du, dv), DIR/verdicts.csv
     (per track also the unjudged ones' guess: track_speed_mps, too_fast, width_m (median
-    measured width at the foot point), width_ok (inside the width gate (10)), and counted) and
+    measured width at the foot point), width_ok (inside the width gate (10)), counted, and
+    head_speed_mps: the speed under its heads, NaN where its foot rows are its feet) and
     DIR/counts.json (counts: tracks, pedestrians, non_pedestrians, unclassified, too_fast,
     unjudged_plausible, walkers, walkers_low, walkers_high; the rule in words; the run summary
     with ghosts_dropped and ends: the tracked pieces ended, before stitching, by reason:
@@ -120,7 +122,7 @@ def cmd_count(args) -> int:
                         + candidate_columns(res.tracks))
             write_table(outs.path(out("verdicts.csv")), res.verdicts,
                         VERDICT_ORDER + list(GUESS_COLUMNS)
-                        + [c for c in ("candidate",) if c in res.verdicts])
+                        + [c for c in ("head_speed_mps", "candidate") if c in res.verdicts])
             with atomic_write(outs.path(out("counts.json")), "w") as f:
                 f.write(dumps_json(summary, indent=2) + "\n")
             spectra = write_spectra(outs.path(out("spectra.png")), outs.path(out("spectra.pdf")),

@@ -32,8 +32,8 @@ unless its ground speed (`track_speed`: the Theil-Sen slope, robust to a few row
 feet; least squares with `verdicts.speed_fit` "lsq") exceeds the fastest the walking model's test
 (14) accepts for any rhythm (`walking_top_speed`: pace and stride both at +k_sigma3, 2.57 m/s with
 Table 1): any window of it would be judged non-pedestrian, so it is not counted (`too_fast`: short
-bicycle tracks). With `verdicts.head_speed` (off) a track whose foot rows are mostly not its feet (a
-walker whose legs the mask lost) is timed under its heads instead (`head_speed`,
+bicycle tracks). With `verdicts.head_speed` (on; rule 31) a track whose foot rows are mostly not its
+feet (a walker whose legs the mask lost) is timed under its heads instead (`head_speed`,
 `head_feet.head_ground_points`; verdicts `head_speed_mps`). A track judged pedestrian is counted; a
 non-pedestrian verdict removes one. Tracks shorter than `verdicts.min_track_frames` frames (after
 stitching) are dropped from every output and count first, and so are tracks that never moved

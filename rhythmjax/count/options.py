@@ -227,10 +227,12 @@ class VerdictOptions:
     # for walkers and too slow for bicycles; on a fresh pool 220001-8 (confirmatory test,
     # docs/rules.md rule 25) Theil-Sen counted non-walkers 61 -> 46, tracks on no object 116 ->
     # 110, walkers with a counted track 1211 -> 1220, per-clip errors -0.9 [-1.9, +0.1] points
-    head_speed: bool = False  # the too-fast rule reads an unjudged track's speed under its
+    head_speed: bool = True  # the too-fast rule reads an unjudged track's speed under its
     # heads where its foot rows are mostly not its feet (`head_feet.head_ground_points`: the
-    # legs lost in the mask, the foot row the hips); verdicts["head_speed_mps"] (issue 16,
-    # thirty-second round, rule 31; docs/rules.md)
+    # legs lost in the mask, the foot row the hips); verdicts["head_speed_mps"]. Issue 16,
+    # rule 31 (docs/rules.md), on since the thirty-second round: on two fresh pools 11 tracks
+    # counted more, 8 of them walkers no other counted track follows, no non-walker; False:
+    # the count before
     window_candidates: bool = False  # candidate windows B (issue 16, item 2): I(k) summed also
     # in window B moved by -0.2, -0.1 and +0.1 W (io.files.WINDOW_CANDIDATES; count.
     # window_candidates), written as the tracks' candidate columns; each rhythm window is judged
