@@ -82,7 +82,6 @@ def too_tall(shape: ShapeModel, u: float, v_bottom: float, span: float, tall: fl
     return not (math.isfinite(h) and h > 0.0) or span > tall * h
 
 
-
 def head_ground_points(shape: ShapeModel, rows: list[TrackRow], n_rows: int,
                        tall: float = TALL_HEIGHTS) -> np.ndarray | None:
     """(k, 3) array of t (s), x, y (m): the ground points under the heads of a track's OBSERVE
