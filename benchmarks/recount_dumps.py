@@ -85,7 +85,8 @@ def config_of(camera: str):
     if camera == "dev":
         import eval_all as ea
 
-        clip = next(c for c in ea._dev_index() if c.get("count"))
+        clips = json.loads((ea.DEV_ROOT / "index.json").read_text())["clips"]
+        clip = next(c for c in clips if c.get("count"))  # every dev clip has the same camera
         return config_from_dict(ea.dev_camera(json.loads((ea.DEV_ROOT / clip["truth"])
                                                          .read_text())))
     if not camera.startswith("count:"):
