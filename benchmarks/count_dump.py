@@ -28,6 +28,20 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
+def own_config(focal_px: float = 0.0):
+    """The own counting scenes' Config: the synthetic preset, with a f = b f = `focal_px` px
+    (f 8 mm) where > 0."""
+    import copy
+
+    from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.presets import SYNTHETIC_CONFIG
+
+    d = copy.deepcopy(SYNTHETIC_CONFIG)
+    if focal_px > 0:
+        d["camera"] = {"a_px_per_m": focal_px / 0.008, "b_px_per_m": focal_px / 0.008}
+    return config_from_dict(d)
+
+
 def clips_of(source: str, seed: int, scenes: int, clothing: str = "contrasted",
              focal_px: float = 0.0, pairs: float = 0.0, pair_layout: str = "side"):
     """(name, cfg, frames, truth, kinds, offset, true walkers) per clip of `source`."""
@@ -45,16 +59,9 @@ def clips_of(source: str, seed: int, scenes: int, clothing: str = "contrasted",
         kinds = {int(i): "pedestrian" for i in np.unique(truth["id"])}
         yield "pets", cfg, frames, truth, kinds, -1, len(kinds)
     elif source == "count":
-        import copy
-
-        from rhythmjax.model.params import config_from_dict
-        from rhythmjax.sim.presets import SYNTHETIC_CONFIG
         from rhythmjax.sim.scene import render_scene
 
-        d = copy.deepcopy(SYNTHETIC_CONFIG)
-        if focal_px > 0:
-            d["camera"] = {"a_px_per_m": focal_px / 0.008, "b_px_per_m": focal_px / 0.008}
-        cfg = config_from_dict(d)
+        cfg = own_config(focal_px)
         for s, spec in ec.scene_specs(scenes, seed=seed, camera=cfg.camera, clothing=clothing,
                                       pairs=pairs, pair_layout=pair_layout):
             scene = render_scene(s, spec)

@@ -71,7 +71,6 @@ def observed_rows(tracks: dict):
 def config_of(camera: str):
     """The Config `count_dump.py` ran a source with: `count:FOCAL_PX` (the own scenes' preset
     with a f = b f = FOCAL_PX; 0: the preset's), `dev` (the dev clips' camera), `pets`."""
-    import copy
     import json
     import sys
 
@@ -91,12 +90,9 @@ def config_of(camera: str):
                                                          .read_text())))
     if not camera.startswith("count:"):
         raise SystemExit(f"unknown camera {camera!r}: count:FOCAL_PX, dev or pets")
-    from rhythmjax.sim.presets import SYNTHETIC_CONFIG
+    from count_dump import own_config
 
-    d, focal = copy.deepcopy(SYNTHETIC_CONFIG), float(camera.split(":", 1)[1])
-    if focal > 0:
-        d["camera"] = {"a_px_per_m": focal / 0.008, "b_px_per_m": focal / 0.008}
-    return config_from_dict(d)
+    return own_config(float(camera.split(":", 1)[1]))
 
 
 def track_rows(tracks: dict, tid: int) -> list:
@@ -144,21 +140,16 @@ def recounted(record: dict, rule: str, cfg=None) -> np.ndarray:
             counted[i] = not points_speed(t[k], x[k], y[k], fit) > top
         return counted
     if rule == "head-speed":
-        from rhythmjax.count import points_speed
-        from rhythmjax.count.head_feet import head_ground_points
+        from rhythmjax.count.counting import faster_than, head_speed
         from rhythmjax.count.patches import ShapeModel
 
-        shape, top = ShapeModel.from_config(cfg, "3d"), top_speed()
+        shape, n_rows = ShapeModel.from_config(cfg, "3d"), int(record["image_size"][1])
+        head = np.asarray([head_speed(shape, track_rows(record["tracks"], tid), n_rows)
+                           for tid in np.asarray(v["track_id"])], np.float64)
+        too_fast = faster_than(v["track_speed_mps"], head, top_speed())
         explained = np.asarray(v.get("explained_by", np.zeros(len(verdict), np.int64))) != 0
-        for i, tid in enumerate(np.asarray(v["track_id"])):
-            if verdict[i] != "unclassified" or explained[i]:
-                continue
-            pts = head_ground_points(shape, track_rows(record["tracks"], tid),
-                                     int(record["image_size"][1]))
-            if pts is not None:
-                s = points_speed(pts[:, 0], pts[:, 1], pts[:, 2])
-                if not np.isnan(s):
-                    counted[i] = not s > top
+        unjudged = (verdict == "unclassified") & ~explained
+        counted[unjudged] = ~too_fast[unjudged]
         return counted
     raise SystemExit(f"unknown rule {rule!r}: no-peak, speed-se:Z, speed-fit:FIT or head-speed")
 

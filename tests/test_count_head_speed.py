@@ -19,7 +19,6 @@ from rhythmjax.count.counting import faster_than, head_speed
 from rhythmjax.count.head_feet import head_ground_points
 from rhythmjax.count.options import with_changes
 from rhythmjax.count.patches import ShapeModel, ground_point
-from rhythmjax.count.pedestrian import Pedestrian
 from rhythmjax.model.params import Camera, Config, walking_top_speed
 from rhythmjax.model.status import TrackState
 from rhythmjax.track.rows import TrackRow
@@ -102,13 +101,11 @@ def test_rows_without_a_head_or_not_observed_are_left_out():
 
 
 def test_head_speed_of_a_pedestrian_and_the_too_fast_test():
-    """`head_speed` of a pedestrian's rows; `faster_than` takes the head speed where there is
+    """`head_speed` of a track's rows; `faster_than` takes the head speed where there is
     one (both ways), else the track's own."""
-    p = Pedestrian(slot=0, born=0)
-    p.rows, _ = walker_rows(foot_z=np.full(30, HIPS_M))
-    assert head_speed(shape(), p, CAM.image_height) == pytest.approx(1.4, rel=0.015)
-    p.rows, _ = walker_rows()
-    assert math.isnan(head_speed(shape(), p, CAM.image_height))
+    hips, _ = walker_rows(foot_z=np.full(30, HIPS_M))
+    assert head_speed(shape(), hips, CAM.image_height) == pytest.approx(1.4, rel=0.015)
+    assert math.isnan(head_speed(shape(), walker_rows()[0], CAM.image_height))
     top = walking_top_speed(Config())
     got = faster_than([5.0, 5.0, 1.0, 1.0, math.nan], [1.4, math.nan, 4.0, math.nan, math.nan],
                       top)

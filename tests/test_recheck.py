@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from rhythmjax.model.camera_np import project_3d
-from rhythmjax.model.params import Config, walking_top_pace, walking_top_speed
+from rhythmjax.model.params import Config, walking_pace_band, walking_top_pace, walking_top_speed
 from rhythmjax.model.status import Reason, TrackState, Verdict
 from rhythmjax.sim import scene as synth
 from rhythmjax.track.options import TrackerOptions, with_changes
@@ -31,6 +31,7 @@ def test_the_walking_models_bounds_by_hand():
     """Table 1: pace 2.05 +- 0.183 Hz, stride 0.72 +- 0.09 m, k_sigma3 3: the fastest pace
     2.599 Hz, the fastest walk 2.599 x 0.99 = 2.573 m/s."""
     assert walking_top_pace(CFG) == pytest.approx(2.05 + 3 * 0.183, abs=1e-6)
+    assert walking_pace_band(CFG) == pytest.approx((2.05 - 3 * 0.183, 2.05 + 3 * 0.183), abs=1e-6)
     assert walking_top_speed(CFG) == pytest.approx((2.05 + 3 * 0.183) * (0.72 + 3 * 0.09),
                                                    abs=1e-6)
 

@@ -84,7 +84,6 @@ def test_the_head_speed_recount_reproduces_the_library():
 
     from rhythmjax.count.counting import faster_than, head_speed
     from rhythmjax.count.patches import ShapeModel
-    from rhythmjax.count.pedestrian import Pedestrian
 
     cfg = rd.config_of("count:800")  # the own scenes' preset at 800 px: the default camera
     hips, _ = walker_rows(foot_z=np.full(30, HIPS_M))
@@ -95,13 +94,10 @@ def test_the_head_speed_recount_reproduces_the_library():
     verdicts = {"track_id": np.array([1, 2]),
                 "verdict": np.array(["unclassified"] * 2, dtype=object),
                 "reason": np.array(["too-short"] * 2, dtype=object),
-                "too_fast": np.array([True, True]), "counted": np.array([False, False])}
+                "too_fast": np.array([True, True]), "counted": np.array([False, False]),
+                "track_speed_mps": np.array([9.0, 9.0])}
     record = {"tracks": tracks, "verdicts": verdicts, "image_size": (512, 512)}
     assert rd.recounted(record, "head-speed", cfg).tolist() == [True, False]
     shape = ShapeModel.from_config(cfg, "3d")
-    heads = []
-    for rows in (hips, feet):
-        p = Pedestrian(slot=0, born=0)
-        p.rows = rows
-        heads.append(head_speed(shape, p, 512))
+    heads = [head_speed(shape, rows, 512) for rows in (hips, feet)]
     assert faster_than([9.0, 9.0], heads, rd.top_speed()).tolist() == [False, True]

@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..io.files import CANDIDATE_COLUMNS, atomic_path
-from ..model.params import Config
+from ..model.params import Config, walking_pace_band
 from ..model.rhythm import window_spectrum as classifier_spectrum
 from ..model.status import REASON_LABELS, VERDICT_LABELS
 from ..track.toolkit import window_signal
@@ -138,9 +138,7 @@ def panel_text(result: dict) -> tuple[str, str, str]:
 
 def _page(plt, cfg: Config, chosen: list, first: int, n_all: int, page: int, pages: int,
           truth_ids: dict | None):
-    walk, thr = cfg.walking, cfg.thresholds
-    lo = float(walk.pace_mean - thr.k_sigma3 * walk.pace_std)
-    hi = float(walk.pace_mean + thr.k_sigma3 * walk.pace_std)
+    lo, hi = walking_pace_band(cfg)
     rows = math.ceil(len(chosen) / COLS)
     height = 2.9 * rows + 1.3
     fig, axes = plt.subplots(rows, COLS, figsize=(4.4 * COLS, height), squeeze=False)
@@ -153,7 +151,7 @@ def _page(plt, cfg: Config, chosen: list, first: int, n_all: int, page: int, pag
         verdict, reason, measures = panel_text(o.result)
         colour = COLOURS.get(verdict, "k")
         line, = ax.semilogy(f, p, lw=1.1, color="#1f4e9a", label="MEM spectrum / white level")
-        thr_line = ax.axhline(float(thr.p_thr), color="k", ls=":", lw=0.9, label="P_thr")
+        thr_line = ax.axhline(float(cfg.thresholds.p_thr), color="k", ls=":", lw=0.9, label="P_thr")
         band = ax.axvspan(lo, hi, color="g", alpha=0.12,
                           label=f"walking pace band {lo:.2f}-{hi:.2f} Hz")
         pace = float(o.result["pace_hz"])

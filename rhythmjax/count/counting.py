@@ -216,11 +216,12 @@ def points_speed(t, x, y, fit: str = "theil-sen") -> float:
     return float(np.hypot(*v))
 
 
-def head_speed(shape: ShapeModel, p: Pedestrian, n_rows: int, fit: str = "theil-sen") -> float:
-    """Ground speed (m/s) under a track's heads (`points_speed` of
+def head_speed(shape: ShapeModel, rows: list[TrackRow], n_rows: int,
+               fit: str = "theil-sen") -> float:
+    """Ground speed (m/s) under the heads of a track's `rows` (`points_speed` of
     `head_feet.head_ground_points`, the image `n_rows` high) where its foot rows are mostly not
     its feet; NaN where they are, or too few heads for a speed."""
-    pts = head_ground_points(shape, p.rows, n_rows)
+    pts = head_ground_points(shape, rows, n_rows)
     return math.nan if pts is None else points_speed(pts[:, 0], pts[:, 1], pts[:, 2], fit)
 
 
@@ -308,7 +309,8 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
     verdicts["track_speed_mps"], verdicts["too_fast"] = speed, speed > top
     if level.opt.verdicts.head_speed:  # rule 31: the speed under the heads where it stands
         n_rows = level.image_shape[0]
-        head = np.asarray([head_speed(level.shape, p, n_rows, fit) for p in peds], np.float64)
+        head = np.asarray([head_speed(level.shape, p.rows, n_rows, fit) for p in peds],
+                          np.float64)
         verdicts["head_speed_mps"] = head
         verdicts["too_fast"] = faster_than(speed, head, top)
     verdicts["width_m"] = np.asarray([track_width(level, p) for p in peds], np.float64)

@@ -240,11 +240,17 @@ def walking_top_speed(cfg: Config) -> float:
     return walking_top_pace(cfg) * (float(w.stride_mean) + k * float(w.stride_std))
 
 
+def walking_pace_band(cfg: Config) -> tuple[float, float]:
+    """The paces (Hz) the walking model's test (14) accepts: pace_mean -+ k_sigma3 pace_std
+    (1.50-2.60 Hz with the paper's Table 1)."""
+    mean, k = float(cfg.walking.pace_mean), float(cfg.thresholds.k_sigma3)
+    return mean - k * float(cfg.walking.pace_std), mean + k * float(cfg.walking.pace_std)
+
+
 def walking_top_pace(cfg: Config) -> float:
-    """The fastest pace (Hz) the walking model's test (14) accepts: pace_mean + k_sigma3
-    pace_std (2.60 Hz with the paper's Table 1)."""
-    return float(cfg.walking.pace_mean) + float(cfg.thresholds.k_sigma3) * \
-        float(cfg.walking.pace_std)
+    """The fastest pace (Hz) the walking model's test (14) accepts: the top of
+    `walking_pace_band` (2.60 Hz with the paper's Table 1)."""
+    return walking_pace_band(cfg)[1]
 
 
 def config_to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
