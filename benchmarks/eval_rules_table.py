@@ -84,6 +84,10 @@ RULES = {
                       "nothing fitted (rule 29's speed bound); the earlier windows looked at on "
                       "own seeds 5555, 6666, 16, 20240603, 777001, 888001, 999001, "
                       "230001-280001, 450001-540001 and PETS09 (rule 30b)"),
+    "core_column": ("tracker", "body.column_fraction", 0.3, None, TRACKER_SOURCES,
+                    "nothing fitted (0.3, the projections' first slice fraction); found on the "
+                    "dev clips (dev_walk_05's suitcase), so they only report it; only where the "
+                    "extent is wider than the predicted body box (rule 32b)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -99,7 +103,8 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "shared_overlap": (), "split_depth": TRACKER_SOURCES,
               "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": TRACKER_SOURCES,
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
-              "recheck_tail": TRACKER_SOURCES, "recheck_speed": ()}
+              "recheck_tail": TRACKER_SOURCES, "recheck_speed": (),
+              "core_column": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

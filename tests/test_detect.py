@@ -312,3 +312,28 @@ def test_motion_outside_counts_motion_pixels_outside_the_boxes():
                 for xx in range(max(x - margin, 0), min(x + w + margin, 60)):
                     keep[yy, xx] = False
         assert motion_outside(m, boxes, margin) == int(np.sum((m > 0) & keep))
+
+
+def test_foot_column_of_the_body_core_beside_a_trailing_suitcase():
+    """Rule 32b, hand-worked: a walker's motion (columns 40..50, rows 30..90: 61 px per column)
+    pulling a suitcase (columns 52..69, rows 75..90: 16 px per column, 0.26 of the walker's).
+    The slice at 0.1 takes both (extent 40..69: u_p 54.5, wid_IMG 30); where that extent is
+    wider than the predicted body box, u_p is the centre of the columns reaching 0.3 of the
+    maximum (the walker's, 40..50: 45.0) and the box spans those columns; the foot row, the
+    rows and the width stay the slice's. A body box at least as wide as the extent, no body
+    box, or no column fraction: 54.5."""
+    m = np.zeros((120, 120), np.uint8)
+    m[30:91, 40:51] = 1
+    m[75:91, 52:70] = 1
+    centre, size = (55, 60), (80, 100)
+    kw = dict(fraction=0.1, halo=0, dilate_px=3)
+    paper = detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_fraction=None, **kw)
+    assert (paper.u, paper.v, paper.width, paper.box) == (54.5, 90.0, 30.0, (40, 30, 30, 61))
+    core = detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_fraction=0.3, **kw)
+    assert core.u == 45.0 and (core.v, core.width, core.box) == (90.0, 30.0, (40, 30, 11, 61))
+    assert detect_in_window(m, centre, size, core=(30, 20, 30, 72), column_fraction=0.3,
+                            **kw).u == 54.5  # the extent (30 px) is not wider than the box
+    assert detect_in_window(m, centre, size, column_fraction=0.3, **kw).u == 54.5  # no box
+    # 0.3 of the maximum and no more: at 0.25 the suitcase's columns (0.26) are the core's too
+    assert detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_fraction=0.25,
+                            **kw).u == 54.5

@@ -156,6 +156,7 @@ class OnlineTracker:
                 continue
             det = detect.detect_in_window(M, centre, (box_w, box_h),
                                           fraction=opt.body.slice_fraction, core=cores[s],
+                                          column_fraction=opt.body.column_fraction,
                                           body_px=opt.body.parts_widths * Wp
                                           if opt.body.parts_widths > 0 else None)
             if det is not None:
@@ -166,6 +167,7 @@ class OnlineTracker:
         split = split_shared(M, shared, predicted, overlap=opt.body.shared_overlap,
                              near_widths=opt.body.split_near_widths,
                              fraction=opt.body.slice_fraction,
+                             column_fraction=opt.body.column_fraction,
                              depth_widths=opt.body.split_depth_widths,
                              margin_widths=opt.body.split_depth_margin_widths
                              ) if shared and opt.body.split_shared else {}

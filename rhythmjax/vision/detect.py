@@ -10,7 +10,11 @@ Pipeline per frame (PAPERS.md, "Sobel"):
 4. Vertical and horizontal projections of M, sliced at a fraction of their maximum, give the bottom
    point (u_p = centre of the horizontal extent, v_p = lowest row) and the image width wid_IMG,
    inside a small window centred on the predicted foot point (`detect_in_window`), or per connected
-   region for new objects elsewhere (`find_objects`).
+   region for new objects elsewhere (`find_objects`). With `column_fraction` (above the slice
+   fraction), where wid_IMG is wider than the predicted body box (`core`), u_p is the centre of
+   the columns reaching that fraction instead, and the detection's box spans those columns: the
+   body's core, which a trailing suitcase or a bag (columns with little motion) does not pull
+   aside; wid_IMG and v_p stay the slice's.
 
 Image coordinates are px: u = column index, v = row index (downwards), pixel centres at integers.
 Biases, measured on synthetic frames (tests/test_detect.py): the extent of M is the union of the
@@ -127,8 +131,11 @@ def _project(m: np.ndarray, axis: int) -> np.ndarray:
 
 
 def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: int,
-                  halo: int) -> Detection | None:
-    """Projections of the motion crop `m` (top-left at (x0, y0) px) sliced into a Detection."""
+                  halo: int, column_fraction: Number | None = None,
+                  wide_px: Number = math.inf) -> Detection | None:
+    """Projections of the motion crop `m` (top-left at (x0, y0) px) sliced into a Detection;
+    where wid_IMG exceeds `wide_px`, u_p is the centre of the columns reaching `column_fraction`
+    of the vertical projection's maximum and the box spans them (None: never; module doc)."""
     cols = _project(m, 0)  # vertical projection: one value per column
     ext = _extent(cols, fraction)
     if ext is None:
@@ -141,6 +148,8 @@ def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: i
     if area < min_area:
         return None
     width = float(max(c1 - c0 + 1 - 2 * halo, 1))
+    if column_fraction is not None and width > wide_px:  # something beside the body: its
+        c0, c1 = _extent(cols, max(column_fraction, fraction))  # core's columns, u_p and box
     return Detection(u=x0 + 0.5 * (c0 + c1), v=float(y0 + r1), width=width,
                      box=(x0 + c0, y0 + r0, c1 - c0 + 1, r1 - r0 + 1), area=area)
 
@@ -156,7 +165,8 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
                      window_size: Number | Sequence[Number] | np.ndarray, *,
                      fraction: Number = 0.3, min_area: int = 10, halo: int = SOBEL_HALO_PX,
                      core: WindowBox | None = None, dilate_px: int = 3,
-                     body_px: Number | None = None) -> Detection | None:
+                     body_px: Number | None = None,
+                     column_fraction: Number | None = None) -> Detection | None:
     """Detect the object in a window centred on the predicted foot point `center_uv` = (u, v) px.
 
     `window_size` is (width, height) px or one number for a square; the window is clipped at the
@@ -182,7 +192,11 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
     detection was half a body with the foot point of the wrong part, pulling the estimate
     further off. Here the other regions with some motion inside `core` are added nearest first
     while the kept regions stay within `body_px` columns and their bottom not below `core`'s by
-    more than a tenth of its height and the dilation (a nearer object's feet)."""
+    more than a tenth of its height and the dilation (a nearer object's feet).
+
+    `column_fraction` (with `core`): where wid_IMG is wider than `core`, u_p is the centre of the
+    columns reaching this fraction of the vertical projection's maximum and the box spans them
+    (the body without a suitcase or bag beside it; module doc, item 4); None: never."""
     u, v = (float(c) for c in center_uv)
     if not (math.isfinite(u) and math.isfinite(v)):
         return None
@@ -197,7 +211,8 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
                                body_px)
         if crop is None:
             return None
-    det = _bottom_point(crop, x0, y0, fraction, min_area, halo)
+    det = _bottom_point(crop, x0, y0, fraction, min_area, halo, column_fraction,
+                        math.inf if core is None else core[2])
     if det is None or det.box[1] <= y0:  # the extent reaches the window's top: no top row
         return det
     return dataclasses.replace(det, top=float(det.box[1]))
