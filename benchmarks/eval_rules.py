@@ -41,7 +41,7 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   window of a Pedestrian track's last N rows and on the windows before its deciding one);
   recheck_tail: `recheck.tail` alone (rule 30a); recheck_speed: `recheck.earlier` "speed"
   (rule 30b: the windows before the deciding one, by the speed test alone).
-- core_column: the tracker's `body.column_fraction` 0.3 (the default) vs None (rule 32b: where a
+- core_column: the tracker's `body.column_fraction` 0.3 vs None (the default; rule 32b: where a
   detection is wider than its predicted body box, the foot column u_p is the centre of the
   columns reaching 0.3 of the vertical projection's maximum, not 0.1's).
 - still_end: only the still rule's end of a track that stands still (patched off in this

@@ -62,12 +62,13 @@ class BodyOptions:
     # wrong part): on the synthetic set 20 of 35 walkers had a 64-frame run on one track, 27 with it
     slice_fraction: float = 0.1  # projection slice, fraction of its maximum (0.3 lost the feet:
     # v noisy); also for new objects
-    column_fraction: float | None = 0.3  # where a detection is wider than its predicted body
-    # box (core_widths W), its foot column u_p is the centre of the columns reaching this
-    # fraction of the vertical projection's maximum (the body's core: a trailing suitcase or a
-    # bag does not pull it aside; `detect.detect_in_window`); None: the centre of the slice
-    # fraction's extent, the paper's reading, everywhere. Width and foot row unchanged. Rule
-    # 32b, nothing fitted (0.3: the projections' first slice fraction); docs/rules.md
+    column_fraction: float | None = None  # a number: where a detection is wider than its
+    # predicted body box (core_widths W), its foot column u_p is the centre of the columns
+    # reaching this fraction of the vertical projection's maximum (the body's core: a trailing
+    # suitcase or a bag does not pull it aside; `detect.detect_in_window`); None: the centre of
+    # the slice fraction's extent, the paper's reading, everywhere. Width and foot row
+    # unchanged. Rule 32b (0.3, a priori): off, it lost walkers and pace on most own sources
+    # (docs/rules.md)
     shared_overlap: float = 0.5  # two tracks' detections overlapping by this fraction of the
     # smaller box are one (merged) blob: it updates only the track whose predicted foot point is
     # nearest its foot point (in W) when the others' are more than twice as far, else none (they

@@ -182,8 +182,8 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
 
     skip_missing: a window with more than `MAX_MISSING_FRACTION` of its rhythm samples missing
     (mixed with a neighbour) is not judged; the next starts after its last missing sample.
-    measured_speed: the speed of (12) from the foot points of the OBSERVE rows but the track's
-    first (the filter's start, which no gate judged; else the filtered ground positions only). final (the track ends with N rows or more and no window
+    measured_speed: the speed of (12) from the foot points of the OBSERVE rows (else the
+    filtered ground positions only). final (the track ends with N rows or more and no window
     judged, every one having been skipped): the N rows with the fewest missing are judged.
     Candidate windows B (`obj.candidate_rows`, not None): the window is judged once on window
     B's I(k) and once on each candidate's (the same times, ground track and foot points), and
@@ -215,8 +215,6 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
     if measured_speed:
         observed = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE
                                else (math.nan, math.nan) for r in window], np.float64)
-        if k == 0:  # a track's first row starts the filter, no update took it: not one of the
-            observed[0] = math.nan  # gates' accepted points (as in `rhythm.classify_track`)
         args += (jnp.asarray(observed, jnp.float32),)
     cands = getattr(obj, "candidate_rows", None)
     chosen = None
