@@ -67,8 +67,9 @@ class BodyOptions:
     # reaching this fraction of the vertical projection's maximum (the body's core: a trailing
     # suitcase or a bag does not pull it aside; `detect.detect_in_window`); None: the centre of
     # the slice fraction's extent, the paper's reading, everywhere. Width and foot row
-    # unchanged. Rule 32b (0.3, a priori): off, it lost walkers and pace on most own sources
-    # (docs/rules.md)
+    # unchanged; new objects and the shared-blob split's re-detections (as wide as the box)
+    # never widen past it. Rule 32b (0.3, a priori): off, it lost walkers and pace on most own
+    # sources (docs/rules.md)
     shared_overlap: float = 0.5  # two tracks' detections overlapping by this fraction of the
     # smaller box are one (merged) blob: it updates only the track whose predicted foot point is
     # nearest its foot point (in W) when the others' are more than twice as far, else none (they

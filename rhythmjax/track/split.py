@@ -45,35 +45,34 @@ class Predicted(NamedTuple):
 
 def split_shared(motion: np.ndarray, shared: Iterable[int], predicted: Mapping[int, Predicted],
                  *, overlap: float, near_widths: float, fraction: float,
-                 depth_widths: float = 0.0, margin_widths: float = 0.1,
-                 column_fraction: float | None = None) -> dict[int, Detection]:
+                 depth_widths: float = 0.0, margin_widths: float = 0.1
+                 ) -> dict[int, Detection]:
     """The sharers (keys of `shared`, each in `predicted`) that can take a measurement of their
     own, with it: each is re-detected in a window `core` wide (its predicted body box's width)
     and `height` high at `centre` in the motion image `motion` (`detect_in_window`, the regions
-    of `core`, parts not joined, projections sliced at `fraction`, the foot column at
-    `column_fraction`: `detect.detect_in_window`). Kept: re-detections that
+    of `core`, parts not joined, projections sliced at `fraction`). Kept: re-detections that
     overlap no other sharer's re-detection by `overlap` of the smaller box and whose foot point
     lies within `near_widths` W of the predicted one `foot`. With `depth_widths` > 0, the
     sharers left then go through `front_split`."""
     shared = list(shared)
-    cut = dict(fraction=fraction, column_fraction=column_fraction)
-    out = split_across(motion, shared, predicted, overlap=overlap, near_widths=near_widths, **cut)
+    out = split_across(motion, shared, predicted, overlap=overlap, near_widths=near_widths,
+                       fraction=fraction)
     if depth_widths > 0:
         out.update(front_split(motion, [s for s in shared if s not in out], shared, predicted,
                                depth_widths=depth_widths, margin_widths=margin_widths,
-                               near_widths=near_widths, **cut))
+                               near_widths=near_widths, fraction=fraction))
     return out
 
 
 def split_across(motion: np.ndarray, shared: Iterable[int], predicted: Mapping[int, Predicted],
-                 *, overlap: float, near_widths: float, fraction: float,
-                 column_fraction: float | None = None) -> dict[int, Detection]:
+                 *, overlap: float, near_widths: float, fraction: float
+                 ) -> dict[int, Detection]:
     """`split_shared`'s first step: each sharer re-detected in its own body box's columns."""
     again = {}
     for s in shared:
         p = predicted[s]
         det = detect_in_window(motion, p.centre, (p.core[2], p.height), fraction=fraction,
-                               core=p.core, body_px=None, column_fraction=column_fraction)
+                               core=p.core, body_px=None)
         if det is not None:
             again[s] = det
     still = shared_detections(again, overlap)
@@ -84,8 +83,8 @@ def split_across(motion: np.ndarray, shared: Iterable[int], predicted: Mapping[i
 
 def front_split(motion: np.ndarray, left: Iterable[int], shared: Iterable[int],
                 predicted: Mapping[int, Predicted], *, depth_widths: float,
-                margin_widths: float, near_widths: float, fraction: float,
-                column_fraction: float | None = None) -> dict[int, Detection]:
+                margin_widths: float, near_widths: float, fraction: float
+                ) -> dict[int, Detection]:
     """The FRONT sharers of `left` (sharers not split across) re-detected below the others: a
     sharer whose predicted foot row lies more than `depth_widths` W below that of every other
     sharer whose body box overlaps its own in columns is nearer the camera and occludes them,
@@ -105,11 +104,11 @@ def front_split(motion: np.ndarray, left: Iterable[int], shared: Iterable[int],
             continue  # not in front of every sharer over its columns
         top = float(max(q.foot[1] for q in others) + margin_widths * p.W)
         bottom = float(p.centre[1] + p.height / 2.0)  # the detection window's bottom row
-        det = detect_in_rows(motion, p, top, bottom, fraction, column_fraction)
+        det = detect_in_rows(motion, p, top, bottom, fraction)
         if det is None or math.hypot(det.u - p.foot[0], det.v - p.foot[1]) > near_widths * p.W:
             continue
         whole = detect_in_window(motion, p.centre, (p.core[2], p.height), fraction=fraction,
-                                 core=p.core, body_px=None, column_fraction=column_fraction)
+                                 core=p.core, body_px=None)
         out[s] = det if whole is None else dataclasses.replace(det, width=whole.width,
                                                                 top=whole.top)
     return out
@@ -121,7 +120,7 @@ def columns_overlap(a: WindowBox, b: WindowBox) -> bool:
 
 
 def detect_in_rows(motion: np.ndarray, p: Predicted, top: float, bottom: float,
-                   fraction: float, column_fraction: float | None = None) -> Detection | None:
+                   fraction: float) -> Detection | None:
     """`detect_in_window` in the columns of p's body box between rows `top` and `bottom` px
     (the body box clipped to those rows keeps the regions that belong to it); None for a strip
     under 4 rows."""
@@ -132,5 +131,4 @@ def detect_in_rows(motion: np.ndarray, p: Predicted, top: float, bottom: float,
     if r1 - r0 < 2:
         return None
     return detect_in_window(motion, (x0 + w / 2, (top + bottom) / 2), (w, bottom - top),
-                            fraction=fraction, core=(x0, r0, w, r1 - r0), body_px=None,
-                            column_fraction=column_fraction)
+                            fraction=fraction, core=(x0, r0, w, r1 - r0), body_px=None)

@@ -167,7 +167,6 @@ class OnlineTracker:
         split = split_shared(M, shared, predicted, overlap=opt.body.shared_overlap,
                              near_widths=opt.body.split_near_widths,
                              fraction=opt.body.slice_fraction,
-                             column_fraction=opt.body.column_fraction,
                              depth_widths=opt.body.split_depth_widths,
                              margin_widths=opt.body.split_depth_margin_widths
                              ) if shared and opt.body.split_shared else {}
