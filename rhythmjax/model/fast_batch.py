@@ -85,8 +85,8 @@ class Segments:
 
     def gather(self, seg: np.ndarray, j: np.ndarray):
         """The rows of window j of segments `seg`: intensity, dt (W, N), xy (m) and observed
-        (px, NaN where the gates used no measurement) (W, N, 2), float32 (views of
-        `gather_packed`'s array)."""
+        (px, NaN where the filter used no measurement; the row that started it is used)
+        (W, N, 2), float32 (views of `gather_packed`'s array)."""
         p = self.gather_packed(seg, j)
         return p[0], p[1], np.moveaxis(p[2:4], 0, -1), np.moveaxis(p[4:6], 0, -1)
 
@@ -113,6 +113,7 @@ class Segments:
                 out[0, w] = np.take(rd.rest.intensity, at)
             out[1, w] = np.take(rd.rest.dt, at)
             seen = np.take(rd.valid, at)
+            seen[:, 0] |= j[w] == 0  # window 0's first row started the filter (k0)
             out[2, w], out[3, w] = np.take(rd.xy, 2 * at), np.take(rd.xy, 2 * at + 1)
             out[4, w] = np.where(seen, np.take(rd.rest.z, 2 * at), np.nan)
             out[5, w] = np.where(seen, np.take(rd.rest.z, 2 * at + 1), np.nan)

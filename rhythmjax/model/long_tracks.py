@@ -145,7 +145,9 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
         return _unclassified(Reason.TOO_SHORT if available.any() else Reason.NO_MEASUREMENTS,
                              n_tracked)
     n_windows = (n_tracked - n) // hop + 1
-    observed = np.where(valid[:, None], z, np.nan).astype(np.float32)
+    used = valid.copy()
+    used[k0] = True  # the measurement that started the filter (as `rhythm.track_windows`)
+    observed = np.where(used[:, None], z, np.nan).astype(np.float32)
     first = None
     for j0 in range(0, n_windows, window_chunk):
         j = np.arange(j0, min(j0 + window_chunk, n_windows))

@@ -351,7 +351,10 @@ def track_windows(
     k0 = jnp.argmax(out.started)
     n_tracked = jnp.sum(present & out.started)
     xy = out.mean[:, jnp.array([0, 2])]
-    observed = jnp.where(out.valid[:, None], z, jnp.nan)
+    # the measurements the filter used: its updates and the one that started it (as the
+    # tracker's OBSERVE rows; the speed of (12) reads them)
+    used = out.valid | (out.started & (jnp.arange(T) == k0))
+    observed = jnp.where(used[:, None], z, jnp.nan)
     j, complete = window_grid(T, n, thr.hop_samples, n_tracked)
     complete = out.started[k0] & complete
 
