@@ -88,6 +88,10 @@ RULES = {
                     "nothing fitted (0.3, the projections' first slice fraction); found on the "
                     "dev clips (dev_walk_05's suitcase), so they only report it; only where the "
                     "extent is wider than the predicted body box (rule 32b)"),
+    "upper_column": ("tracker", "body.column_rows", 0.5, None, TRACKER_SOURCES,
+                     "nothing fitted (0.5, a walker's hips at half its height); the case found "
+                     "on the dev clips (dev_walk_05's suitcase), so they only report it; only "
+                     "where the extent is wider than the predicted body box (rule 33)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -104,7 +108,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": TRACKER_SOURCES,
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
               "recheck_tail": TRACKER_SOURCES, "recheck_speed": (),
-              "core_column": ()}
+              "core_column": (), "upper_column": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

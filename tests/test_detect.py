@@ -337,3 +337,44 @@ def test_foot_column_of_the_body_core_beside_a_trailing_suitcase():
     # 0.3 of the maximum and no more: at 0.25 the suitcase's columns (0.26) are the core's too
     assert detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_fraction=0.25,
                             **kw).u == 54.5
+
+
+def test_foot_column_of_the_upper_body_beside_a_trailing_suitcase():
+    """Rule 33, hand-worked on rule 32b's walker and suitcase: the sliced rows are 30..90 (61),
+    their top half (int(0.5 * 61) = 30 rows, 30..59) holds the walker's columns only (40..50),
+    so u_p is 45.0 and the box spans them; foot row, rows and width stay the slice's. With the
+    top 0.8 (48 rows, 30..77) the suitcase's 3 rows per column are below the slice (3/48 < 0.1):
+    45.0; with the top 0.9 (54 rows, 30..83) its 9 are above it (9/54): u_p 54.5 again. Not wider
+    than the body box, or no body box: the paper's 54.5."""
+    m = np.zeros((120, 120), np.uint8)
+    m[30:91, 40:51] = 1
+    m[75:91, 52:70] = 1
+    centre, size = (55, 60), (80, 100)
+    kw = dict(fraction=0.1, halo=0, dilate_px=3)
+    upper = detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_rows=0.5, **kw)
+    assert upper.u == 45.0 and (upper.v, upper.width, upper.box) == (90.0, 30.0, (40, 30, 11, 61))
+    assert detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_rows=0.8,
+                            **kw).u == 45.0
+    assert detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_rows=0.9,
+                            **kw).u == 54.5
+    assert detect_in_window(m, centre, size, core=(30, 20, 30, 72), column_rows=0.5,
+                            **kw).u == 54.5
+    assert detect_in_window(m, centre, size, column_rows=0.5, **kw).u == 54.5
+
+
+def test_upper_body_column_ignores_the_legs_swing():
+    """Rule 33 against rule 32b on a walker mid-stride: torso columns 40..50 over rows 30..65,
+    below them a stance leg with little motion (columns 34..41, every other row of 66..90: 13 px
+    per column) and a swinging leg with much (columns 49..58, every row of 66..90: 25 px). The
+    slice at 0.1 spans 34..58 (u_p 46.0); the upper half's columns (rows 30..59) are the
+    torso's, 40..50 (45.0); the core fraction 0.3 (of 61 px) keeps the swinging leg's columns
+    and not the stance leg's: 40..58 (49.0), pulled by the legs."""
+    m = np.zeros((120, 120), np.uint8)
+    m[30:66, 40:51] = 1
+    m[66:91:2, 34:42] = 1
+    m[66:91, 49:59] = 1
+    centre, size = (45, 60), (80, 100)
+    kw = dict(fraction=0.1, halo=0, dilate_px=3, core=(39, 20, 12, 72))
+    assert detect_in_window(m, centre, size, **kw).u == 46.0
+    assert detect_in_window(m, centre, size, column_rows=0.5, **kw).u == 45.0
+    assert detect_in_window(m, centre, size, column_fraction=0.3, **kw).u == 49.0

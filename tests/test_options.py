@@ -27,6 +27,7 @@ TRACKER_DEFAULTS = [
     ("body_widths", "body.parts_widths", 1.8),
     ("fraction", "body.slice_fraction", 0.1),
     ("(new: issue 16, rule 32b)", "body.column_fraction", None),  # the body core's column, off
+    ("(new: issue 16, rule 33)", "body.column_rows", None),  # the upper body's column, off
     ("shared_overlap", "body.shared_overlap", 0.5),
     ("(new: issue 16, missed walkers)", "body.split_shared", True),
     ("(new: issue 16, missed walkers)", "body.split_near_widths", 0.3),

@@ -70,6 +70,10 @@ class BodyOptions:
     # unchanged; new objects and the shared-blob split's re-detections (as wide as the box)
     # never widen past it. Rule 32b (0.3, a priori): off, it lost walkers and pace on most own
     # sources (docs/rules.md)
+    column_rows: float | None = None  # a fraction: with column_fraction None, where a detection
+    # is wider than its predicted body box its u_p is the centre of the slice extent of the
+    # columns' motion over the top column_rows of its rows (torso and head, above a suitcase
+    # and the legs' swing); None: never. Rule 33 (0.5, a priori; docs/rules.md)
     shared_overlap: float = 0.5  # two tracks' detections overlapping by this fraction of the
     # smaller box are one (merged) blob: it updates only the track whose predicted foot point is
     # nearest its foot point (in W) when the others' are more than twice as far, else none (they

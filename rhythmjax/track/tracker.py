@@ -157,6 +157,7 @@ class OnlineTracker:
             det = detect.detect_in_window(M, centre, (box_w, box_h),
                                           fraction=opt.body.slice_fraction, core=cores[s],
                                           column_fraction=opt.body.column_fraction,
+                                          column_rows=opt.body.column_rows,
                                           body_px=opt.body.parts_widths * Wp
                                           if opt.body.parts_widths > 0 else None)
             if det is not None:

@@ -14,7 +14,9 @@ Pipeline per frame (PAPERS.md, "Sobel"):
    fraction), where wid_IMG is wider than the predicted body box (`core`), u_p is the centre of
    the columns reaching that fraction instead, and the detection's box spans those columns: the
    body's core, which a trailing suitcase or a bag (columns with little motion) does not pull
-   aside; wid_IMG and v_p stay the slice's.
+   aside; wid_IMG and v_p stay the slice's. With `column_rows` (a fraction), the same gate
+   takes u_p from the slice extent of the columns' motion over the top part of the sliced rows
+   (torso and head, above a suitcase and the legs' swing).
 
 Image coordinates are px: u = column index, v = row index (downwards), pixel centres at integers.
 Biases, measured on synthetic frames (tests/test_detect.py): the extent of M is the union of the
@@ -132,10 +134,12 @@ def _project(m: np.ndarray, axis: int) -> np.ndarray:
 
 def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: int,
                   halo: int, column_fraction: Number | None = None,
-                  wide_px: Number = math.inf) -> Detection | None:
+                  wide_px: Number = math.inf,
+                  column_rows: Number | None = None) -> Detection | None:
     """Projections of the motion crop `m` (top-left at (x0, y0) px) sliced into a Detection;
     where wid_IMG exceeds `wide_px`, u_p is the centre of the columns reaching `column_fraction`
-    of the vertical projection's maximum and the box spans them (None: never; module doc)."""
+    of the vertical projection's maximum, or of the slice extent of the projection over the top
+    `column_rows` of the sliced rows, and the box spans them (None: never; module doc)."""
     cols = _project(m, 0)  # vertical projection: one value per column
     ext = _extent(cols, fraction)
     if ext is None:
@@ -150,6 +154,9 @@ def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: i
     width = float(max(c1 - c0 + 1 - 2 * halo, 1))
     if column_fraction is not None and width > wide_px:  # something beside the body: its
         c0, c1 = _extent(cols, max(column_fraction, fraction))  # core's columns, u_p and box
+    elif column_rows is not None and width > wide_px:  # ... or its upper body's columns
+        upper = m[r0:r0 + max(int(column_rows * (r1 - r0 + 1)), 1), c0:c1 + 1]
+        c0, c1 = (c0 + c for c in _extent(_project(upper, 0), fraction) or (0, c1 - c0))
     return Detection(u=x0 + 0.5 * (c0 + c1), v=float(y0 + r1), width=width,
                      box=(x0 + c0, y0 + r0, c1 - c0 + 1, r1 - r0 + 1), area=area)
 
@@ -166,7 +173,8 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
                      fraction: Number = 0.3, min_area: int = 10, halo: int = SOBEL_HALO_PX,
                      core: WindowBox | None = None, dilate_px: int = 3,
                      body_px: Number | None = None,
-                     column_fraction: Number | None = None) -> Detection | None:
+                     column_fraction: Number | None = None,
+                     column_rows: Number | None = None) -> Detection | None:
     """Detect the object in a window centred on the predicted foot point `center_uv` = (u, v) px.
 
     `window_size` is (width, height) px or one number for a square; the window is clipped at the
@@ -196,7 +204,10 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
 
     `column_fraction` (with `core`): where wid_IMG is wider than `core`, u_p is the centre of the
     columns reaching this fraction of the vertical projection's maximum and the box spans them
-    (the body without a suitcase or bag beside it; module doc, item 4); None: never."""
+    (the body without a suitcase or bag beside it; module doc, item 4); None: never.
+    `column_rows` (with `core`, `column_fraction` None): the same, u_p the centre of the slice
+    extent of the vertical projection over the top `column_rows` of the sliced rows (torso and
+    head: a suitcase or the legs' swing lie below); None: never."""
     u, v = (float(c) for c in center_uv)
     if not (math.isfinite(u) and math.isfinite(v)):
         return None
@@ -212,7 +223,7 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
         if crop is None:
             return None
     det = _bottom_point(crop, x0, y0, fraction, min_area, halo, column_fraction,
-                        math.inf if core is None else core[2])
+                        math.inf if core is None else core[2], column_rows)
     if det is None or det.box[1] <= y0:  # the extent reaches the window's top: no top row
         return det
     return dataclasses.replace(det, top=float(det.box[1]))
