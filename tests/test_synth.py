@@ -240,3 +240,38 @@ def test_clothing_of_any_grey():
     assert abs(near - p) < 4 * math.sqrt(p * (1 - p) / many.size)
     with pytest.raises(ValueError, match="clothing must be one of"):
         synth.random_spec(5, clothing="bright")
+
+
+def test_suitcase_drawn_only_when_asked():
+    """`random_spec(suitcase_fraction=...)`: 0 (the default) draws the same scene as before the
+    option (the draw is skipped); 1 gives every walker a suitcase and no bicycle or dog; 0.5
+    about half the walkers (a binomial band of 4 sigma over the 300 walkers below)."""
+    base = synth.random_spec(5, n_walkers=3, n_bicycles=1, n_dogs=1)
+    assert synth.random_spec(5, n_walkers=3, n_bicycles=1, n_dogs=1,
+                             suitcase_fraction=0.0) == base
+    assert not any(a.suitcase for a in base.actors)
+    every = synth.random_spec(5, n_walkers=3, n_bicycles=1, n_dogs=1, suitcase_fraction=1.0)
+    assert [a.suitcase for a in every.actors] == [True, True, True, False, False]
+    half = [a.suitcase for s in range(60) for a in synth.random_spec(
+        s, n_walkers=5, n_bicycles=0, n_dogs=0, suitcase_fraction=0.5, occlusion=True).actors]
+    assert len(half) == 300 and abs(np.mean(half) - 0.5) < 4 * math.sqrt(0.25 / 300)
+
+
+def test_suitcase_trails_its_walker_on_the_ground():
+    """A walker crossing the image at 8 m with and without a suitcase (no noise): the pixels the
+    suitcase changes lie behind the walker (against its image motion, beyond its foot point
+    by at least a tenth of its width) and reach down to the feet's row (within 3 px: the case
+    stands on the ground, 0.03 m up); its walker's truth is the same."""
+    kw = dict(pace_hz=2.0, step_length_m=0.7, bag_side=1.0)
+    plain = _lone(synth.walker(-1.5, 8.0, 0.0, **kw), 12)
+    pulled = _lone(synth.walker(-1.5, 8.0, 0.0, suitcase=True, **kw), 12)
+    t0, t1 = plain.truth[0], pulled.truth[0]
+    np.testing.assert_array_equal(t0.u, t1.u)
+    np.testing.assert_array_equal(t0.v, t1.v)
+    k = 10
+    rows, cols = np.nonzero(plain.frames[k] != pulled.frames[k])
+    ahead = np.sign(t0.u[k] - t0.u[0])  # the image direction the walker moves in
+    assert ahead != 0 and rows.size > 50
+    behind = (cols - t0.u[k]) * -ahead  # px behind the foot point
+    assert behind.min() > 0.1 * t0.width_px[k]
+    assert abs(rows.max() - t0.v[k]) <= 3

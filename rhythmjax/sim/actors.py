@@ -86,7 +86,24 @@ def walker_parts(c: float, a: dict) -> list:
         sgn = a["bag_side"]
         parts.append(("hull", _box(-0.16, 0.16, 0.28 * sgn, 0.38 * sgn, 0.55 * k, 0.9 * k),
                       a["bag_grey"], 0.0, 0.4 * sgn))
+    if a.get("suitcase", False):
+        parts.extend(suitcase_parts(a, k))
     return parts
+
+
+def suitcase_parts(a: dict, k: float) -> list:
+    """A wheeled suitcase pulled behind a walker (body frame: s forward, l lateral, z up, m):
+    0.40 m long, 0.24 m wide, 0.55 m tall, leaning towards the walker (its bottom 0.45-0.85 m
+    behind the walker's reference point, its top 0.25 m further forward) on its bag side, and
+    its handle up to the walker's hand (0.8 k m high). It translates with the walker and has no
+    rhythm of its own (drawn after the dev renderer's trailing suitcase; docs/rules.md, "The
+    foot column from the upper body")."""
+    sgn = a["bag_side"]
+    lat = 0.2 * sgn
+    return [("hull", _limb((-0.65, lat, 0.03), (-0.4, lat, 0.58), 0.2, 0.12, 0.2, 0.12),
+             a["bag_grey"], 0.0, lat),
+            ("hull", _limb((-0.2, 0.27 * sgn, 0.8 * k), (-0.3, lat, 0.58), 0.015, 0.015, 0.015,
+                           0.015), a["bag_grey"], 0.0, lat)]
 
 
 def bicycle_parts(t: float, a: dict) -> list:
@@ -190,9 +207,11 @@ def _grey_pair(rng, clothing: str = "contrasted") -> tuple[int, int]:
 
 
 def sample_params(kind: str, rng, bicycle_speed, bag_fraction,
-                  clothing: str = "contrasted") -> dict:
+                  clothing: str = "contrasted", suitcase_fraction: float = 0.0) -> dict:
     """Random ActorSpec keyword arguments of one actor of `kind` (see `synth.random_spec`);
-    `clothing` as `_grey_pair`'s."""
+    `clothing` as `_grey_pair`'s. A walker pulls a suitcase with probability
+    `suitcase_fraction`, drawn last and only where it is above 0 (scenes without suitcases
+    draw the same numbers as before it existed)."""
     torso, legs = _grey_pair(rng, clothing)
     kw = {"grey_torso": torso, "grey_legs": legs, "phase": float(rng.uniform(0, 1)),
           "grey_head": int(rng.uniform(60, 110))}
@@ -204,6 +223,8 @@ def sample_params(kind: str, rng, bicycle_speed, bag_fraction,
                   bag_side=float(rng.choice([-1.0, 1.0])),
                   grey_extra=int(rng.uniform(20, 70) if rng.random() < 0.5
                                  else rng.uniform(170, 230)))
+        if suitcase_fraction > 0:
+            kw["suitcase"] = bool(rng.random() < suitcase_fraction)
     elif kind == "bicycle":
         speed, cad = rng.uniform(*bicycle_speed), rng.uniform(0.9, 1.5)
         kw.update(pace_hz=2 * cad, step_length_m=speed / (2 * cad), grey_feet=20,

@@ -70,6 +70,7 @@ class ActorSpec:
     grey_extra: int = 200
     bag: bool = False
     bag_side: float = 1.0
+    suitcase: bool = False  # a wheeled suitcase pulled behind (walkers; `actors.suitcase_parts`)
 
     @property
     def speed_mps(self) -> float:
@@ -82,6 +83,7 @@ class ActorSpec:
             "torso": self.grey_torso, "legs": self.grey_legs, "shoes": self.grey_feet,
             "tyre": self.grey_feet, "head": self.grey_head, "bag_grey": self.grey_extra,
             "frame": self.grey_extra, "bag": self.bag, "bag_side": self.bag_side,
+            "suitcase": self.suitcase,
             "speed_mps": self.speed_mps, "cadence_hz": self.pace_hz / 2.0,
         }
 
@@ -359,7 +361,8 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                 min_life: int = 80, max_life: int = 120, range_m: tuple[float, float] = (3.5, 19.5),
                 bicycle_speed: tuple[float, float] = (3.0, 6.0), bag_fraction: float = 0.2,
                 noise_std: float = 2.0, jitter_px: float = 0.0, margin_px: float = 8.0,
-                crossing_fraction: float = 0.85, clothing: str = "contrasted") -> SceneSpec:
+                crossing_fraction: float = 0.85, clothing: str = "contrasted",
+                suitcase_fraction: float = 0.0) -> SceneSpec:
     """A random scene: walkers with the paper's pace N(2.05, 0.183) Hz and step length
     N(0.72, 0.09) m, bicycles at `bicycle_speed` m/s pedalling at 0.9-1.5 rev/s, dogs trotting
     at 3-5 Hz with 0.2-0.35 m steps. Each lives min_life..max_life frames (fewer for a bicycle
@@ -369,7 +372,9 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     life. Without `occlusion`, paths are re-drawn (up to 300 times) until the objects' image
     boxes never overlap; with it, overlaps are left as drawn. `clothing`: "contrasted" (every
     clothing grey at least 40 grey levels off the ground's 120) or "any" (uniform 20-235, some
-    close to the ground; `sim.actors.CLOTHING`). Deterministic given `seed`."""
+    close to the ground; `sim.actors.CLOTHING`). A walker pulls a wheeled suitcase behind it
+    with probability `suitcase_fraction` (0: none, and the scene is drawn as before the option
+    existed). Deterministic given `seed`."""
     if clothing not in sa.CLOTHING:
         raise ValueError(f"clothing must be one of {sa.CLOTHING}, got {clothing!r}")
     camera = camera or Camera()
@@ -381,7 +386,8 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     actors = []
     k = np.arange(n_frames)
     for kind in kinds:
-        kw = sa.sample_params(kind, rng, bicycle_speed, bag_fraction, clothing)
+        kw = sa.sample_params(kind, rng, bicycle_speed, bag_fraction, clothing,
+                              suitcase_fraction)
         speed = kw["pace_hz"] * kw["step_length_m"]
         life = int(rng.integers(min_life, max_life + 1))
         life = min(life, n_frames, max(16, int(crossing_fraction * (range_m[1] - range_m[0])
