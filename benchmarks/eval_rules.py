@@ -44,6 +44,9 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - core_column: the tracker's `body.column_fraction` 0.3 vs None (the default; rule 32b: where a
   detection is wider than its predicted body box, the foot column u_p is the centre of the
   columns reaching 0.3 of the vertical projection's maximum, not 0.1's).
+- height_fallback: the tracker's `size.min_height_scope` "window-or-track" vs "window" (the
+  default; rule 26f: a deciding window with fewer than `size.min_height_rows` readable heights
+  is read over the whole track).
 - upper_column: the tracker's `body.column_rows` 0.5 vs None (the default; rule 33: where a
   detection is wider than its predicted body box, u_p is the centre of the slice extent of the
   motion's columns over the top half of its rows).

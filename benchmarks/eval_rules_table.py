@@ -69,6 +69,9 @@ RULES = {
     "min_height_track": ("tracker", "size.min_height_heights", 0.5, 0.0, TRACKER_SOURCES,
                          "as min_height, every row of the track (26b, size.min_height_scope "
                          "'track'; decided on own seeds 230001-260001)"),
+    "height_fallback": ("tracker", "size.min_height_scope", "window-or-track", "window",
+                        TRACKER_SOURCES, "nothing fitted (26d's 0.5 walker heights and 10 rows); "
+                        "the dogs it is for found on own seeds 1170001-1280001 (rule 26f)"),
     "recheck": ("tracker", "recheck.enabled", True, False, TRACKER_SOURCES,
                 "nothing fitted (the walking model's bounds); later windows looked at on own "
                 "seeds 5555, 6666, 20240603, 777001, 888001, 999001, 230001-280001 (rule 29)"),
@@ -108,7 +111,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": TRACKER_SOURCES,
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
               "recheck_tail": TRACKER_SOURCES, "recheck_speed": (),
-              "core_column": (), "upper_column": ()}
+              "core_column": (), "upper_column": (), "height_fallback": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

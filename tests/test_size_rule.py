@@ -149,6 +149,27 @@ def test_window_scope_reads_the_deciding_window_only():
         SizeOptions(min_height_scope="rows")
 
 
+def test_window_or_track_scope_reads_the_track_where_the_window_has_too_few_rows():
+    """Rule 26f: a track whose deciding window (rows 0..12) has no readable top row (a far
+    dog: a walker's head would leave the image there) and whose next 20 rows read a 0.6 m dog
+    keeps its Pedestrian verdict with the window scope (0 rows read) and turns Non-pedestrian
+    with "window-or-track" (the track's 20 rows). A window with 12 readable rows of a 1.7 m
+    walker before the dog's rows keeps Pedestrian with either; one with 9 readable rows (below
+    `min_height_rows`) is read over the track, where the dog's 20 rows make the median low."""
+    fallback = SizeOptions(min_height_heights=0.5, min_height_scope="window-or-track")
+    result = {"verdict": int(Verdict.PEDESTRIAN), "reason": int(Reason.MATCHED),
+              "window": (0, 12)}
+    dog = _rows(0.6, 20)[:-1]
+    unread = [r._replace(v_top=math.nan) for r in _rows(0.6, 12)[:-1]]
+    assert refuse_low(result, TILTED, unread + dog, 1.7, ON) is result
+    assert refuse_low(result, TILTED, unread + dog, 1.7, fallback)["reason"] == Reason.TOO_LOW
+    walker = _rows(1.7, 12)[:-1]
+    assert refuse_low(result, TILTED, walker + dog, 1.7, fallback) is result
+    few = walker[:9] + unread[9:]
+    assert refuse_low(result, TILTED, few + dog, 1.7, ON) is result
+    assert refuse_low(result, TILTED, few + dog, 1.7, fallback)["reason"] == Reason.TOO_LOW
+
+
 def test_the_tracker_applies_the_rule():
     """One rendered walker at 18 m (its head inside the image of this 1 m camera) is judged
     Pedestrian by default and measures 1.7 m (within 0.05 m); with the rule at 2 walker heights

@@ -172,7 +172,7 @@ class RelinkOptions:
     gate_per_s: float = 0.5  # ... growing by this fraction per second since then
 
 
-HEIGHT_SCOPES = ("window", "track")  # `size.min_height_scope`
+HEIGHT_SCOPES = ("window", "track", "window-or-track")  # `size.min_height_scope`
 
 
 @dataclass(frozen=True)
@@ -189,7 +189,8 @@ class SizeOptions:
     # a walker's head would be inside the image, `size.median_height`; fewer: the verdict stands)
     min_height_scope: str = "window"  # the rows read: "window", those of the track's deciding
     # rhythm window (rule 26c: a track re-acquired onto another object keeps the height of the
-    # one its verdict was judged on); "track", every row (rule 26b)
+    # one its verdict was judged on); "track", every row (rule 26b); "window-or-track", the
+    # window's, every row where the window has fewer than min_height_rows (rule 26f)
 
     def __post_init__(self):
         if self.min_height_scope not in HEIGHT_SCOPES:

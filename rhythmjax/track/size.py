@@ -11,7 +11,9 @@ at least `min_height_rows` such rows, is below `min_height_heights` walker heigh
 Non-pedestrian with reason too-low; every other verdict stands (the paper's (13)-(15) decide
 them). The rows read are those of the deciding rhythm window (rule 26c, `min_height_scope`
 "window"): a track that re-acquisition or a crossing carried onto another object after its
-verdict keeps the height of the object the verdict was judged on."""
+verdict keeps the height of the object the verdict was judged on. With "window-or-track" (rule
+26f, off) a window with too few readable rows is read over the whole track instead (a far dog
+whose window rows are those where a walker's head would leave the image)."""
 
 from __future__ import annotations
 
@@ -57,20 +59,30 @@ def too_low(verdict: int, height_m: float, rows: int, walker_height_m: float,
             and height_m < options.min_height_heights * walker_height_m)
 
 
+def _height_of(camera: Camera | tuple, rows: list, walker_height_m: float) -> tuple[float, int]:
+    """`median_height` of `rows` (`rows.TrackRow`: u, v, v_top)."""
+    cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
+    return median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2], walker_height_m)
+
+
 def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m: float,
                options: SizeOptions) -> dict:
     """`result` (a track's deciding window's outcome: `toolkit.RESULT_FIELDS`, with its
     "window" (first, end) row indices) with verdict Non-pedestrian and reason too-low where
     `too_low` says so for the track's `rows` (`rows.TrackRow`: u, v, v_top): those of the
     deciding window with `options.min_height_scope` "window" (every row when the result names
-    none), all of them with "track"; `result` itself otherwise (nothing computed when off)."""
+    none), all of them with "track", the window's and where fewer than
+    `options.min_height_rows` of them are readable every row with "window-or-track" (rule 26f);
+    `result` itself otherwise (nothing computed when off)."""
     if options.min_height_heights <= 0 or int(result["verdict"]) != Verdict.PEDESTRIAN:
         return result
-    if options.min_height_scope == "window" and "window" in result:
+    if options.min_height_scope != "track" and "window" in result:
         first, end = result["window"]
-        rows = rows[first:end]
-    cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
-    height, n = median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2], walker_height_m)
+        height, n = _height_of(camera, rows[first:end], walker_height_m)
+        if options.min_height_scope == "window-or-track" and n < options.min_height_rows:
+            height, n = _height_of(camera, rows, walker_height_m)  # rule 26f: the track's
+    else:
+        height, n = _height_of(camera, rows, walker_height_m)
     if not too_low(int(result["verdict"]), height, n, walker_height_m, options):
         return result
     return {**result, "verdict": int(Verdict.NON_PEDESTRIAN), "reason": int(Reason.TOO_LOW)}
