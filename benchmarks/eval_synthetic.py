@@ -32,10 +32,11 @@ RECOMMENDED = SYNTHETIC_CONFIG  # the demo's config (and its tracker options, SY
 
 
 def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, camera=None,
-                clothing: str = "contrasted", suitcase_fraction: float = 0.0):
+                clothing: str = "contrasted", suitcase_fraction: float = 0.0,
+                lateral_deg: float | None = None):
     """The fixed evaluation scenes: (scene_seed, SceneSpec) pairs (`clothing`: `random_spec`'s,
     "any" for clothing grey levels that may match the ground's; `suitcase_fraction`: of the
-    walkers pulling a suitcase, `random_spec`'s)."""
+    walkers pulling a suitcase, and `lateral_deg`, paths crossing the view: `random_spec`'s)."""
     from rhythmjax.sim.scene import random_spec
 
     out = []
@@ -44,7 +45,8 @@ def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, 
         out.append((s, random_spec(s, n_walkers=4 if i < 5 else 3, n_bicycles=1,
                                    n_dogs=1 if i % 2 == 0 else 0, n_frames=n_frames,
                                    camera=camera, clothing=clothing,
-                                   suitcase_fraction=suitcase_fraction, **SCENE_OPTIONS)))
+                                   suitcase_fraction=suitcase_fraction,
+                                   lateral_deg=lateral_deg, **SCENE_OPTIONS)))
     return out
 
 

@@ -275,3 +275,22 @@ def test_suitcase_trails_its_walker_on_the_ground():
     behind = (cols - t0.u[k]) * -ahead  # px behind the foot point
     assert behind.min() > 0.1 * t0.width_px[k]
     assert abs(rows.max() - t0.v[k]) <= 3
+
+
+def test_lateral_paths_only_when_asked():
+    """`random_spec(lateral_deg=...)`: None (the default) draws the same scene as before the
+    option; 30 makes every path (walkers, bicycle, dog) head within 30 degrees of the x axis,
+    left or right, both drawn, where the default's in-view test leaves mostly radial paths
+    (|sin heading| > 0.8 for most walkers of these 20 scenes)."""
+    kw = dict(n_walkers=4, n_bicycles=1, n_dogs=1, n_frames=180, min_life=110, max_life=150,
+              range_m=(3.1, 19.9))
+    base = synth.random_spec(5, **kw)
+    assert synth.random_spec(5, lateral_deg=None, **kw) == base
+    lateral = [a.heading_rad for s in range(20)
+               for a in synth.random_spec(s, lateral_deg=30.0, **kw).actors]
+    off_axis = np.degrees(np.arcsin(np.abs(np.sin(lateral))))
+    assert len(lateral) == 120 and off_axis.max() <= 30.0 + 1e-9
+    assert np.any(np.cos(lateral) > 0) and np.any(np.cos(lateral) < 0)
+    radial = [abs(math.sin(a.heading_rad)) for s in range(20)
+              for a in synth.random_spec(s, **kw).actors if a.kind == "pedestrian"]
+    assert np.mean(np.asarray(radial) > 0.8) > 0.5

@@ -362,7 +362,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                 bicycle_speed: tuple[float, float] = (3.0, 6.0), bag_fraction: float = 0.2,
                 noise_std: float = 2.0, jitter_px: float = 0.0, margin_px: float = 8.0,
                 crossing_fraction: float = 0.85, clothing: str = "contrasted",
-                suitcase_fraction: float = 0.0) -> SceneSpec:
+                suitcase_fraction: float = 0.0, lateral_deg: float | None = None) -> SceneSpec:
     """A random scene: walkers with the paper's pace N(2.05, 0.183) Hz and step length
     N(0.72, 0.09) m, bicycles at `bicycle_speed` m/s pedalling at 0.9-1.5 rev/s, dogs trotting
     at 3-5 Hz with 0.2-0.35 m steps. Each lives min_life..max_life frames (fewer for a bicycle
@@ -374,7 +374,9 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     clothing grey at least 40 grey levels off the ground's 120) or "any" (uniform 20-235, some
     close to the ground; `sim.actors.CLOTHING`). A walker pulls a wheeled suitcase behind it
     with probability `suitcase_fraction` (0: none, and the scene is drawn as before the option
-    existed). Deterministic given `seed`."""
+    existed). `lateral_deg`: every path heads within this many degrees of the image's rows (left
+    or right: walkers crossing the view, as the dev clips' mostly do); None: any heading, which
+    the in-view test turns mostly radial for long lives. Deterministic given `seed`."""
     if clothing not in sa.CLOTHING:
         raise ValueError(f"clothing must be one of {sa.CLOTHING}, got {clothing!r}")
     camera = camera or Camera()
@@ -397,7 +399,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
             start = int(rng.integers(0, n_frames - life + 1))
             alive = (k >= start) & (k < start + life)
             best = _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion,
-                          range_m, margin_px)
+                          range_m, margin_px, lateral_deg)
             if best is None:
                 if life <= 16:
                     raise PlacementError("scene", f"could not place a {kind} path in view "
@@ -412,7 +414,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
 
 
 def _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion, range_m,
-           margin_px):
+           margin_px, lateral_deg=None):
     """Up to 300 random straight paths for one actor: the first whose image box clashes with no
     placed actor's, else the least clashing one in view; None when none stays in view."""
     fps, W, H = float(camera.fps), camera.image_width, camera.image_height
@@ -420,7 +422,11 @@ def _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion, r
     afs = host.a * host.f
     best = None
     for _ in range(300):
-        head = float(rng.uniform(-math.pi, math.pi))
+        if lateral_deg is None:
+            head = float(rng.uniform(-math.pi, math.pi))
+        else:  # within lateral_deg of the x axis (the image's rows), left or right
+            head = math.radians(float(rng.uniform(-lateral_deg, lateral_deg))) + (
+                math.pi if rng.random() < 0.5 else 0.0)
         ym = float(rng.uniform(*range_m))
         half = 0.8 * (W / 2) * ym * math.cos(host.theta) / afs
         xm = float(rng.uniform(-half, half))
