@@ -65,17 +65,23 @@ def differences(frames, options: TrackerOptions) -> list:
     return out
 
 
-def _best_p(cfg, t, signal, xy):
-    """(best-window P, any window Pedestrian) over the windows of N rows, one every hop."""
+def judged_windows(cfg, t, signal, xy):
+    """`classify_window`'s result for each rhythm window of `signal` (N rows, one every hop,
+    at most N/4 missing), in order; `t` s and `xy` m (ground points) per row."""
     n, hop = int(cfg.thresholds.n), int(cfg.thresholds.hop_samples)
-    best, ped = math.nan, False
     for k in range(0, len(signal) - n + 1, hop):
         x = signal[k:k + n]
         if np.sum(~np.isfinite(x)) > 0.25 * n:
             continue
-        r = classify_window_jit(cfg, jnp.asarray(x, jnp.float32),
-                                jnp.asarray(t[k:k + n] - t[k], jnp.float32),
-                                jnp.asarray(xy[k:k + n], jnp.float32), jnp.asarray(True))
+        yield classify_window_jit(cfg, jnp.asarray(x, jnp.float32),
+                                  jnp.asarray(t[k:k + n] - t[k], jnp.float32),
+                                  jnp.asarray(xy[k:k + n], jnp.float32), jnp.asarray(True))
+
+
+def _best_p(cfg, t, signal, xy):
+    """(best-window P, any window Pedestrian) over the windows of N rows, one every hop."""
+    best, ped = math.nan, False
+    for r in judged_windows(cfg, t, signal, xy):
         p = np.asarray(r.peak_power)[np.asarray(r.peak_mask)]
         if p.size:
             best = float(np.nanmax([best, p.max()])) if math.isfinite(best) else float(p.max())

@@ -31,7 +31,6 @@ import eval_window_b as ewb  # noqa: E402
 
 from rhythmjax.model.camera import image_width  # noqa: E402
 from rhythmjax.model.params import config_from_dict  # noqa: E402
-from rhythmjax.model.rhythm import classify_window_jit  # noqa: E402
 from rhythmjax.model.status import Verdict  # noqa: E402
 from rhythmjax.sim.evaluate import match_tracks  # noqa: E402
 from rhythmjax.sim.presets import synthetic_options  # noqa: E402
@@ -46,15 +45,8 @@ WAYS = ("trk_first", "trk", "trk2W", "truthW", "truth2W")
 def window_paces(cfg, t, signal, xy) -> tuple[float, float]:
     """(pace Hz of the first window judged Pedestrian, of the Pedestrian window with the
     strongest peak); NaN, NaN when none is."""
-    n, hop = int(cfg.thresholds.n), int(cfg.thresholds.hop_samples)
     first, best = math.nan, (-1.0, math.nan)
-    for k in range(0, len(signal) - n + 1, hop):
-        x = signal[k:k + n]
-        if np.sum(~np.isfinite(x)) > 0.25 * n:
-            continue
-        r = classify_window_jit(cfg, jnp.asarray(x, jnp.float32),
-                                jnp.asarray(t[k:k + n] - t[k], jnp.float32),
-                                jnp.asarray(xy[k:k + n], jnp.float32), jnp.asarray(True))
+    for r in ewb.judged_windows(cfg, t, signal, xy):
         if int(r.verdict) != Verdict.PEDESTRIAN:
             continue
         p = float(np.asarray(r.peak_power)[np.asarray(r.peak_mask)].max())
