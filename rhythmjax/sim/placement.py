@@ -1,8 +1,13 @@
-"""Whether a random scene's objects can be placed in the view at all (`scene.random_spec`)."""
+"""Whether a random scene's objects can be placed in the view at all, and each object's random
+path (`scene.random_spec`)."""
 
 from __future__ import annotations
 
-from ..model.camera_np import camera_tuple, depth_3d
+import math
+
+import numpy as np
+
+from ..model.camera_np import camera_tuple, depth_3d, project_3d
 from ..model.params import Camera, ConfigError
 from . import actors as sa
 
@@ -42,3 +47,51 @@ def check_room(camera: Camera, n_walkers: int, n_bicycles: int, n_dogs: int, n_f
         f"range ({float(range_m[1]):g} m), where they are smallest, their image boxes, each "
         f"alive at least {min(min_life, n_frames)} of {n_frames} frames, would cover the image "
         f"{cover:.3g} times over (about {fit} walkers fit); ask for fewer objects or more frames")
+
+
+def place_path(camera: Camera, kind: str, rng: np.random.Generator, k: np.ndarray, start: int,
+               life: int, alive: np.ndarray, speed: float, placed: list, occlusion: bool,
+               range_m: tuple[float, float], margin_px: float,
+               lateral_deg: float | None = None):
+    """Up to 300 random straight paths for one actor of `kind` alive at frames `alive` (of the
+    frame indices `k`, from `start` for `life` frames) at `speed` m/s: the first whose image box
+    clashes with no `placed` actor's (each (alive, u, half-width, v, height) px), else the least
+    clashing one in view: (clash frames, heading rad, x m, y m at `start`, u, half-width, v,
+    height px per frame); None when none stays in view (within `range_m` m and `margin_px` px
+    of the image's sides and bottom). Headings uniform, or within `lateral_deg` degrees of the
+    x axis, left or right (`scene.random_spec`)."""
+    fps, W, H = float(camera.fps), camera.image_width, camera.image_height
+    host = camera_tuple(camera)
+    afs = host.a * host.f
+    best = None
+    for _ in range(300):
+        if lateral_deg is None:
+            head = float(rng.uniform(-math.pi, math.pi))
+        else:  # within lateral_deg of the x axis (the image's rows), left or right
+            head = math.radians(float(rng.uniform(-lateral_deg, lateral_deg))) + (
+                math.pi if rng.random() < 0.5 else 0.0)
+        ym = float(rng.uniform(*range_m))
+        half = 0.8 * (W / 2) * ym * math.cos(host.theta) / afs
+        xm = float(rng.uniform(-half, half))
+        tau = (k - start - life / 2) / fps
+        x = xm + speed * tau * math.cos(head)
+        y = ym + speed * tau * math.sin(head)
+        u, v = project_3d(host, x, y, 0.0)
+        a = alive
+        if not ((y[a] > range_m[0]).all() and (y[a] < range_m[1]).all()
+                and (u[a] > margin_px).all() and (u[a] < W - margin_px).all()
+                and (v[a] < H - margin_px).all()):
+            continue
+        d = depth_3d(host, y, 0.0)
+        hw_px, h_px = sa.EXTENT[kind][0] * afs / d, sa.EXTENT[kind][1] * afs / d
+        clash = 0
+        if not occlusion:
+            for a2, u2, hw2, v2, h2 in placed:
+                both = a & a2
+                clash += int(np.sum(both & (np.abs(u - u2) < hw_px + hw2)
+                                    & (v - h_px < v2) & (v2 - h2 < v)))
+        if best is None or clash < best[0]:
+            best = (clash, head, x[start], y[start], u, hw_px, v, h_px)
+        if clash == 0:
+            break
+    return best

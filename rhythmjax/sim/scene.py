@@ -36,7 +36,7 @@ from ..model.camera_np import (
 )
 from ..model.params import Camera
 from . import actors as sa
-from .placement import PlacementError, check_room
+from .placement import PlacementError, check_room, place_path
 
 
 KINDS = ("pedestrian", "bicycle", "dog")
@@ -398,8 +398,8 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
         while best is None:  # a life too long for any path in view: shorten it by 10 %
             start = int(rng.integers(0, n_frames - life + 1))
             alive = (k >= start) & (k < start + life)
-            best = _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion,
-                          range_m, margin_px, lateral_deg)
+            best = place_path(camera, kind, rng, k, start, life, alive, speed, placed,
+                              occlusion, range_m, margin_px, lateral_deg)
             if best is None:
                 if life <= 16:
                     raise PlacementError("scene", f"could not place a {kind} path in view "
@@ -411,47 +411,6 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                                 n_frames=life, **kw))
     return SceneSpec(n_frames=n_frames, actors=tuple(actors), camera=camera, noise_std=noise_std,
                      jitter_px=jitter_px)
-
-
-def _place(camera, kind, rng, k, start, life, alive, speed, placed, occlusion, range_m,
-           margin_px, lateral_deg=None):
-    """Up to 300 random straight paths for one actor: the first whose image box clashes with no
-    placed actor's, else the least clashing one in view; None when none stays in view."""
-    fps, W, H = float(camera.fps), camera.image_width, camera.image_height
-    host = camera_tuple(camera)
-    afs = host.a * host.f
-    best = None
-    for _ in range(300):
-        if lateral_deg is None:
-            head = float(rng.uniform(-math.pi, math.pi))
-        else:  # within lateral_deg of the x axis (the image's rows), left or right
-            head = math.radians(float(rng.uniform(-lateral_deg, lateral_deg))) + (
-                math.pi if rng.random() < 0.5 else 0.0)
-        ym = float(rng.uniform(*range_m))
-        half = 0.8 * (W / 2) * ym * math.cos(host.theta) / afs
-        xm = float(rng.uniform(-half, half))
-        tau = (k - start - life / 2) / fps
-        x = xm + speed * tau * math.cos(head)
-        y = ym + speed * tau * math.sin(head)
-        u, v = project_3d(host, x, y, 0.0)
-        a = alive
-        if not ((y[a] > range_m[0]).all() and (y[a] < range_m[1]).all()
-                and (u[a] > margin_px).all() and (u[a] < W - margin_px).all()
-                and (v[a] < H - margin_px).all()):
-            continue
-        d = depth_3d(host, y, 0.0)
-        hw_px, h_px = sa.EXTENT[kind][0] * afs / d, sa.EXTENT[kind][1] * afs / d
-        clash = 0
-        if not occlusion:
-            for a2, u2, hw2, v2, h2 in placed:
-                both = a & a2
-                clash += int(np.sum(both & (np.abs(u - u2) < hw_px + hw2)
-                                    & (v - h_px < v2) & (v2 - h2 < v)))
-        if best is None or clash < best[0]:
-            best = (clash, head, x[start], y[start], u, hw_px, v, h_px)
-        if clash == 0:
-            break
-    return best
 
 
 __all__ = ["KINDS", "ActorSpec", "ObjectTruth", "PlacementError", "Scene", "SceneSpec", "bicycle",
