@@ -64,7 +64,8 @@ def walker_feet(c, step_length: float):
 
 
 def walker_parts(c: float, a: dict) -> list:
-    """Parts of a walker at gait cycle c; `a` holds height_m, step_length_m, grey levels, bag."""
+    """Parts of a walker at gait cycle c; `a` holds height_m, step_length_m, grey levels, bag,
+    suitcase."""
     k = a["height_m"] / 1.7
     L = a["step_length_m"]
     hip, sh = 0.9 * k, 1.42 * k
@@ -86,7 +87,7 @@ def walker_parts(c: float, a: dict) -> list:
         sgn = a["bag_side"]
         parts.append(("hull", _box(-0.16, 0.16, 0.28 * sgn, 0.38 * sgn, 0.55 * k, 0.9 * k),
                       a["bag_grey"], 0.0, 0.4 * sgn))
-    if a.get("suitcase", False):
+    if a["suitcase"]:
         parts.extend(suitcase_parts(a, k))
     return parts
 
