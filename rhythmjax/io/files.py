@@ -55,16 +55,22 @@ TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity")
 WINDOW_CANDIDATES = (("intensity_up20", -0.2), ("intensity_up10", -0.1),
                      ("intensity_down10", 0.1))
 CANDIDATE_COLUMNS = tuple(name for name, _ in WINDOW_CANDIDATES)
-OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top", "u_top", "state", *CANDIDATE_COLUMNS)
+# The pace window (rule 34, issue 16): I(k) summed in a window at window B's foot point as wide
+# as a walker's step, one optional column after the candidates'. It never decides a verdict:
+# where a rhythm window says Pedestrian and the pace window over the same rows does too, that
+# window's pace and stride are the pace window's (`model.candidates.strongest`).
+PACE_COLUMN = "intensity_wide"
+OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top", "u_top", "state", *CANDIDATE_COLUMNS,
+                          PACE_COLUMN)
 LABELS = ("pedestrian", "bicycle", "dog", "car", "other")
 TRACK_STATES = ("none", "detect", "observe", "predict")  # `state` (`status.TrackState` names)
 MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top", "u_top",
-                *CANDIDATE_COLUMNS)
+                *CANDIDATE_COLUMNS, PACE_COLUMN)
 MAX_ABS = 1e12
 TRACK_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
                "width_px": "float", "intensity": "float", "label": "str", "x": "float",
                "y": "float", "v_top": "float", "u_top": "float", "state": "str",
-               **{name: "float" for name in CANDIDATE_COLUMNS}}
+               **{name: "float" for name in (*CANDIDATE_COLUMNS, PACE_COLUMN)}}
 TRACK_NOT_EMPTY = ("track_id", "frame", "t")
 TRACK_KEY = "track_id" + KEY_SUFFIX  # a Table's codes of its track ids (`tables.convert_parquet`)
 
@@ -95,6 +101,8 @@ class Tracks:
     track_key: np.ndarray | None = None  # int64 codes equal where track_id is (`run_key`)
     state: np.ndarray | None = None  # object array of `TRACK_STATES` ("" = not given)
     candidates: np.ndarray | None = None  # (rows, K) float64: `CANDIDATE_COLUMNS`' I(k)
+    # (where given), then `PACE_COLUMN`'s (where given: `pace_window`)
+    pace_window: bool = False  # the last candidates column is the pace window (rule 34)
 
     def __len__(self) -> int:
         return int(self.frame.shape[0])
@@ -160,6 +168,7 @@ class TrackBatch:
     v_top: np.ndarray | None = None  # (B, T) px, the top row (head) where the file has it
     u_top: np.ndarray | None = None  # (B, T) px, the head's column at v_top, likewise
     candidates: np.ndarray | None = None  # (B, T, K): the candidate windows' I(k), if any
+    pace_window: bool = False  # the last candidates column is the pace window's (rule 34)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -191,7 +200,7 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
         if i is not None:
             raise tab.where(p, i, c, f"{float(a[i])!r} is not a usable value (inf or |value| > "
                             "1e12); leave the cell empty for a missing measurement")
-        if c in ("width_px", "intensity", *CANDIDATE_COLUMNS):
+        if c in ("width_px", "intensity", *CANDIDATE_COLUMNS, PACE_COLUMN):
             i = first_true(a < 0)
             if i is not None:
                 raise tab.where(p, i, c, f"{float(a[i])!r} is negative")
@@ -229,8 +238,10 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
     else:  # the rows are in order: taken as they are
         order = None
     col = {k: tab[k] if order is None else tab[k][order] for k in tab if k != "label"}
-    candidates = (np.stack([col[c] for c in CANDIDATE_COLUMNS], axis=1).astype(np.float64)
-                  if have else None)
+    pace_window = PACE_COLUMN in tab
+    extra = [*(CANDIDATE_COLUMNS if have else ()), *((PACE_COLUMN,) if pace_window else ())]
+    candidates = (np.stack([col[c] for c in extra], axis=1).astype(np.float64)
+                  if extra else None)
     lines = tab.lines if order is None else tab.lines[order]
     if order is not None:
         tid = tid[order]
@@ -243,7 +254,8 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
                   line=lines, unit=tab.unit, label=labels, x=col.get("x"), y=col.get("y"),
                   fps=None if fps is None else float(fps), v_top=col.get("v_top"),
                   u_top=col.get("u_top"), notes=notes,
-                  track_key=col.get(TRACK_KEY), state=col.get("state"), candidates=candidates)
+                  track_key=col.get(TRACK_KEY), state=col.get("state"), candidates=candidates,
+                  pace_window=pace_window)
 
 
 def run_key(rows) -> np.ndarray:
@@ -342,7 +354,7 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
                       t=tg.astype(np.float32), dt=dt.astype(np.float32), present=present,
                       length=length, labels=labels, xy=grid(tracks.x, tracks.y),
                       v_top=grid(tracks.v_top), u_top=grid(tracks.u_top),
-                      candidates=candidate_grid)
+                      candidates=candidate_grid, pace_window=tracks.pace_window)
 
 
 __all__: Sequence[str] = (

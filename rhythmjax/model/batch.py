@@ -204,8 +204,8 @@ def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progr
         if batch.candidates is not None:
             signal = np.concatenate([signal[:, None], batch.candidates[i, :L]], axis=1)
         pieces = classify_long_track(cfg, batch.z[i, :L], batch.width[i, :L], signal,
-                                     batch.dt[i, :L],
-                                     segment_rows=segment_rows)
+                                     batch.dt[i, :L], segment_rows=segment_rows,
+                                     pace_last=batch.pace_window)
         parts.append({k: np.asarray([p[k] for p in pieces]) for k in CODES})
         owners.append(np.full(len(pieces), i))
     owner = np.concatenate(owners)

@@ -9,6 +9,14 @@ WINDOW_CANDIDATES`); every classifier then judges each rhythm window once per ca
 paper's window B first) and keeps, per window, the candidate whose strongest peak of (13) is
 highest: `strongest`. With no candidate columns nothing changes (the paper's window B alone).
 
+The pace window (rule 34, `io.files.PACE_COLUMN`) is the last result where `pace_last`: it
+never decides. Where the chosen window says Pedestrian and the pace window over the same rows
+says Pedestrian too, the window's pace F (Hz) and stride T = D / (F N dt) (m, (14)) are the pace
+window's; every other field (verdict, reason, ratio, speed, peaks) stays the chosen one's.
+A walker crossing the view has its feet a step apart (0.6-0.9 m), more than W = 0.5 m: window B
+sees one foot's swing at a time, the wide window both. Off by default: it read the own crossing
+walkers' pace better and the dev clips' worse (docs/rules.md, rule 34).
+
 Measured before it was built (docs/window_b.md, "candidate windows"): walkers with a Pedestrian
 window, today -> candidates, own seeds +1, +1, 0, 0; dev clips +2; PETS09 through the tracker +1;
 one dog more on one own training seed.
@@ -20,6 +28,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from .status import Verdict
+
 
 def strongest_power(result: Mapping[str, np.ndarray]) -> np.ndarray:
     """Per window (leading axis), the power of its strongest peak of (13) (`peak_power` where
@@ -29,12 +39,22 @@ def strongest_power(result: Mapping[str, np.ndarray]) -> np.ndarray:
     return np.max(np.where(mask, power, 0.0), axis=-1, initial=0.0)
 
 
-def strongest(results: Sequence[Mapping[str, np.ndarray]]) -> tuple[dict, np.ndarray]:
+def strongest(results: Sequence[Mapping[str, np.ndarray]], *,
+              pace_last: bool = False) -> tuple[dict, np.ndarray]:
     """The per-window results of C candidates (dicts of NumPy arrays with a leading window axis,
     the same keys and shapes; `results[0]` the paper's window B) merged into one: per window the
     result of the candidate whose strongest peak is highest (the first such on ties, so the
     paper's window B wins a tie and a window without peaks keeps it). Returns the merged dict
-    and the chosen candidate per window (int64, 0 = the paper's window)."""
+    and the chosen candidate per window (int64, 0 = the paper's window). `pace_last`: the last
+    result is the pace window's (module doc), not a candidate."""
+    if pace_last:
+        merged, best = strongest(results[:-1])
+        pace = results[-1]
+        take = ((np.asarray(merged["verdict"]) == Verdict.PEDESTRIAN)
+                & (np.asarray(pace["verdict"]) == Verdict.PEDESTRIAN))
+        for k in ("pace_hz", "stride_m"):
+            merged[k] = np.where(take, np.asarray(pace[k]), np.asarray(merged[k]))
+        return merged, best
     if len(results) == 1:
         first = results[0]
         n = len(np.asarray(first["peak_power"]))

@@ -79,6 +79,7 @@ class Segments:
         self.n, self.hop = n_win, hop
         extra = rounds[0].rest.candidates if rounds else None
         self.n_candidates = 1 + (0 if extra is None else int(extra.shape[-1]))
+        self.pace_window = bool(rounds and rounds[0].rest.pace_window)  # its last column
 
     def __len__(self) -> int:
         return len(self.owner)
@@ -138,7 +139,8 @@ def classify_candidates(cfg: Config, segs: Segments, seg: np.ndarray, j: np.ndar
     if segs.n_candidates > 1:  # each window's speed once for every signal
         packed = np.concatenate([packed] + [segs.gather_packed(seg, j, c)[:1]
                                             for c in range(1, segs.n_candidates)])
-    return strongest(classify_windows_packed_candidates(cfg, packed, place, block))
+    return strongest(classify_windows_packed_candidates(cfg, packed, place, block),
+                     pace_last=segs.pace_window)
 
 
 def classify_segments(cfg: Config, segs: Segments, place: Placement | None = None,

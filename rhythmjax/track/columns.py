@@ -1,14 +1,15 @@
 """The tracker's output tables: tracks (ARCHITECTURE.md's format plus the filter's ground
-estimate, the state and, where the tracker sampled them, the candidate windows' I(k)) and
+estimate, the state and, where the tracker sampled them, the candidate and pace windows' I(k)) and
 verdicts, one row per track, from the tracker's objects."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
-from ..io.files import CANDIDATE_COLUMNS
+from ..io.files import CANDIDATE_COLUMNS, PACE_COLUMN
 from ..model.status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
 from .rows import TrackRow
 
@@ -17,16 +18,19 @@ TRACK_COLUMNS = ["track_id", *TrackRow._fields]  # track_id, then the fields of 
 
 
 def candidate_columns(columns) -> list[str]:
-    """The candidate-window columns (`io.files.CANDIDATE_COLUMNS`) that `columns` (a mapping of
-    tracks columns) holds, in their order: what a writer appends to its column order."""
-    return [c for c in CANDIDATE_COLUMNS if c in columns]
+    """The candidate-window columns (`io.files.CANDIDATE_COLUMNS`, then `PACE_COLUMN`) that
+    `columns` (a mapping of tracks columns) holds, in their order: what a writer appends to its
+    column order."""
+    return [c for c in (*CANDIDATE_COLUMNS, PACE_COLUMN) if c in columns]
 
 
-def tracks_columns(objs: list, *, candidates: bool | None = None) -> dict[str, np.ndarray]:
+def tracks_columns(objs: list, *, candidates: bool | None = None,
+                   pace: bool = False) -> dict[str, np.ndarray]:
     """The tracks format (ARCHITECTURE.md) plus the filter's ground estimate and the state, from
     objects with a track_id and rows (`TrackRow`). `candidates`: also the candidate windows'
     I(k) (grey levels; float64 columns `io.files.CANDIDATE_COLUMNS`) from each object's
-    `candidate_rows` (one tuple per row, that order); None: where the objects have them."""
+    `candidate_rows` (one tuple per row, that order); None: where the objects have them.
+    `pace`: the pace window's I(k) too (`io.files.PACE_COLUMN`, each tuple's last entry)."""
     rows = [(o.track_id, *r) for o in objs for r in o.rows]
     cols = list(zip(*rows)) if rows else [[] for _ in TRACK_COLUMNS]
     out = {k: np.asarray(c) for k, c in zip(TRACK_COLUMNS, cols)}
@@ -38,23 +42,29 @@ def tracks_columns(objs: list, *, candidates: bool | None = None) -> dict[str, n
         out[k] = out[k].astype(np.float64)
     if candidates is None:
         candidates = any(getattr(o, "candidate_rows", None) is not None for o in objs)
-    if candidates:
-        out.update(candidate_table(objs))
+    names = (*(CANDIDATE_COLUMNS if candidates else ()), *((PACE_COLUMN,) if pace else ()))
+    if names:
+        out.update(candidate_table(objs, names))
     return out
 
 
-def candidate_table(objs: list) -> dict[str, np.ndarray]:
-    """The candidate windows' I(k) (grey levels; float64 columns `io.files.CANDIDATE_COLUMNS`)
-    of objects' rows in order, from each object's `candidate_rows` (one tuple per row, in
-    that order). Raises ValueError naming the track when an object has none or too few."""
+def candidate_table(objs: list, names: Sequence[str] = CANDIDATE_COLUMNS
+                    ) -> dict[str, np.ndarray]:
+    """The candidate windows' I(k) (grey levels; float64 columns `names`, by default
+    `io.files.CANDIDATE_COLUMNS`) of objects' rows in order, from each object's `candidate_rows`
+    (one tuple per row, in that order). Raises ValueError naming the track when an object has
+    none or too few."""
     for o in objs:
         if o.candidate_rows is None or len(o.candidate_rows) != len(o.rows):
             n = None if o.candidate_rows is None else len(o.candidate_rows)
             raise ValueError(f"track {o.track_id}: candidate windows' I(k) for {n} of its "
                              f"{len(o.rows)} rows")
+        if any(len(c) != len(names) for c in o.candidate_rows):
+            raise ValueError(f"track {o.track_id}: candidate windows' I(k) not one per column "
+                             f"of {', '.join(names)}")
     values = np.asarray([c for o in objs for c in o.candidate_rows], np.float64)
-    values = values.reshape(-1, len(CANDIDATE_COLUMNS))
-    return {name: values[:, j].copy() for j, name in enumerate(CANDIDATE_COLUMNS)}
+    values = values.reshape(-1, len(names))
+    return {name: values[:, j].copy() for j, name in enumerate(names)}
 
 
 def verdict_columns(objs: list, n: int) -> dict[str, np.ndarray]:

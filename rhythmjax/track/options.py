@@ -130,6 +130,13 @@ class BodyOptions:
     # on own seed 5555 and UCSD's cart (Test004, a walker crossing it) more. Pace MAE and step
     # error better on every scored source. Costs three window-B sums a row and three more
     # (13)-(15) a rhythm window (bench_pipeline: -4 % fps with 1 object, -14 % with 5)
+    pace_window_widths: float = 0.0  # rule 34 (issue 16): I(k) summed also in window B scaled
+    # by this (2: 2 W wide, 2 W/5 high, bottom row at the foot row), written as the tracks'
+    # `intensity_wide` column; it never decides a verdict, but where a rhythm window says
+    # Pedestrian and this window over the same rows does too, the track's pace and stride are
+    # read from it (model.candidates.strongest). Off: 2 lowered the pace error of own walkers
+    # crossing the view (0.034 -> 0.026, 0.029 -> 0.024 Hz on two fresh pools) but raised it on
+    # the dev clips, whose walkers all cross it (0.016 -> 0.024 Hz; docs/rules.md, rule 34)
 
 
 @dataclass(frozen=True)

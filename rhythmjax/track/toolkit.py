@@ -156,7 +156,8 @@ class RhythmWindows(Protocol):
     result: dict | None  # the deciding (or first) window's outcome, `RESULT_FIELDS` + window
     decided: bool  # a window said Pedestrian: matching stops
     # optional, not part of the protocol: `candidate_rows`, per row a tuple of the candidate
-    # windows' I(k) (`track.tracker`, `body.window_candidates`); absent or None: window B only
+    # windows' I(k) (`track.tracker`, `body.window_candidates`); absent or None: window B only;
+    # `pace_window` True: each tuple's last entry is the pace window's (rule 34)
 
 
 def window_signal(obj, start: int, end: int, candidate: int = 0) -> np.ndarray:
@@ -190,7 +191,9 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
     the candidate whose strongest peak is highest decides (`model.candidates.strongest`; window
     B on ties), every candidate judged in one call (`rhythm.classify_window_candidates_jit`);
     the missing-sample rules read window B's I(k) only (a candidate is NaN exactly where it
-    is)."""
+    is). The pace window (`obj.pace_window`, rule 34) is judged in the same call and gives a
+    Pedestrian window's pace and stride where it says Pedestrian too (`strongest`'s
+    pace_last)."""
     n = cfg.thresholds.n
     rows = obj.rows
     k = obj.win_start
@@ -226,7 +229,8 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
         every = _outcome(classify_window_candidates_jit(
             cfg, jnp.asarray(np.stack(sigs), jnp.float32), *args[2:]))
         merged, best = strongest([{f: v[c][None] for f, v in every.items()}
-                                  for c in range(len(sigs))])
+                                  for c in range(len(sigs))],
+                                 pace_last=getattr(obj, "pace_window", False))
         out = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}
         chosen = int(best[0])
     obj.windows_done += 1

@@ -33,7 +33,7 @@ from ..model.camera_np import camera_tuple, upright_size
 from ..model.params import Config, host_float
 from ..model.status import VERDICT_LABELS, TrackState
 from ..vision import detect, stabilise
-from ..vision.window_b import window_b_candidates
+from ..vision.window_b import window_b_extras
 from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .options import TrackerOptions
@@ -62,7 +62,9 @@ class _Object:
     vel: list[Velocity] = field(default_factory=list)  # EKF ground velocity m/s per row
     top: float = math.nan  # top row px of the last detection (`detect.Detection.top`)
     candidate_rows: list[tuple[float, ...]] | None = None  # per row, I(k) of the candidate
-    # windows B (`io.files.WINDOW_CANDIDATES` order; NaN where `intensity` is); None: option off
+    # windows B (`io.files.WINDOW_CANDIDATES` order), then the pace window's where
+    # `pace_window` (rule 34); NaN where `intensity` is; None: both options off
+    pace_window: bool = False  # the last entry of each candidate_rows tuple is the pace window
 
 
 class _Lost(NamedTuple):
@@ -104,6 +106,8 @@ class OnlineTracker:
         self.n_frames = 0
         self._offsets = (tuple(float(off) for _, off in WINDOW_CANDIDATES)
                          if self.opt.body.window_candidates else None)  # in W, + = down
+        self._pace_scale = float(self.opt.body.pace_window_widths)  # rule 34; 0: off
+        self._extra = len(self._offsets or ()) + (self._pace_scale > 0)  # entries a row
 
     # ------------------------------------------------------------------------------------------
     def update(self, index: int, t: float, frame: np.ndarray | None) -> None:
@@ -198,7 +202,8 @@ class OnlineTracker:
             for det in found[:len(free)]:
                 s = free.pop(0)
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top,
-                                         candidate_rows=None if self._offsets is None else [])
+                                         candidate_rows=[] if self._extra else None,
+                                         pace_window=self._pace_scale > 0)
                 present[s], reset[s] = True, True
                 if opt.body.side_anchor:
                     cut, det = det, sides.anchor_at_side(det, self._walker_px(det.u, det.v),
@@ -315,8 +320,9 @@ class OnlineTracker:
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         intensity = math.nan if no_sample or D is None else detect.window_b_intensity(D, fu, fv, W)
         if obj.candidate_rows is not None:  # NaN exactly where `intensity` is
-            obj.candidate_rows.append((math.nan,) * len(self._offsets) if math.isnan(intensity)
-                                      else window_b_candidates(D, fu, fv, W, self._offsets))
+            obj.candidate_rows.append((math.nan,) * self._extra if math.isnan(intensity) else
+                                      window_b_extras(D, fu, fv, W, self._offsets or (),
+                                                      self._pace_scale))
         top, obj.top = (obj.top if measured else math.nan), math.nan  # this frame's only
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
                                  float(mean[0]), float(mean[2]), int(obj.state), float(top)))
@@ -377,8 +383,7 @@ class OnlineTracker:
         obj.rows = rows + gap
         obj.vel = vel + [NAN_VELOCITY] * len(gap)
         if old.candidate_rows is not None:
-            obj.candidate_rows = old.candidate_rows[:kept] + [(math.nan,) * len(
-                self._offsets)] * len(gap)
+            obj.candidate_rows = old.candidate_rows[:kept] + [(math.nan,) * self._extra] * len(gap)
         obj.track_id = old.track_id
         self.relinked += 1
         return True
@@ -398,7 +403,8 @@ class OnlineTracker:
         for o in objs:  # rule 26: a Pedestrian too low for a walker (off by default)
             if o.result is not None:
                 o.result = refuse_low(o.result, self._camera, o.rows, walker_m, self.opt.size)
-        return (tracks_columns(objs, candidates=self._offsets is not None),
+        return (tracks_columns(objs, candidates=self._offsets is not None,
+                               pace=self._pace_scale > 0),
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 
     def _split_at_switch(self, obj: _Object) -> None:
@@ -425,7 +431,8 @@ class OnlineTracker:
         the final window rule, added to the finished tracks."""
         cands = obj.candidate_rows
         part = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[rows],
-                       vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows])
+                       vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows],
+                       pace_window=obj.pace_window)
         self._next_id += 1
         while not part.decided and len(part.rows) >= part.win_start + self.cfg.thresholds.n:
             match_window(self.cfg, part)

@@ -63,6 +63,19 @@ def window_b_candidates(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number
     return tuple(window_b_intensity(absdiff, u_p, v_p + float(off) * W, W) for off in offsets)
 
 
+def window_b_extras(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
+                    offsets: Sequence[float], pace_scale: float) -> tuple[float, ...]:
+    """The tracker's extra I(k) samples of a row (grey levels): the candidate windows B
+    (`window_b_candidates` at `offsets`), then, where `pace_scale` > 0, the pace window of rule
+    34 (`io.files.PACE_COLUMN`): window B scaled by `pace_scale` about the foot point, i.e.
+    `pace_scale` W px wide and `pace_scale` W/5 px high with its bottom row at v_p
+    (`window_b_intensity(absdiff, u_p, v_p, pace_scale * W)`). NaN rules as there."""
+    moved = window_b_candidates(absdiff, u_p, v_p, W, offsets)
+    if pace_scale <= 0:
+        return moved
+    return moved + (window_b_intensity(absdiff, u_p, v_p, pace_scale * W),)
+
+
 @jax.jit
 def _walker_width(camera: Camera, width_m, u, v):
     _, y, ok = ground_from_image(camera, u, v)
