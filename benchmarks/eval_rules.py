@@ -50,6 +50,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - upper_column: the tracker's `body.column_rows` 0.5 vs None (the default; rule 33: where a
   detection is wider than its predicted body box, u_p is the centre of the slice extent of the
   motion's columns over the top half of its rows).
+- pace_window: the tracker's `body.pace_window_widths` 2.0 vs 0 (rule 34: a Pedestrian window's
+  pace and stride from I(k) of window B scaled by 2 where that window says Pedestrian too).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

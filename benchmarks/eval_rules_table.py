@@ -95,6 +95,10 @@ RULES = {
                      "nothing fitted (0.5, a walker's hips at half its height); the case found "
                      "on the dev clips (dev_walk_05's suitcase), so they only report it; only "
                      "where the extent is wider than the predicted body box (rule 33)"),
+    "pace_window": ("tracker", "body.pace_window_widths", 2.0, 0.0, TRACKER_SOURCES,
+                    "nothing fitted (2 W, a step of a crossing walker, a priori); the need found "
+                    "on own crossing seeds 1470001-1520001, measured on fresh 1530001-1640001 "
+                    "(rule 34: the pace and stride only; off: worse on the dev clips)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -111,7 +115,8 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "split_shared": TRACKER_SOURCES, "side_anchor": (), "min_height": TRACKER_SOURCES,
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
               "recheck_tail": TRACKER_SOURCES, "recheck_speed": (),
-              "core_column": (), "upper_column": (), "height_fallback": ()}
+              "core_column": (), "upper_column": (), "height_fallback": (),
+              "pace_window": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -11,11 +11,14 @@ points with B two walker widths wide (`trk2W`), and B at the true foot point, W 
 of the first such window (`trk_first`, the tracker's rule, Sec. 4.2) or of the one with the
 strongest peak (the others).
 
-    python benchmarks/study_lateral_pace.py SEED [SEED ...]
+    python benchmarks/study_lateral_pace.py SEED [SEED ...] [-o ROWS.json]
+
+`-o` writes every walker's row (true pace and each way's, by path kind) for paired reading.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import sys
 from pathlib import Path
@@ -39,20 +42,21 @@ from rhythmjax.track import track_frames  # noqa: E402
 from rhythmjax.vision import detect  # noqa: E402
 
 
-WAYS = ("trk_first", "trk", "trk2W", "truthW", "truth2W")
+WAYS = ("trk_first", "trk", "trk_median", "trk2W", "trk2W_median", "truthW", "truth2W")
 
 
-def window_paces(cfg, t, signal, xy) -> tuple[float, float]:
+def window_paces(cfg, t, signal, xy) -> tuple[float, float, float]:
     """(pace Hz of the first window judged Pedestrian, of the Pedestrian window with the
-    strongest peak); NaN, NaN when none is."""
-    first, best = math.nan, (-1.0, math.nan)
+    strongest peak, the median over the Pedestrian windows); NaN each when none is."""
+    first, best, paces = math.nan, (-1.0, math.nan), []
     for r in ewb.judged_windows(cfg, t, signal, xy):
         if int(r.verdict) != Verdict.PEDESTRIAN:
             continue
         p = float(np.asarray(r.peak_power)[np.asarray(r.peak_mask)].max())
         first = float(r.pace_hz) if math.isnan(first) else first
         best = max(best, (p, float(r.pace_hz)))
-    return first, best[1]
+        paces.append(float(r.pace_hz))
+    return first, best[1], float(np.median(paces)) if paces else math.nan
 
 
 def window_b_signal(D, frames, I_trk, u, v, widths) -> np.ndarray:
@@ -92,10 +96,11 @@ def walker_rows(cfg, options, seed: int, lateral_deg: float | None) -> list[dict
                 return window_b_signal(D, f, I_trk, u, v, widths * W)
 
             u, v = np.asarray(tracks["u"])[sel], np.asarray(tracks["v"])[sel]
-            first, best = window_paces(cfg, tt, I_trk, xy)
+            first, best, median = window_paces(cfg, tt, I_trk, xy)
+            _, best2, median2 = window_paces(cfg, tt, signal(u, v, 2.0), xy)
             out.append({"true": float(spec.actors[int(obj.track_id[3:])].pace_hz),
-                        "trk_first": first, "trk": best,
-                        "trk2W": window_paces(cfg, tt, signal(u, v, 2.0), xy)[1],
+                        "trk_first": first, "trk": best, "trk_median": median,
+                        "trk2W": best2, "trk2W_median": median2,
                         "truthW": window_paces(cfg, tt, signal(obj.u[f], obj.v[f], 1.0), xy)[1],
                         "truth2W": window_paces(cfg, tt, signal(obj.u[f], obj.v[f], 2.0),
                                                 xy)[1]})
@@ -103,15 +108,20 @@ def walker_rows(cfg, options, seed: int, lateral_deg: float | None) -> list[dict
 
 
 def main(argv: list[str]) -> int:
-    seeds = [int(s) for s in argv] or [1470001]
+    out = argv[argv.index("-o") + 1] if "-o" in argv else None
+    seeds = [int(s) for s in argv if s.isdigit()] or [1470001]
     cfg = config_from_dict(es.RECOMMENDED)
+    every = {}
     for name, lateral in (("radial (default paths)", None), ("crossing (lateral_deg 30)", 30.0)):
         rows = [r for s in seeds for r in walker_rows(cfg, synthetic_options(), s, lateral)]
+        every[name] = rows
         print(f"{name}: {len(rows)} walkers with a track")
         for way in WAYS:
             e = np.array([abs(r[way] - r["true"]) for r in rows if math.isfinite(r[way])])
             print(f"  {way:9s} Pedestrian {e.size:3d}  pace MAE {e.mean():.3f} Hz  median "
                   f"{np.median(e):.3f}  > 0.1 Hz: {int(np.sum(e > 0.1))}", flush=True)
+    if out:
+        Path(out).write_text(json.dumps(every, indent=1))
     return 0
 
 
