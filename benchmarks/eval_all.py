@@ -17,6 +17,8 @@ FRESH_SEED), `synthetic_any` and `count_any` (the same scenes with clothing of a
 close to the ground's: `sim.scene.random_spec`'s clothing "any"), `synthetic_suitcase` (the
 scenes with half the walkers pulling a wheeled suitcase: `random_spec`'s suitcase_fraction 0.5),
 `synthetic_lateral` (the scenes with every path within 30 degrees of crossing the view),
+`synthetic_knees` and `synthetic_lateral_knees` (those two with walkers that bend their knees
+and roll their feet heel to toe: `random_spec`'s articulated, `sim.legs`),
 `dev` (the 15 single/multi clips of ../shared/data/dev through the tracker, as `rhythmjax run
 -c CAMERA.json`), `dev_count`
 (the 3 crowd clips through `count_frames`, as `rhythmjax count -c CAMERA.json`), `pets` (the
@@ -64,8 +66,8 @@ from eval_all_score import (
 FRESH_SEED = 777_001  # a seed no rule was chosen on (eval_synthetic's is 20240603)
 DEV_ROOT = Path(os.environ.get("RHYTHMJAX_DEV", "/work/shared/data/dev"))
 SOURCES = ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitcase",
-           "synthetic_lateral", "dev", "dev_count", "pets", "pets_count", "pets_boxes", "ucsd",
-           "casia")
+           "synthetic_lateral", "synthetic_knees", "synthetic_lateral_knees", "dev", "dev_count",
+           "pets", "pets_count", "pets_boxes", "ucsd", "casia")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -73,7 +75,8 @@ SOURCES = ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitca
 
 
 def run_synthetic(sets, quick, log, clothing: str = "contrasted",
-                  suitcase_fraction: float = 0.0, lateral_deg: float | None = None) -> dict:
+                  suitcase_fraction: float = 0.0, lateral_deg: float | None = None,
+                  articulated: bool = False) -> dict:
     import eval_synthetic as es
 
     from rhythmjax.model.params import config_from_dict
@@ -85,7 +88,8 @@ def run_synthetic(sets, quick, log, clothing: str = "contrasted",
         r = es.evaluate(cfg, es.scene_specs(seed, 3 if quick else 10, camera=cfg.camera,
                                             clothing=clothing,
                                             suitcase_fraction=suitcase_fraction,
-                                            lateral_deg=lateral_deg),
+                                            lateral_deg=lateral_deg,
+                                            articulated=articulated),
                         verbose=False)["by_track"]
         out[str(seed)] = {"verdicts": verdict_row(r["objects"]), "objects": r["objects"],
                           "seconds": time.perf_counter() - t0}
@@ -320,6 +324,17 @@ def run_synthetic_lateral(sets, quick, log) -> dict:
     return run_synthetic(sets, quick, log, lateral_deg=30.0)
 
 
+def run_synthetic_knees(sets, quick, log) -> dict:
+    """`synthetic` with walkers that bend their knees and roll their feet heel to toe
+    (`random_spec`'s articulated; `sim.legs`)."""
+    return run_synthetic(sets, quick, log, articulated=True)
+
+
+def run_synthetic_lateral_knees(sets, quick, log) -> dict:
+    """`synthetic_lateral` with the walkers of `synthetic_knees`."""
+    return run_synthetic(sets, quick, log, lateral_deg=30.0, articulated=True)
+
+
 def run_count_any(sets, quick, log) -> dict:
     """`count` with clothing of any grey."""
     return run_count(sets, quick, log, clothing="any")
@@ -327,6 +342,8 @@ def run_count_any(sets, quick, log) -> dict:
 
 RUNNERS = {"synthetic": run_synthetic, "count": run_count, "synthetic_any": run_synthetic_any,
            "synthetic_suitcase": run_synthetic_suitcase, "synthetic_lateral": run_synthetic_lateral,
+           "synthetic_knees": run_synthetic_knees,
+           "synthetic_lateral_knees": run_synthetic_lateral_knees,
            "count_any": run_count_any, "dev": run_dev,
            "dev_count": run_dev_count, "pets": run_pets, "pets_count": run_pets_count,
            "pets_boxes": run_pets_boxes, "ucsd": run_ucsd, "casia": run_casia}
@@ -363,7 +380,7 @@ def print_table(out: dict) -> None:
         if "skipped" in r:
             print(f"| {name} | {r['skipped']} |" + " |" * 8)
         elif name in ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitcase",
-                      "synthetic_lateral"):
+                      "synthetic_lateral", "synthetic_knees", "synthetic_lateral_knees"):
             for seed, s in r.items():
                 print(table_line(f"{name} seed {seed}", s.get("verdicts"), s.get("count")))
         else:

@@ -33,10 +33,11 @@ RECOMMENDED = SYNTHETIC_CONFIG  # the demo's config (and its tracker options, SY
 
 def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, camera=None,
                 clothing: str = "contrasted", suitcase_fraction: float = 0.0,
-                lateral_deg: float | None = None):
+                lateral_deg: float | None = None, articulated: bool = False):
     """The fixed evaluation scenes: (scene_seed, SceneSpec) pairs (`clothing`: `random_spec`'s,
     "any" for clothing grey levels that may match the ground's; `suitcase_fraction`: of the
-    walkers pulling a suitcase, and `lateral_deg`, paths crossing the view: `random_spec`'s)."""
+    walkers pulling a suitcase, `lateral_deg`, paths crossing the view, and `articulated`,
+    walkers with knees and heel-to-toe feet: `random_spec`'s)."""
     from rhythmjax.sim.scene import random_spec
 
     out = []
@@ -46,7 +47,8 @@ def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, 
                                    n_dogs=1 if i % 2 == 0 else 0, n_frames=n_frames,
                                    camera=camera, clothing=clothing,
                                    suitcase_fraction=suitcase_fraction,
-                                   lateral_deg=lateral_deg, **SCENE_OPTIONS)))
+                                   lateral_deg=lateral_deg, articulated=articulated,
+                                   **SCENE_OPTIONS)))
     return out
 
 

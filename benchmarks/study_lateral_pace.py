@@ -11,9 +11,10 @@ points with B two walker widths wide (`trk2W`), and B at the true foot point, W 
 of the first such window (`trk_first`, the tracker's rule, Sec. 4.2) or of the one with the
 strongest peak (the others).
 
-    python benchmarks/study_lateral_pace.py SEED [SEED ...] [-o ROWS.json]
+    python benchmarks/study_lateral_pace.py SEED [SEED ...] [-o ROWS.json] [--articulated]
 
-`-o` writes every walker's row (true pace and each way's, by path kind) for paired reading.
+`-o` writes every walker's row (true pace and each way's, by path kind) for paired reading;
+`--articulated` draws the walkers with knees and heel-to-toe feet (`sim.legs`).
 """
 
 from __future__ import annotations
@@ -67,11 +68,14 @@ def window_b_signal(D, frames, I_trk, u, v, widths) -> np.ndarray:
                      for i, k in enumerate(frames)])
 
 
-def walker_rows(cfg, options, seed: int, lateral_deg: float | None) -> list[dict]:
+def walker_rows(cfg, options, seed: int, lateral_deg: float | None,
+                articulated: bool = False) -> list[dict]:
     """One row per walker of the seed's ten scenes with a track: its true pace and the pace
-    each way of `WAYS` reads (NaN where no window is judged Pedestrian)."""
+    each way of `WAYS` reads (NaN where no window is judged Pedestrian); `articulated`:
+    walkers with knees and heel-to-toe feet (`sim.legs`)."""
     out = []
-    for s, spec in es.scene_specs(seed, 10, camera=cfg.camera, lateral_deg=lateral_deg):
+    for s, spec in es.scene_specs(seed, 10, camera=cfg.camera, lateral_deg=lateral_deg,
+                                  articulated=articulated):
         scene = render_scene(s, spec)
         frames = list(scene.frames)
         tracks, _, _, _ = track_frames(cfg, ((i, i / scene.fps, f) for i, f in enumerate(frames)),
@@ -110,10 +114,12 @@ def walker_rows(cfg, options, seed: int, lateral_deg: float | None) -> list[dict
 def main(argv: list[str]) -> int:
     out = argv[argv.index("-o") + 1] if "-o" in argv else None
     seeds = [int(s) for s in argv if s.isdigit()] or [1470001]
+    articulated = "--articulated" in argv
     cfg = config_from_dict(es.RECOMMENDED)
     every = {}
     for name, lateral in (("radial (default paths)", None), ("crossing (lateral_deg 30)", 30.0)):
-        rows = [r for s in seeds for r in walker_rows(cfg, synthetic_options(), s, lateral)]
+        rows = [r for s in seeds
+                for r in walker_rows(cfg, synthetic_options(), s, lateral, articulated)]
         every[name] = rows
         print(f"{name}: {len(rows)} walkers with a track")
         for way in WAYS:

@@ -22,6 +22,8 @@ import math
 
 import numpy as np
 
+from . import legs
+
 
 WALKER_SWING = 0.4
 DOG_SWING = 0.45
@@ -65,21 +67,13 @@ def walker_feet(c, step_length: float):
 
 def walker_parts(c: float, a: dict) -> list:
     """Parts of a walker at gait cycle c; `a` holds height_m, step_length_m, grey levels, bag,
-    suitcase."""
+    suitcase and `articulated` (legs with knees and heel-to-toe feet, `sim.legs`; else straight
+    legs, `rod_legs`)."""
     k = a["height_m"] / 1.7
-    L = a["step_length_m"]
-    hip, sh = 0.9 * k, 1.42 * k
-    parts = []
-    for side, (rel, lift) in zip((1.0, -1.0), walker_feet(c, L)):
-        rel, lift = float(rel), float(lift)
-        lat, fz = 0.05 * side, FOOT_LIFT * lift  # step width 0.1 m; toe clearance a few cm
-        parts.append(("hull", _limb((0.0, 1.8 * lat, hip), (rel, lat, fz + 0.07), 0.075, 0.065,
-                                    0.05, 0.045), a["legs"], 0.0, lat))
-        parts.append(("hull", _box(rel - 0.12, rel + 0.12, lat - 0.04, lat + 0.04, fz, fz + 0.08),
-                      a["shoes"], 0.0, lat))
-        hand = -0.6 * rel  # arms swing against the leg of the same side
-        parts.append(("hull", _limb((0.0, 0.25 * side, sh), (hand, 0.27 * side, 0.8 * k), 0.045,
-                                    0.045, 0.04, 0.04), a["torso"], 0.0, 0.3 * side))
+    if a.get("articulated", False):
+        parts = articulated_legs(c, a, k)
+    else:
+        parts = rod_legs(c, a, k)
     parts.append(("hull", _box(-0.13, 0.13, -0.225, 0.225, 0.86 * k, 1.46 * k), a["torso"], 0.0,
                   0.0))
     parts.append(("hull", _box(-0.1, 0.1, -0.08, 0.08, 1.47 * k, 1.7 * k), a["head"], 0.0, 0.0))
@@ -89,6 +83,45 @@ def walker_parts(c: float, a: dict) -> list:
                       a["bag_grey"], 0.0, 0.4 * sgn))
     if a["suitcase"]:
         parts.extend(suitcase_parts(a, k))
+    return parts
+
+
+def _arm(rel: float, side: float, k: float, a: dict) -> tuple:
+    """An arm swinging against the leg of its side (rel: that leg's foot place, m)."""
+    sh, hand = 1.42 * k, -0.6 * rel
+    return ("hull", _limb((0.0, 0.25 * side, sh), (hand, 0.27 * side, 0.8 * k), 0.045, 0.045,
+                          0.04, 0.04), a["torso"], 0.0, 0.3 * side)
+
+
+def rod_legs(c: float, a: dict, k: float) -> list:
+    """Straight legs from hip to a flat shoe that slides FOOT_LIFT above the ground in swing,
+    and the arms (the plain walker)."""
+    L, hip = a["step_length_m"], 0.9 * k
+    parts = []
+    for side, (rel, lift) in zip((1.0, -1.0), walker_feet(c, L)):
+        rel, lift = float(rel), float(lift)
+        lat, fz = 0.05 * side, FOOT_LIFT * lift  # step width 0.1 m; toe clearance a few cm
+        parts.append(("hull", _limb((0.0, 1.8 * lat, hip), (rel, lat, fz + 0.07), 0.075, 0.065,
+                                    0.05, 0.045), a["legs"], 0.0, lat))
+        parts.append(("hull", _box(rel - 0.12, rel + 0.12, lat - 0.04, lat + 0.04, fz, fz + 0.08),
+                      a["shoes"], 0.0, lat))
+        parts.append(_arm(rel, side, k, a))
+    return parts
+
+
+def articulated_legs(c: float, a: dict, k: float) -> list:
+    """Thigh, shank and a heel-to-toe foot per leg (`sim.legs`), and the arms."""
+    L = a["step_length_m"]
+    parts = []
+    for side, offset in ((1.0, 0.0), (-1.0, 0.5)):
+        lat = 0.05 * side
+        (hs, hz), (ks, kz), (as_, az), phi = legs.leg_joints(c, offset, L, k)
+        parts.append(("hull", _limb((hs, 1.8 * lat, hz), (ks, 1.4 * lat, kz), 0.075, 0.065,
+                                    0.06, 0.055), a["legs"], 0.0, lat))
+        parts.append(("hull", _limb((ks, 1.4 * lat, kz), (as_, lat, az), 0.06, 0.055, 0.045,
+                                    0.04), a["legs"], 0.0, lat))
+        parts.append(("hull", legs.foot_points(as_, az, phi, lat), a["shoes"], 0.0, lat))
+        parts.append(_arm(as_, side, k, a))
     return parts
 
 
@@ -182,6 +215,8 @@ def contact_offset(kind: str, t: np.ndarray, a: dict) -> np.ndarray:
     the midpoint of the feet for walkers, the mean of the four feet for dogs, 0 for bicycles
     (the midpoint between the wheels' ground contacts)."""
     c = a["pace_hz"] * np.asarray(t, np.float64) / 2.0 + a["phase"]
+    if kind == "pedestrian" and a.get("articulated", False):
+        return np.mean([legs.ankle(c, o, a["step_length_m"])[0] for o in (0.0, 0.5)], axis=0)
     if kind == "pedestrian":
         return np.mean([r for r, _ in walker_feet(c, a["step_length_m"])], axis=0)
     if kind == "dog":

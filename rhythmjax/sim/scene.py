@@ -71,6 +71,7 @@ class ActorSpec:
     bag: bool = False
     bag_side: float = 1.0
     suitcase: bool = False  # a wheeled suitcase pulled behind (walkers; `actors.suitcase_parts`)
+    articulated: bool = False  # walkers: knees and heel-to-toe feet (`sim.legs`), else rod legs
 
     @property
     def speed_mps(self) -> float:
@@ -83,7 +84,7 @@ class ActorSpec:
             "torso": self.grey_torso, "legs": self.grey_legs, "shoes": self.grey_feet,
             "tyre": self.grey_feet, "head": self.grey_head, "bag_grey": self.grey_extra,
             "frame": self.grey_extra, "bag": self.bag, "bag_side": self.bag_side,
-            "suitcase": self.suitcase,
+            "suitcase": self.suitcase, "articulated": self.articulated,
             "speed_mps": self.speed_mps, "cadence_hz": self.pace_hz / 2.0,
         }
 
@@ -362,7 +363,8 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                 bicycle_speed: tuple[float, float] = (3.0, 6.0), bag_fraction: float = 0.2,
                 noise_std: float = 2.0, jitter_px: float = 0.0, margin_px: float = 8.0,
                 crossing_fraction: float = 0.85, clothing: str = "contrasted",
-                suitcase_fraction: float = 0.0, lateral_deg: float | None = None) -> SceneSpec:
+                suitcase_fraction: float = 0.0, lateral_deg: float | None = None,
+                articulated: bool = False) -> SceneSpec:
     """A random scene: walkers with the paper's pace N(2.05, 0.183) Hz and step length
     N(0.72, 0.09) m, bicycles at `bicycle_speed` m/s pedalling at 0.9-1.5 rev/s, dogs trotting
     at 3-5 Hz with 0.2-0.35 m steps. Each lives min_life..max_life frames (fewer for a bicycle
@@ -376,7 +378,9 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
     with probability `suitcase_fraction` (0: none, and the scene is drawn as before the option
     existed). `lateral_deg`: every path heads within this many degrees of the image's rows (left
     or right: walkers crossing the view, as the dev clips' mostly do); None: any heading, which
-    the in-view test turns mostly radial for long lives. Deterministic given `seed`."""
+    the in-view test turns mostly radial for long lives. `articulated`: walkers with knees and
+    heel-to-toe feet (`sim.legs`; draws no random number, so the scene is otherwise the same).
+    Deterministic given `seed`."""
     if clothing not in sa.CLOTHING:
         raise ValueError(f"clothing must be one of {sa.CLOTHING}, got {clothing!r}")
     camera = camera or Camera()
@@ -407,6 +411,8 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                 life = max(16, int(0.9 * life))
         _, head, x0, y0, u, hw_px, v, h_px = best
         placed.append((alive, u, hw_px, v, h_px))
+        if kind == "pedestrian" and articulated:
+            kw["articulated"] = True
         actors.append(ActorSpec(kind, float(x0), float(y0), head, start_frame=start,
                                 n_frames=life, **kw))
     return SceneSpec(n_frames=n_frames, actors=tuple(actors), camera=camera, noise_std=noise_std,
