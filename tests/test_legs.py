@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from rhythmjax.sim import actors, legs
-from rhythmjax.sim.scene import random_spec, render_scene, walker, SceneSpec
+from rhythmjax.sim.scene import SceneSpec, random_spec, render_scene, walker
 
 
 L, K = 0.72, 1.0

@@ -25,7 +25,7 @@ import numpy as np
 from . import legs
 
 
-WALKER_SWING = 0.4
+WALKER_SWING = legs.SWING  # 0.4
 DOG_SWING = 0.45
 WHEEL_RADIUS = 0.34  # m
 WHEELBASE = 1.05  # m

@@ -38,7 +38,7 @@ import math
 import numpy as np
 
 
-SWING = 0.4  # fraction of the cycle in swing (sim.actors.WALKER_SWING)
+SWING = 0.4  # fraction of a walker's gait cycle in swing (sim.actors.WALKER_SWING is this)
 HEEL = 0.06  # m, heel behind the ankle
 TOE = 0.18  # m, toe ahead of the ankle
 ANKLE = 0.08  # m, ankle above the sole
@@ -50,7 +50,8 @@ HIP = 0.9  # hip joint height per unit k (k = height / 1.7 m), m
 MID_STANCE_KNEE = math.radians(5.0)  # knee flexion with the stance foot under the hip
 HEEL_STRIKE_KNEE = math.radians(5.0)  # and at heel strike
 # Swing key frames: (tau, ankle height m or None for the geometric end, pitch deg).
-SWING_KEYS = ((0.0, None, -45.0), (0.3, 0.20, -25.0), (0.6, 0.10, 0.0), (1.0, None, 15.0))
+SWING_KEYS = ((0.0, None, math.degrees(TOE_OFF_PITCH)), (0.3, 0.20, -25.0), (0.6, 0.10, 0.0),
+              (1.0, None, math.degrees(HEEL_STRIKE_PITCH)))
 # Foot outline about the ankle, flat (s, z) m: heel bottom and top, toe top and bottom.
 FOOT_OUTLINE = ((-HEEL, -ANKLE), (-HEEL, 0.0), (TOE, -0.045), (TOE, -ANKLE))
 
