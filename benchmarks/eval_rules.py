@@ -52,6 +52,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   motion's columns over the top half of its rows).
 - pace_window: the tracker's `body.pace_window_widths` 2.0 vs 0 (rule 34: a Pedestrian window's
   pace and stride from I(k) of window B scaled by 2 where that window says Pedestrian too).
+- window_per_pixel: the tracker's `body.window_per_pixel` True vs False (rule 35: I(k) the
+  mean of D over window B, grey levels per pixel, instead of its sum).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

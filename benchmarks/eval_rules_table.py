@@ -99,6 +99,9 @@ RULES = {
                     "nothing fitted (2 W, a step of a crossing walker, a priori); the need found "
                     "on own crossing seeds 1470001-1520001, measured on fresh 1530001-1640001 "
                     "(rule 34: the pace and stride only; off: worse on the dev clips)"),
+    "window_per_pixel": ("tracker", "body.window_per_pixel", True, False, TRACKER_SOURCES,
+                         "own scenes with knees, radial 1830001-1840001 (rule 35; confirmed on "
+                         "fresh 1850001-1880001: off, non-walkers more)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -116,7 +119,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
               "recheck_tail": TRACKER_SOURCES, "recheck_speed": (),
               "core_column": (), "upper_column": (), "height_fallback": (),
-              "pace_window": ()}
+              "pace_window": (), "window_per_pixel": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -39,6 +39,7 @@ TRACKER_DEFAULTS = [
     ("high_foot_frames", "body.high_foot_frames", 3),
     ("(new: issue 16 item 2)", "body.window_candidates", True),
     ("(new: issue 16, rule 34)", "body.pace_window_widths", 0.0),
+    ("(new: issue 16, rule 35)", "body.window_per_pixel", False),  # I(k) per pixel of B
     ("min_area", "new.min_area", 40),
     ("outside_margin_px", "new.outside_margin_px", 8),
     ("near_widths", "new.near_widths", 1.0),

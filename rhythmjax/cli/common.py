@@ -68,6 +68,15 @@ def add_window_candidates(p: argparse.ArgumentParser, default: bool) -> None:
                    "by the candidate whose strongest spectral peak is highest")
 
 
+def add_window_per_pixel(p: argparse.ArgumentParser, default: bool) -> None:
+    """--window-per-pixel / --no-window-per-pixel (rule 35: I(k) as the mean of D over window
+    B, grey levels per pixel, instead of its sum); `default` the verb's options' default."""
+    p.add_argument("--window-per-pixel", action=argparse.BooleanOptionalAction,
+                   default=default, help="I(k) as the mean of the frame difference over window "
+                   "B (grey levels per pixel) instead of its sum: no trend from a walker's "
+                   "image growing or shrinking as it comes nearer or goes away")
+
+
 def reading_check(args, src, notes=None) -> None:
     """After the video's pass: what was lost (frames read of frames announced, frames skipped
     and why) as one warning line on stderr, always; an error (`BadInput`) with --strict. Its

@@ -26,6 +26,7 @@ from .common import (
     add_common,
     add_strict,
     add_window_candidates,
+    add_window_per_pixel,
     fps_arg,
     load_config_dict,
     open_source,
@@ -79,6 +80,8 @@ def cmd_rhythm(args) -> int:
     --window-candidates: I(k) also in window B moved by -0.2, -0.1 and +0.1 W (the tracker's
     body.window_candidates; columns intensity_up20, intensity_up10, intensity_down10), and each
     rhythm window judged by the candidate with the strongest spectral peak.
+    --window-per-pixel: each I(k) the mean of the difference over its window instead of the
+    sum (the tracker's body.window_per_pixel, rule 35).
 
     Writes DIR/tracks.parquet (the tracks format with intensity) and DIR/verdicts.csv; prints
     the verdicts (or a --json summary). The two replace the previous pair together, and nothing
@@ -100,7 +103,8 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
         check_in_image(tracks, src.width, src.height, mot, args.box_scale)
         W = window_widths(cfg, tracks.u, tracks.v)
         offsets = tuple(off for _, off in WINDOW_CANDIDATES) if args.window_candidates else ()
-        sig = box_intensities(src, tracks.frame, tracks.u, tracks.v, W, offsets=offsets)
+        sig = box_intensities(src, tracks.frame, tracks.u, tracks.v, W, offsets=offsets,
+                              mean=args.window_per_pixel)
         reading_check(args, src)
     late = np.flatnonzero(tracks.frame >= sig.n_frames)
     if late.size:
@@ -171,6 +175,7 @@ def register(sub, formatter=None) -> None:
     p.add_argument("--fps", type=fps_arg, help="frame rate (frames/s): --fps, else the config's "
                    "camera.fps, else the file's; needed for a frame folder without camera.fps")
     add_window_candidates(p, BodyOptions().window_candidates)
+    add_window_per_pixel(p, BodyOptions().window_per_pixel)
     add_camera_check(p)
     add_strict(p)
     add_common(p)

@@ -135,7 +135,7 @@ class BoxSignal:
 
 def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.ndarray,
                     W: np.ndarray, *, motion: MotionOptions = MotionOptions(),
-                    offsets: Sequence[float] = ()) -> BoxSignal:
+                    offsets: Sequence[float] = (), mean: bool = False) -> BoxSignal:
     """I(k) of window B for rows (frame, u, v, W) (0-based frame index, px) over the
     `(index, t, gray | None)` stream `frames`, one pass, holding two frames: the sum of
     D = |gray_k - gray_(k-1)| over W x W/5 px ending at the foot row (`window_b_intensity`).
@@ -145,7 +145,9 @@ def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.nd
     shake is compensated as in the tracker (`motion.stabilise`, `vision.stabilise.Stabiliser`),
     on the frames with rows to sample (a fixed camera's D is unchanged). `offsets` (walker widths
     W, negative: up): also I(k) of window B moved down by offset x W px, per offset
-    (`vision.window_b.window_b_candidates`), as `BoxSignal.candidates`."""
+    (`vision.window_b.window_b_candidates`), as `BoxSignal.candidates`. `mean`: each I(k) the
+    mean of D over its window (grey levels per pixel; the tracker's `body.window_per_pixel`,
+    rule 35)."""
     frame = np.asarray(frame, np.int64)
     out = np.full(frame.shape, np.nan)
     offsets = tuple(float(o) for o in offsets)
@@ -176,10 +178,10 @@ def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.nd
                     if -0.5 <= u[r] < Wd - 0.5 and -0.5 <= v[r] < H - 0.5 and \
                             math.isfinite(W[r]) and W[r] > 0:
                         out[r] = detect.window_b_intensity(D, float(u[r]), float(v[r]),
-                                                           float(W[r]))
+                                                           float(W[r]), mean=mean)
                         if cand is not None:
                             cand[r] = window_b_candidates(D, float(u[r]), float(v[r]),
-                                                          float(W[r]), offsets)
+                                                          float(W[r]), offsets, mean=mean)
         prev = gray
         if index >= last:
             break

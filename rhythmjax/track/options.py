@@ -130,6 +130,12 @@ class BodyOptions:
     # on own seed 5555 and UCSD's cart (Test004, a walker crossing it) more. Pace MAE and step
     # error better on every scored source. Costs three window-B sums a row and three more
     # (13)-(15) a rhythm window (bench_pipeline: -4 % fps with 1 object, -14 % with 5)
+    window_per_pixel: bool = False  # rule 35 (issue 16): I(k) as the mean of D over window B
+    # (grey levels per pixel) instead of its sum (Sec. 4.1), candidate and pace windows alike.
+    # Window B is W x W/5 px and a walker's feet fill it alike at any distance, so the sum grows
+    # with W^2 as a walker comes nearer: a trend over a rhythm window of one walking towards or
+    # away from the camera; the mean has none. Chosen on own scenes with knees (docs/rules.md,
+    # rule 35)
     pace_window_widths: float = 0.0  # rule 34 (issue 16): I(k) summed also in window B scaled
     # by this (2: 2 W wide, 2 W/5 high, bottom row at the foot row), written as the tracks'
     # `intensity_wide` column; it never decides a verdict, but where a rhythm window says

@@ -318,11 +318,13 @@ class OnlineTracker:
         if measured and not self.opt.body.sample_estimate:
             fu = fu + sample_du  # a side-cut detection: window B on its visible feet
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
-        intensity = math.nan if no_sample or D is None else detect.window_b_intensity(D, fu, fv, W)
+        per_pixel = self.opt.body.window_per_pixel  # rule 35
+        intensity = (math.nan if no_sample or D is None
+                     else detect.window_b_intensity(D, fu, fv, W, mean=per_pixel))
         if obj.candidate_rows is not None:  # NaN exactly where `intensity` is
             obj.candidate_rows.append((math.nan,) * self._extra if math.isnan(intensity) else
                                       window_b_extras(D, fu, fv, W, self._offsets or (),
-                                                      self._pace_scale))
+                                                      self._pace_scale, mean=per_pixel))
         top, obj.top = (obj.top if measured else math.nan), math.nan  # this frame's only
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
                                  float(mean[0]), float(mean[2]), int(obj.state), float(top)))

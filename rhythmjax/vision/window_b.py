@@ -53,27 +53,31 @@ def window_b_intensity(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
 
 
 def window_b_candidates(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
-                        offsets: Sequence[float]) -> tuple[float, ...]:
+                        offsets: Sequence[float], *, mean: bool = False) -> tuple[float, ...]:
     """The rhythm signal I(k) (grey levels) of window B moved vertically, once per offset:
     `window_b_intensity(absdiff, u_p, v_p + offset * W, W)`, i.e. the same W x W/5 px window
     with its bottom row `offset` walker widths W (px) below the foot row v_p (negative: above;
     -0.1 moves it up by W/10 px), u_p and W unchanged. Used for the candidate windows B of
     issue 16 (`io.files.WINDOW_CANDIDATES`). The NaN rules of `window_b_intensity`: every value
-    NaN if u_p, v_p or W is not finite or W <= 0; 0 for a moved window outside the image."""
-    return tuple(window_b_intensity(absdiff, u_p, v_p + float(off) * W, W) for off in offsets)
+    NaN if u_p, v_p or W is not finite or W <= 0; 0 for a moved window outside the image.
+    `mean`: each the mean over its clipped window (grey levels per pixel), as there."""
+    return tuple(window_b_intensity(absdiff, u_p, v_p + float(off) * W, W, mean=mean)
+                 for off in offsets)
 
 
 def window_b_extras(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
-                    offsets: Sequence[float], pace_scale: float) -> tuple[float, ...]:
+                    offsets: Sequence[float], pace_scale: float, *,
+                    mean: bool = False) -> tuple[float, ...]:
     """The tracker's extra I(k) samples of a row (grey levels): the candidate windows B
     (`window_b_candidates` at `offsets`), then, where `pace_scale` > 0, the pace window of rule
     34 (`io.files.PACE_COLUMN`): window B scaled by `pace_scale` about the foot point, i.e.
     `pace_scale` W px wide and `pace_scale` W/5 px high with its bottom row at v_p
-    (`window_b_intensity(absdiff, u_p, v_p, pace_scale * W)`). NaN rules as there."""
-    moved = window_b_candidates(absdiff, u_p, v_p, W, offsets)
+    (`window_b_intensity(absdiff, u_p, v_p, pace_scale * W)`). NaN rules as there; `mean`: per
+    pixel, as there."""
+    moved = window_b_candidates(absdiff, u_p, v_p, W, offsets, mean=mean)
     if pace_scale <= 0:
         return moved
-    return moved + (window_b_intensity(absdiff, u_p, v_p, pace_scale * W),)
+    return moved + (window_b_intensity(absdiff, u_p, v_p, pace_scale * W, mean=mean),)
 
 
 @jax.jit
