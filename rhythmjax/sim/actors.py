@@ -13,7 +13,9 @@ cycle (p = frac(c - o) < swing) and moves forward 2 L then (L the step length) w
 profile (1 - cos(pi p / swing)) / 2; otherwise it is planted. Its position relative to the body,
 which moves at the constant speed F L, is rel = 2 L (g(p) - p) - L (1 - swing): zero mean, and
 constant on the ground during stance. Walkers: offsets 0 and 1/2, swing 0.4 of the cycle (0.8 of
-a step period), double support between. Dogs trot: diagonal pairs share an offset, swing 0.45.
+a step period), double support between; their legs straight (`rod_legs`) or, `articulated`,
+with knees and feet rolling heel to toe (`articulated_legs`, `sim.legs`). Dogs trot: diagonal
+pairs share an offset, swing 0.45.
 """
 
 from __future__ import annotations
