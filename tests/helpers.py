@@ -259,3 +259,29 @@ def simulate_tracks(rng: np.random.Generator, n: int, T: int, cam: CamRef = CamR
         dts.append(dt)
         xs.append(truth)
     return {"z": np.stack(zs), "width": np.stack(ws), "dt": np.stack(dts), "truth": np.stack(xs)}
+
+
+def write_clip_and_truth_boxes(scene, folder) -> tuple[str, object]:
+    """A rendered scene (`sim.scene.render_scene`) written to `folder` as an MJPG clip
+    (scene.avi, 15 fps) and its truth as MOT boxes (gt.txt: 1-based frames, id 1 for walkers
+    and 2 for the rest, boxes 3 W tall ending at the true foot row, W the drawn width).
+    Returns (video path, gt path)."""
+    import cv2
+
+    from rhythmjax.io.mot import write_mot
+    from rhythmjax.sim.scene import scene_to_tracks_truth
+
+    path = str(folder / "scene.avi")
+    h_px, w_px = scene.frames.shape[1:]
+    w = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (w_px, h_px), False)
+    for f in scene.frames:
+        w.write(f)
+    w.release()
+    c = scene_to_tracks_truth(scene)
+    h = 3 * c["width_px"]
+    ids = np.where(c["label"] == "pedestrian", 1, 2)
+    write_mot(folder / "gt.txt", {"frame": c["frame"] + 1, "id": ids,
+                                  "bb_left": c["u"] - c["width_px"] / 2 + 0.5,
+                                  "bb_top": c["v"] + 1 - h, "bb_width": c["width_px"],
+                                  "bb_height": h})
+    return path, folder / "gt.txt"

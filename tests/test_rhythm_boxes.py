@@ -7,17 +7,18 @@ from __future__ import annotations
 import json
 import math
 
-import cv2
 import numpy as np
 import pytest
 
 from rhythmjax.cli.main import main
 from rhythmjax.io import BadInput, Tracks, read_table, to_batch
-from rhythmjax.io.mot import read_mot_numbered, write_mot
+from rhythmjax.io.mot import read_mot_numbered
 from rhythmjax.model.batch import classify_tracks
 from rhythmjax.model.params import Config
 from rhythmjax.sim import scene as synth
 from rhythmjax.track.boxes import box_intensities, foot_points, tracks_from_mot, window_widths
+
+from .helpers import write_clip_and_truth_boxes
 
 
 def _loop_intensity(prev, cur, u, v, W):
@@ -117,20 +118,7 @@ def test_walker_and_dog_judged_from_their_truth_boxes(scene):
 def clip(scene, tmp_path_factory):
     """The scene as an MJPG clip and its truth as MOT boxes (1-based frames; boxes 3 W tall
     ending at the true foot row)."""
-    d = tmp_path_factory.mktemp("rhythm")
-    path = str(d / "scene.avi")
-    w = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (512, 512), False)
-    for f in scene.frames:
-        w.write(f)
-    w.release()
-    c = synth.scene_to_tracks_truth(scene)
-    h = 3 * c["width_px"]
-    ids = np.where(c["label"] == "pedestrian", 1, 2)
-    write_mot(d / "gt.txt", {"frame": c["frame"] + 1, "id": ids,
-                             "bb_left": c["u"] - c["width_px"] / 2 + 0.5,
-                             "bb_top": c["v"] + 1 - h, "bb_width": c["width_px"],
-                             "bb_height": h})
-    return path, d / "gt.txt"
+    return write_clip_and_truth_boxes(scene, tmp_path_factory.mktemp("rhythm"))
 
 
 def test_rhythm_verb_on_mot_boxes(clip, tmp_path, capsys):

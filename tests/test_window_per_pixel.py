@@ -16,13 +16,14 @@ import pytest
 
 from rhythmjax.cli.main import main as cli_main
 from rhythmjax.io import read_table
-from rhythmjax.io.mot import write_mot
 from rhythmjax.model.params import Config
 from rhythmjax.sim import scene as synth
 from rhythmjax.track import track_frames
 from rhythmjax.track.boxes import box_intensities, window_widths
 from rhythmjax.track.options import BodyOptions, TrackerOptions
 from rhythmjax.vision.window_b import window_b_candidates, window_b_extras, window_b_intensity
+
+from .helpers import write_clip_and_truth_boxes
 
 
 def test_per_pixel_windows_by_hand():
@@ -85,17 +86,7 @@ def test_rhythm_verb_flag(walker_scene, tmp_path):
     `box_intensities(..., mean=True)`'s; `--no-window-per-pixel` the sum's."""
     import cv2
 
-    video = str(tmp_path / "clip.avi")
-    w = cv2.VideoWriter(video, cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (512, 512), False)
-    for f in walker_scene.frames:
-        w.write(f)
-    w.release()
-    c = synth.scene_to_tracks_truth(walker_scene)
-    h = 3 * c["width_px"]
-    write_mot(tmp_path / "gt.txt", {"frame": c["frame"] + 1, "id": np.ones(len(h), np.int64),
-                                    "bb_left": c["u"] - c["width_px"] / 2 + 0.5,
-                                    "bb_top": c["v"] + 1 - h, "bb_width": c["width_px"],
-                                    "bb_height": h})
+    video, gt = write_clip_and_truth_boxes(walker_scene, tmp_path)
     cap = cv2.VideoCapture(video)
     decoded = []
     while True:
@@ -105,7 +96,7 @@ def test_rhythm_verb_flag(walker_scene, tmp_path):
         decoded.append(f[:, :, 0])
     for flag, per_pixel in (("--window-per-pixel", True), ("--no-window-per-pixel", False)):
         d = tmp_path / flag.strip("-")
-        assert cli_main(["rhythm", video, "--boxes", str(tmp_path / "gt.txt"), "-o", str(d),
+        assert cli_main(["rhythm", video, "--boxes", str(gt), "-o", str(d),
                          "-q", "--no-camera-check", flag]) == 0
         got = read_table(str(d / "tracks.parquet"))
         u, v = np.asarray(got["u"], float), np.asarray(got["v"], float)
