@@ -172,8 +172,9 @@ def score_pets(tracks, verdicts, boxes) -> dict:
     }
 
 
-def score_ucsd(tracks, verdicts, boxes) -> dict:
-    fr_t, tid = np.asarray(tracks["frame"]), np.asarray(tracks["track_id"])
+def rows_in_boxes(tracks, boxes) -> np.ndarray:
+    """Per track row: its foot point within `BOX_MARGIN_PX` of an annotated box of its frame."""
+    fr_t = np.asarray(tracks["frame"])
     u, v = np.asarray(tracks["u"]), np.asarray(tracks["v"])
     m = BOX_MARGIN_PX
     inside = np.zeros(len(fr_t), bool)
@@ -182,6 +183,12 @@ def score_ucsd(tracks, verdicts, boxes) -> dict:
         x, y, w, h = (boxes[k][sel] for k in ("x", "y", "w", "h"))
         inside[i] = np.any((u[i] >= x - m) & (u[i] <= x + w + m) & (v[i] >= y - m)
                            & (v[i] <= y + h + m))
+    return inside
+
+
+def score_ucsd(tracks, verdicts, boxes) -> dict:
+    tid, u = np.asarray(tracks["track_id"]), np.asarray(tracks["u"])
+    inside = rows_in_boxes(tracks, boxes)
     out = {"anomaly": {}, "other": {}}
     vid = [int(t) for t in verdicts["track_id"]]
     for t in np.unique(tid):

@@ -35,19 +35,6 @@ from rhythmjax.evaluation import datasets  # noqa: E402
 RADIAL_PX_PER_FRAME = 0.05  # |dv/dk| above this: towards or away from the camera
 
 
-def inside_boxes(tracks, boxes) -> np.ndarray:
-    """Per track row: its foot point within `BOX_MARGIN_PX` of an anomaly box of its frame."""
-    frame, u, v = (np.asarray(tracks[k]) for k in ("frame", "u", "v"))
-    m = ev.BOX_MARGIN_PX
-    out = np.zeros(len(frame), bool)
-    for i in np.flatnonzero(np.isfinite(u)):
-        sel = boxes["frame"] == frame[i]
-        x, y, w, h = (boxes[k][sel] for k in ("x", "y", "w", "h"))
-        out[i] = np.any((u[i] >= x - m) & (u[i] <= x + w + m) & (v[i] >= y - m)
-                        & (v[i] <= y + h + m))
-    return out
-
-
 def direction(frames: np.ndarray, v: np.ndarray) -> str:
     """"towards", "away" or "crossing" from the slope of the image row v (px) over frames."""
     if len(frames) < 3:
@@ -66,7 +53,7 @@ def clip_rows(clip: str) -> list[dict]:
     tracks, verdicts = ev.track(cfg, folder, 30.0)
     tid, frame = np.asarray(tracks["track_id"]), np.asarray(tracks["frame"])
     v = np.asarray(tracks["v"])
-    inside = inside_boxes(tracks, boxes)
+    inside = ev.rows_in_boxes(tracks, boxes)
     ids = [int(t) for t in verdicts["track_id"]]
     rows = []
     for t in np.unique(tid):
