@@ -16,9 +16,11 @@ and a fresh seed, FRESH_SEED), `count` (benchmarks/eval_count.py's counting scen
 FRESH_SEED), `synthetic_any` and `count_any` (the same scenes with clothing of any grey, some
 close to the ground's: `sim.scene.random_spec`'s clothing "any"), `synthetic_suitcase` (the
 scenes with half the walkers pulling a wheeled suitcase: `random_spec`'s suitcase_fraction 0.5),
-`synthetic_lateral` (the scenes with every path within 30 degrees of crossing the view),
-`synthetic_knees` and `synthetic_lateral_knees` (those two with walkers that bend their knees
-and roll their feet heel to toe: `random_spec`'s articulated, `sim.legs`),
+`synthetic_lateral` (the scenes with every path within 30 degrees of crossing the view). The own
+scenes' walkers bend their knees and roll their feet heel to toe (`random_spec`'s articulated,
+`sim.legs`; since issue 16's thirty-eighth round); `synthetic_rods`, `synthetic_lateral_rods` and
+`count_rods` are the same scenes with the straight legs drawn before it (`synthetic_knees` and
+`synthetic_lateral_knees`, the names of the thirty-seventh round, stay as aliases),
 `dev` (the 15 single/multi clips of ../shared/data/dev through the tracker, as `rhythmjax run
 -c CAMERA.json`), `dev_count`
 (the 3 crowd clips through `count_frames`, as `rhythmjax count -c CAMERA.json`), `pets` (the
@@ -66,8 +68,11 @@ from eval_all_score import (
 FRESH_SEED = 777_001  # a seed no rule was chosen on (eval_synthetic's is 20240603)
 DEV_ROOT = Path(os.environ.get("RHYTHMJAX_DEV", "/work/shared/data/dev"))
 SOURCES = ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitcase",
-           "synthetic_lateral", "synthetic_knees", "synthetic_lateral_knees", "dev", "dev_count",
-           "pets", "pets_count", "pets_boxes", "ucsd", "casia")
+           "synthetic_lateral", "synthetic_rods", "synthetic_lateral_rods", "count_rods", "dev",
+           "dev_count", "pets", "pets_count", "pets_boxes", "ucsd", "casia")
+OWN_SOURCES = ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitcase",
+               "synthetic_lateral", "synthetic_rods", "synthetic_lateral_rods", "count_rods",
+               "synthetic_knees", "synthetic_lateral_knees")  # one row per seed
 
 
 # ----------------------------------------------------------------------------------------------
@@ -76,7 +81,7 @@ SOURCES = ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitca
 
 def run_synthetic(sets, quick, log, clothing: str = "contrasted",
                   suitcase_fraction: float = 0.0, lateral_deg: float | None = None,
-                  articulated: bool = False) -> dict:
+                  articulated: bool = True) -> dict:
     import eval_synthetic as es
 
     from rhythmjax.model.params import config_from_dict
@@ -122,7 +127,7 @@ def count_clip(cfg, frames, truth, kinds, offset) -> dict:
                 [int(i) for i in res.verdicts["track_id"]])}
 
 
-def run_count(sets, quick, log, clothing: str = "contrasted") -> dict:
+def run_count(sets, quick, log, clothing: str = "contrasted", articulated: bool = True) -> dict:
     import eval_count as ec
 
     from rhythmjax.model.params import config_from_dict
@@ -134,7 +139,7 @@ def run_count(sets, quick, log, clothing: str = "contrasted") -> dict:
     for seed in (ec.SEED, FRESH_SEED):
         clips = []
         for scene_seed, spec in ec.scene_specs(3 if quick else 10, seed=seed, camera=cfg.camera,
-                                               clothing=clothing):
+                                               clothing=clothing, articulated=articulated):
             scene = render_scene(scene_seed, spec)
             truth, kinds = ec.truth_boxes(scene)
             frames = [(k, k / scene.fps, f) for k, f in enumerate(scene.frames)]
@@ -324,15 +329,19 @@ def run_synthetic_lateral(sets, quick, log) -> dict:
     return run_synthetic(sets, quick, log, lateral_deg=30.0)
 
 
-def run_synthetic_knees(sets, quick, log) -> dict:
-    """`synthetic` with walkers that bend their knees and roll their feet heel to toe
-    (`random_spec`'s articulated; `sim.legs`)."""
-    return run_synthetic(sets, quick, log, articulated=True)
+def run_synthetic_rods(sets, quick, log) -> dict:
+    """`synthetic` with the straight-legged walkers drawn before the thirty-eighth round."""
+    return run_synthetic(sets, quick, log, articulated=False)
 
 
-def run_synthetic_lateral_knees(sets, quick, log) -> dict:
-    """`synthetic_lateral` with the walkers of `synthetic_knees`."""
-    return run_synthetic(sets, quick, log, lateral_deg=30.0, articulated=True)
+def run_synthetic_lateral_rods(sets, quick, log) -> dict:
+    """`synthetic_lateral` with the straight-legged walkers."""
+    return run_synthetic(sets, quick, log, lateral_deg=30.0, articulated=False)
+
+
+def run_count_rods(sets, quick, log) -> dict:
+    """`count` with the straight-legged walkers."""
+    return run_count(sets, quick, log, articulated=False)
 
 
 def run_count_any(sets, quick, log) -> dict:
@@ -342,8 +351,9 @@ def run_count_any(sets, quick, log) -> dict:
 
 RUNNERS = {"synthetic": run_synthetic, "count": run_count, "synthetic_any": run_synthetic_any,
            "synthetic_suitcase": run_synthetic_suitcase, "synthetic_lateral": run_synthetic_lateral,
-           "synthetic_knees": run_synthetic_knees,
-           "synthetic_lateral_knees": run_synthetic_lateral_knees,
+           "synthetic_rods": run_synthetic_rods,
+           "synthetic_lateral_rods": run_synthetic_lateral_rods, "count_rods": run_count_rods,
+           "synthetic_knees": run_synthetic, "synthetic_lateral_knees": run_synthetic_lateral,
            "count_any": run_count_any, "dev": run_dev,
            "dev_count": run_dev_count, "pets": run_pets, "pets_count": run_pets_count,
            "pets_boxes": run_pets_boxes, "ucsd": run_ucsd, "casia": run_casia}
@@ -379,8 +389,7 @@ def print_table(out: dict) -> None:
     for name, r in out["sources"].items():
         if "skipped" in r:
             print(f"| {name} | {r['skipped']} |" + " |" * 8)
-        elif name in ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitcase",
-                      "synthetic_lateral", "synthetic_knees", "synthetic_lateral_knees"):
+        elif name in OWN_SOURCES:
             for seed, s in r.items():
                 print(table_line(f"{name} seed {seed}", s.get("verdicts"), s.get("count")))
         else:

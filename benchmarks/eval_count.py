@@ -1,7 +1,9 @@
 """Measured acceptance of issue 4: counting and multi-pedestrian tracking, scored by motmetrics.
 
 (a) synthetic: >= 10 random scenes (`synth.random_spec`, 2-8 walkers, 1-2 bicycles, no dogs,
-    occlusions allowed, 180 frames at 15 fps, 512x512, the issue-3 demo config). Truth boxes: the
+    occlusions allowed, 180 frames at 15 fps, 512x512, the issue-3 demo config; walkers with knees
+    and heel-to-toe feet, `random_spec`'s articulated, since issue 16's thirty-eighth round,
+    straight legs before it: `--legs rods`). Truth boxes: the
     foot point of each visible object (as rendered, jitter included) up to the projection of its
     head (`synth.project_3d` at the actor's height, 1.7 m for walkers, 1.9 m for a bicycle with
     rider) above the body centre; width = the drawn extent (`ObjectTruth.width_px`); clipped
@@ -22,7 +24,7 @@ the two in >= 50 % of its frames (UCSD). Scores:
 `rhythmjax.evaluation.motscore.score_mot`, IoU >= 0.5.
 
     python benchmarks/eval_count.py [--quick] [--parts synthetic,pets,ucsd] [--median-init]
-                                    [--seed S] [--json OUT.json]
+                                    [--seed S] [--legs knees|rods] [--json OUT.json]
 
 Writes nothing unless --json is given. Without `count.count_frames` only the SORT baseline on
 `sort_baseline.blob_detections` runs.
@@ -100,10 +102,13 @@ def _sort_on(det, n_frames: int, truth, offset: int) -> dict:
 
 
 def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None,
-                clothing: str = "contrasted", pairs: float = 0.0, pair_layout: str = "side"):
+                clothing: str = "contrasted", pairs: float = 0.0, pair_layout: str = "side",
+                articulated: bool = True):
     """(scene seed, spec) of n random counting scenes; `pairs` > 0: that fraction of walkers
     joined by a partner at their shoulder, or in file with `pair_layout` "file"
-    (`sim.groups.with_pairs`; 0, the scenes so far)."""
+    (`sim.groups.with_pairs`; 0, the scenes so far); `articulated`: walkers with knees and
+    heel-to-toe feet (`random_spec`'s; False: straight legs, the scenes before issue 16's
+    thirty-eighth round)."""
     from rhythmjax.sim.groups import with_pairs
     from rhythmjax.sim.scene import random_spec
 
@@ -119,7 +124,7 @@ def scene_specs(n: int, seed: int = SEED, n_frames: int = 180, camera=None,
                                    n_frames=n_frames, camera=camera, occlusion=True,
                                    min_life=100, max_life=150, bicycle_speed=(3.0, 3.2),
                                    range_m=(3.1, 19.9), crossing_fraction=0.95,
-                                   clothing=clothing)
+                                   clothing=clothing, articulated=articulated)
                 out.append((s, with_pairs(spec, s, pairs, range_m=(3.1, 19.9),
                                           layout=pair_layout)))
                 break
@@ -181,14 +186,15 @@ def owner_of_tracks(truth, hyp, offset: int, min_iou: float = 0.3) -> dict[int, 
 
 
 def eval_synthetic(n_scenes: int, count_frames, log, median_init: bool = False,
-                   seed: int = SEED) -> dict:
+                   seed: int = SEED, articulated: bool = True) -> dict:
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.sim.presets import SYNTHETIC_CONFIG
     from rhythmjax.sim.scene import render_scene
 
     cfg = config_from_dict(SYNTHETIC_CONFIG)
     rows = []
-    for i, (scene_seed, spec) in enumerate(scene_specs(n_scenes, seed=seed, camera=cfg.camera)):
+    for i, (scene_seed, spec) in enumerate(scene_specs(n_scenes, seed=seed, camera=cfg.camera,
+                                                             articulated=articulated)):
         t0 = time.perf_counter()
         scene = render_scene(scene_seed, spec)
         truth, kinds = truth_boxes(scene)
@@ -406,6 +412,8 @@ def main(argv=None) -> int:
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--seed", type=int, default=SEED, help="seed of the synthetic scenes "
                    "(a second seed checks that a change is not tuned to the default's scenes)")
+    p.add_argument("--legs", default="knees", choices=("knees", "rods"),
+                   help="synthetic walkers' legs: knees and heel-to-toe feet (default) or rods")
     p.add_argument("--json", help="write the figures here (nothing is written otherwise)")
     p.add_argument("--sort-only", action="store_true", help="skip count_frames")
     p.add_argument("--median-init", action="store_true",
@@ -417,12 +425,12 @@ def main(argv=None) -> int:
     count_frames = None if a.sort_only else _count_frames()
     out: dict = {"motmetrics": motmetrics_version(), "assignment": ASSIGNMENT_SOLVER,
                  "iou_threshold": 0.5, "quick": a.quick, "median_init": a.median_init,
-                 "seed": a.seed,
+                 "seed": a.seed, "legs": a.legs,
                  "paper_method": count_frames is not None}
     t0 = time.perf_counter()
     if "synthetic" in parts:
         out["synthetic"] = eval_synthetic(3 if a.quick else a.scenes, count_frames, log,
-                                          a.median_init, a.seed)
+                                          a.median_init, a.seed, a.legs == "knees")
     if "pets" in parts:
         out["pets"] = eval_pets(count_frames, 200 if a.quick else None, log, a.median_init)
     if "ucsd" in parts:

@@ -3,12 +3,15 @@
 10 scenes of 180 frames at 15 Hz, 512x512, each with 3-4 walkers (pace N(2.05, 0.183) Hz, step
 N(0.72, 0.09) m, 3-20 m), one bicycle (3.0-3.2 m/s on a mostly radial path: fast enough to be a
 bicycle, slow enough to stay ~70 frames (>= 64 = N) in the range and the image) and, in half
-of them, a dog: 35 walkers, 10 bicycles, 5 dogs.
+of them, a dog: 35 walkers, 10 bicycles, 5 dogs. The walkers bend their knees and roll their
+feet heel to toe (`random_spec`'s articulated, `sim.legs`; since issue 16's thirty-eighth round:
+before it they had straight legs, `--legs rods`).
 Every scene goes through the online tracker (detect + Fig. 3 state machine + rhythm windows) and
 `evaluate.score`; prints pace MAE, step-length median error, walkers judged Pedestrian, bicycles
 and dogs judged Non-pedestrian, and missed / unclassified counts; writes the figures as JSON.
 
     python benchmarks/eval_synthetic.py [-o eval_synthetic.json] [--config C.json] [--scenes 10]
+                                        [--seed S] [--legs knees|rods]
 """
 
 from __future__ import annotations
@@ -33,11 +36,12 @@ RECOMMENDED = SYNTHETIC_CONFIG  # the demo's config (and its tracker options, SY
 
 def scene_specs(seed: int = SEED, n_scenes: int = 10, n_frames: int = N_FRAMES, camera=None,
                 clothing: str = "contrasted", suitcase_fraction: float = 0.0,
-                lateral_deg: float | None = None, articulated: bool = False):
+                lateral_deg: float | None = None, articulated: bool = True):
     """The fixed evaluation scenes: (scene_seed, SceneSpec) pairs (`clothing`: `random_spec`'s,
     "any" for clothing grey levels that may match the ground's; `suitcase_fraction`: of the
     walkers pulling a suitcase, `lateral_deg`, paths crossing the view, and `articulated`,
-    walkers with knees and heel-to-toe feet: `random_spec`'s)."""
+    walkers with knees and heel-to-toe feet: `random_spec`'s; False, straight legs, the scenes
+    before issue 16's thirty-eighth round)."""
     from rhythmjax.sim.scene import random_spec
 
     out = []
@@ -117,6 +121,8 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=SEED)
     p.add_argument("--clothing", default="contrasted", choices=("contrasted", "any"),
                    help="clothing grey levels of the scenes' objects (random_spec)")
+    p.add_argument("--legs", default="knees", choices=("knees", "rods"),
+                   help="walkers' legs: knees and heel-to-toe feet (default) or straight rods")
     a = p.parse_args(argv)
     if a.config:
         with open(a.config) as fh:
@@ -124,10 +130,12 @@ def main(argv=None) -> int:
     else:
         cfg = Config() if a.defaults else config_from_dict(RECOMMENDED)
     t0 = time.perf_counter()
-    out = evaluate(cfg, scene_specs(a.seed, a.scenes, camera=cfg.camera, clothing=a.clothing))
+    out = evaluate(cfg, scene_specs(a.seed, a.scenes, camera=cfg.camera, clothing=a.clothing,
+                                    articulated=a.legs == "knees"))
     out["seconds"] = time.perf_counter() - t0
     out["config"] = config_to_dict(cfg)
     out["seed"] = a.seed
+    out["legs"] = a.legs
     with open(a.output, "w") as fh:
         json.dump(out, fh, indent=1, default=float)
     f = lambda x: f"{x:.3f}"  # noqa: E731

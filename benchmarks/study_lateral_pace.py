@@ -11,10 +11,12 @@ points with B two walker widths wide (`trk2W`), and B at the true foot point, W 
 of the first such window (`trk_first`, the tracker's rule, Sec. 4.2) or of the one with the
 strongest peak (the others).
 
-    python benchmarks/study_lateral_pace.py SEED [SEED ...] [-o ROWS.json] [--articulated]
+    python benchmarks/study_lateral_pace.py SEED [SEED ...] [-o ROWS.json] [--rods]
 
-`-o` writes every walker's row (true pace and each way's, by path kind) for paired reading;
-`--articulated` draws the walkers with knees and heel-to-toe feet (`sim.legs`).
+`-o` writes every walker's row (true pace and each way's, by path kind) for paired reading. The
+walkers bend their knees and roll their feet heel to toe (`sim.legs`, the own scenes' default
+since issue 16's thirty-eighth round); `--rods` draws the straight legs of the scenes before it
+(`--articulated`, the flag of the thirty-seventh round, is accepted and changes nothing).
 """
 
 from __future__ import annotations
@@ -69,7 +71,7 @@ def window_b_signal(D, frames, I_trk, u, v, widths) -> np.ndarray:
 
 
 def walker_rows(cfg, options, seed: int, lateral_deg: float | None,
-                articulated: bool = False) -> list[dict]:
+                articulated: bool = True) -> list[dict]:
     """One row per walker of the seed's ten scenes with a track: its true pace and the pace
     each way of `WAYS` reads (NaN where no window is judged Pedestrian); `articulated`:
     walkers with knees and heel-to-toe feet (`sim.legs`)."""
@@ -114,7 +116,7 @@ def walker_rows(cfg, options, seed: int, lateral_deg: float | None,
 def main(argv: list[str]) -> int:
     out = argv[argv.index("-o") + 1] if "-o" in argv else None
     seeds = [int(s) for s in argv if s.isdigit()] or [1470001]
-    articulated = "--articulated" in argv
+    articulated = "--rods" not in argv
     cfg = config_from_dict(es.RECOMMENDED)
     every = {}
     for name, lateral in (("radial (default paths)", None), ("crossing (lateral_deg 30)", 30.0)):

@@ -8,8 +8,8 @@ and has a verdict is sorted by the least-squares slope of its image row over its
 "radial" where |dv/dk| > `RADIAL_PX_PER_FRAME` (towards the camera: v grows; away: v falls),
 "crossing" otherwise. Prints the verdicts per direction and each radial track judged
 Non-pedestrian (pace, reason, rows). Compare the own scenes with knees and with straight legs
-(`eval_all.py --only synthetic_knees,synthetic_lateral_knees`; docs/validation.md, "Thirty-seventh
-round").
+(`eval_all.py --only synthetic,synthetic_lateral` and `synthetic_rods,synthetic_lateral_rods`;
+docs/validation.md, "Thirty-seventh round").
 
     RHYTHMJAX_DATA=../shared/data/real python benchmarks/study_radial_walkers.py [-o ROWS.json]
 """
