@@ -102,6 +102,9 @@ RULES = {
     "window_per_pixel": ("tracker", "body.window_per_pixel", True, False, TRACKER_SOURCES,
                          "own scenes with knees, radial 1830001-1840001 (rule 35; confirmed on "
                          "fresh 1850001-1880001: off, non-walkers more)"),
+    "top_inside": ("tracker", "size.top_inside_heights", 0.1, 0.0, TRACKER_SOURCES,
+                   "nothing fitted (0.1 walker heights a priori; the case seen on own seed 12's "
+                   "dog, rule 36)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -119,7 +122,7 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
               "recheck_tail": TRACKER_SOURCES, "recheck_speed": (),
               "core_column": (), "upper_column": (), "height_fallback": (),
-              "pace_window": (), "window_per_pixel": ()}
+              "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -72,6 +72,28 @@ def test_rows_where_a_walkers_head_leaves_the_image_are_not_read():
     assert median_height(cam, u, v, v_top, 0.5)[1] == 5
 
 
+def test_rule_36_reads_a_top_seen_inside_the_image():
+    """Rule 36 (`top_inside_heights`): at 8 m the paper's camera puts a 1.7 m walker's head
+    34.9 px above the image (foot row 145.5, the walker 180.3 px tall), so rule 26 reads no row
+    there. A 0.6 m top seen at row 84.1 is 84.1 / 180.3 = 0.47 walker heights below the edge:
+    with 0.1 those rows count and read 0.6 m; a walker's top at the edge (row 1) and a top at
+    0.09 walker heights (row 16.2) still do not; at 0.1 walker heights + 0.1 px (row 18.1) it
+    counts. Rows at 30 m (the head inside) read as before."""
+    cam = Config().camera
+    y = np.array([8.0, 8.0, 30.0])
+    u, v = project_3d(cam, 0 * y, y, 0 * y)
+    _, v_top = project_3d(cam, 0 * y, y, 0.6 + 0 * y)
+    assert median_height(cam, u, v, v_top, 1.7)[1] == 1
+    h, n = median_height(cam, u, v, v_top, 1.7, 0.1)
+    assert n == 3 and abs(h - 0.6) < 1e-5
+    walker_px = 180.33557808
+    for top, counted in ((1.0, 1), (0.09 * walker_px, 1), (0.1 * walker_px + 0.1, 3)):
+        tops = np.array([top, top, v_top[2]])
+        assert median_height(cam, u, v, tops, 1.7, 0.1)[1] == counted
+    with pytest.raises(ValueError, match="top_inside_heights"):
+        SizeOptions(top_inside_heights=-0.1)
+
+
 def test_the_fit_reads_the_same_height():
     """`fit.selfcal_height.height_from_top` (JAX, float64 data) against `height_of_top` (NumPy,
     float64) on the same float32 camera: within 2e-6 m (the JAX camera's sines and cosines are

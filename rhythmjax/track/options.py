@@ -204,8 +204,15 @@ class SizeOptions:
     # rhythm window (rule 26c: a track re-acquired onto another object keeps the height of the
     # one its verdict was judged on); "track", every row (rule 26b); "window-or-track", the
     # window's, every row where the window has fewer than min_height_rows (rule 26f)
+    top_inside_heights: float = 0.1  # rule 36 (on since issue 16's thirty-eighth round): a row
+    # where a walker's head would leave the image also counts when its measured top row lies at
+    # least this many walker heights (px at that row) below the image's top edge: the object's
+    # own top is seen, so it is shorter than a walker there (a walker's top is the edge). 0.1 a
+    # priori; 0: off (rule 26's rows only)
 
     def __post_init__(self):
+        if not self.top_inside_heights >= 0.0:
+            raise ValueError(f"size.top_inside_heights must be >= 0, got {self.top_inside_heights}")
         if self.min_height_scope not in HEIGHT_SCOPES:
             raise ValueError(f"size.min_height_scope must be one of {HEIGHT_SCOPES}, "
                              f"got {self.min_height_scope!r}")

@@ -13,7 +13,10 @@ them). The rows read are those of the deciding rhythm window (rule 26c, `min_hei
 "window"): a track that re-acquisition or a crossing carried onto another object after its
 verdict keeps the height of the object the verdict was judged on. With "window-or-track" (rule
 26f, off) a window with too few readable rows is read over the whole track instead (a far dog
-whose window rows are those where a walker's head would leave the image)."""
+whose window rows are those where a walker's head would leave the image). With rule 36
+(`top_inside_heights` > 0, on since the thirty-eighth round) such a row also counts where the measured top lies inside the
+image by that many walker heights: the object's own top is seen there, and a walker's would be
+the image's edge (a dog near the top of the view, whose rows rule 26 cannot read)."""
 
 from __future__ import annotations
 
@@ -30,19 +33,25 @@ from .options import SizeOptions
 __all__ = ["median_height", "refuse_low", "too_low"]
 
 
-def median_height(camera: Camera | tuple, u, v, v_top, walker_height_m: float
-                  ) -> tuple[float, int]:
+def median_height(camera: Camera | tuple, u, v, v_top, walker_height_m: float,
+                  top_inside_heights: float = 0.0) -> tuple[float, int]:
     """(median height m, rows it is taken over) of a track's rows: foot points (u, v) px and
     top rows v_top px (NaN where not measured). Only rows where a walker `walker_height_m` m
     tall standing on the foot point would have its top inside the image (row >= 0, through
     the camera: `camera_np.upright_size`) count: elsewhere a walker's measured top is the
     image's edge or a part below its head, too low, and a height is read for nothing. Rows
     with a non-finite value, a foot point not on the ground in front of the camera or a top
-    at or beyond the vertical vanishing point are left out too; (NaN, 0) when none is left."""
+    at or beyond the vertical vanishing point are left out too; (NaN, 0) when none is left.
+    `top_inside_heights` > 0 (rule 36): a row where the walker's head would leave the image
+    counts too when its top row v_top >= `top_inside_heights` x the walker's height in px
+    there (its height then reads below a walker's: v - v_top < v < the walker's px)."""
     u, v, v_top = (np.asarray(q, np.float64) for q in (u, v, v_top))
     _, walker_px, seen = upright_size(camera, u, v, 1.0, walker_height_m)
     with np.errstate(invalid="ignore"):
-        seen = seen & (v - walker_px >= 0)
+        head_in = v - walker_px >= 0
+        if top_inside_heights > 0:
+            head_in = head_in | (v_top >= top_inside_heights * walker_px)
+        seen = seen & head_in
     H, ok = height_of_top(camera, u, v, v_top)
     H = np.asarray(H)[np.asarray(ok) & seen]
     return (float(np.median(H)) if H.size else math.nan), int(H.size)
@@ -59,10 +68,12 @@ def too_low(verdict: int, height_m: float, rows: int, walker_height_m: float,
             and height_m < options.min_height_heights * walker_height_m)
 
 
-def _height_of(camera: Camera | tuple, rows: list, walker_height_m: float) -> tuple[float, int]:
-    """`median_height` of `rows` (`rows.TrackRow`: u, v, v_top)."""
+def _height_of(camera: Camera | tuple, rows: list, walker_height_m: float,
+               top_inside: float) -> tuple[float, int]:
+    """`median_height` of `rows` (`rows.TrackRow`: u, v, v_top), rule 36's `top_inside`."""
     cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
-    return median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2], walker_height_m)
+    return median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2], walker_height_m,
+                         top_inside)
 
 
 def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m: float,
@@ -76,13 +87,14 @@ def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m
     `result` itself otherwise (nothing computed when off)."""
     if options.min_height_heights <= 0 or int(result["verdict"]) != Verdict.PEDESTRIAN:
         return result
+    top = options.top_inside_heights
     if options.min_height_scope != "track" and "window" in result:
         first, end = result["window"]
-        height, n = _height_of(camera, rows[first:end], walker_height_m)
+        height, n = _height_of(camera, rows[first:end], walker_height_m, top)
         if options.min_height_scope == "window-or-track" and n < options.min_height_rows:
-            height, n = _height_of(camera, rows, walker_height_m)  # rule 26f: the track's
+            height, n = _height_of(camera, rows, walker_height_m, top)  # rule 26f: the track's
     else:
-        height, n = _height_of(camera, rows, walker_height_m)
+        height, n = _height_of(camera, rows, walker_height_m, top)
     if not too_low(int(result["verdict"]), height, n, walker_height_m, options):
         return result
     return {**result, "verdict": int(Verdict.NON_PEDESTRIAN), "reason": int(Reason.TOO_LOW)}
