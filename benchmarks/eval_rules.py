@@ -56,6 +56,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   mean of D over window B, grey levels per pixel, instead of its sum).
 - top_inside: the tracker's `size.top_inside_heights` 0.1 vs 0 (rule 36: the size rule also
   reads rows where a walker's head would leave the image but the measured top lies inside it).
+- twice_pace: the tracker's `size.twice_pace_heights` 0.75 vs 0 (rule 37: a window refused by
+  (14) judged at half its strongest peak where the height is a walker's).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

@@ -105,6 +105,9 @@ RULES = {
     "top_inside": ("tracker", "size.top_inside_heights", 0.1, 0.0, TRACKER_SOURCES,
                    "nothing fitted (0.1 walker heights a priori; the case seen on own seed 12's "
                    "dog, rule 36)"),
+    "twice_pace": ("tracker", "size.twice_pace_heights", 0.75, 0.0, TRACKER_SOURCES,
+                   "nothing fitted (0.75 walker heights a priori; the twice-the-pace walkers seen "
+                   "on own knees radial 2070001-2120001, rule 37)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -122,7 +125,8 @@ DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), 
               "min_height_track": (), "recheck": TRACKER_SOURCES, "recheck_all": (),
               "recheck_tail": TRACKER_SOURCES, "recheck_speed": (),
               "core_column": (), "upper_column": (), "height_fallback": (),
-              "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES}
+              "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES,
+              "twice_pace": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

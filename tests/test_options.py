@@ -57,6 +57,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 26)", "size.min_height_rows", 10),
     ("(new: issue 16, rule 26c)", "size.min_height_scope", "window"),
     ("(new: issue 16, rule 36)", "size.top_inside_heights", 0.1),  # a top seen inside the image
+    ("(new: issue 16, rule 37)", "size.twice_pace_heights", 0.75),  # a walker at twice its pace
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
     ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
     ("(new: issue 16, rule 30)", "recheck.earlier", "off"),  # windows before the verdict

@@ -209,10 +209,16 @@ class SizeOptions:
     # least this many walker heights (px at that row) below the image's top edge: the object's
     # own top is seen, so it is shorter than a walker there (a walker's top is the edge). 0.1 a
     # priori; 0: off (rule 26's rows only)
+    twice_pace_heights: float = 0.75  # rule 37 (on since issue 16's thirty-eighth round): a
+    # window refused by (14) whose strongest peak passes (14) at half its frequency and twice
+    # the step (a walker seen from behind or in front: two bursts a step) is Pedestrian there
+    # when its rows' median height is at least this many walker heights (`track.twice`; 0.75
+    # a priori: a dog at its own trot reads the same pace and step, 0.5-0.7 m tall); 0: off
 
     def __post_init__(self):
-        if not self.top_inside_heights >= 0.0:
-            raise ValueError(f"size.top_inside_heights must be >= 0, got {self.top_inside_heights}")
+        for name in ("top_inside_heights", "twice_pace_heights"):
+            if not getattr(self, name) >= 0.0:
+                raise ValueError(f"size.{name} must be >= 0, got {getattr(self, name)}")
         if self.min_height_scope not in HEIGHT_SCOPES:
             raise ValueError(f"size.min_height_scope must be one of {HEIGHT_SCOPES}, "
                              f"got {self.min_height_scope!r}")

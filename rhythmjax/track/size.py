@@ -14,9 +14,10 @@ them). The rows read are those of the deciding rhythm window (rule 26c, `min_hei
 verdict keeps the height of the object the verdict was judged on. With "window-or-track" (rule
 26f, off) a window with too few readable rows is read over the whole track instead (a far dog
 whose window rows are those where a walker's head would leave the image). With rule 36
-(`top_inside_heights` > 0, on since the thirty-eighth round) such a row also counts where the measured top lies inside the
-image by that many walker heights: the object's own top is seen there, and a walker's would be
-the image's edge (a dog near the top of the view, whose rows rule 26 cannot read)."""
+(`top_inside_heights` > 0, on since the thirty-eighth round) such a row also counts where the
+measured top lies inside the image by that many walker heights: the object's own top is seen
+there, and a walker's would be the image's edge (a dog near the top of the view, whose rows rule
+26 cannot read)."""
 
 from __future__ import annotations
 

@@ -43,6 +43,7 @@ from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
 from .split import Predicted, split_shared
 from .toolkit import PendingStep, SlotSteps, match_window
+from .twice import judge_at_half
 
 
 @dataclass
@@ -102,6 +103,9 @@ class OnlineTracker:
         self.relinked = 0  # tracks continued by `_relink`
         self.switches = 0  # tracks split by `_split_at_switch` (rule 29)
         self._camera = camera_tuple(cfg.camera)
+        walker_m, size = host_float(cfg.width.height), self.opt.size
+        self._look = None if size.twice_pace_heights <= 0 else (  # rule 37 (off)
+            lambda out, rows: judge_at_half(out, cfg, rows, self._camera, walker_m, size))
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
         self._offsets = (tuple(float(off) for _, off in WINDOW_CANDIDATES)
@@ -329,7 +333,7 @@ class OnlineTracker:
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
                                  float(mean[0]), float(mean[2]), int(obj.state), float(top)))
         obj.vel.append(Velocity(float(mean[1]), float(mean[3])))
-        match_window(self.cfg, obj)
+        match_window(self.cfg, obj, second_look=self._look)
         out_of_range = not (self._range[0] <= mean[2] <= self._range[1])
         if out_of_range or obj.predict_time > self._timeout:
             self._end(s, lost=not out_of_range)
@@ -359,7 +363,7 @@ class OnlineTracker:
             if anchor is not None:
                 self._lost.append(_Lost(obj, anchor, (obj.win_start, obj.result, obj.decided,
                                                       obj.windows_done)))
-        match_window(self.cfg, obj, final=True)
+        match_window(self.cfg, obj, final=True, second_look=self._look)
         self._finished.append(obj)
         self._slots[s] = None
 
@@ -437,8 +441,8 @@ class OnlineTracker:
                        pace_window=obj.pace_window)
         self._next_id += 1
         while not part.decided and len(part.rows) >= part.win_start + self.cfg.thresholds.n:
-            match_window(self.cfg, part)
-        match_window(self.cfg, part, final=True)
+            match_window(self.cfg, part, second_look=self._look)
+        match_window(self.cfg, part, final=True, second_look=self._look)
         self._finished.append(part)
         self.switches += 1
 
