@@ -14,10 +14,9 @@ or when the estimate leaves the range. Each tracked frame samples the rhythm sig
 window B at the foot point (with `body.window_candidates` also in window B moved by each offset
 of `io.files.WINDOW_CANDIDATES`); each completed window of N frames (one starts every
 `thresholds.hop_samples` frames) is matched with `rhythm.classify_window` until one says
-Pedestrian (then matching stops, tracking goes on), the same windows `rhythm.classify_track`
-uses on stored tracks, so `rhythmjax classify` re-judges the written tracks alike. A track that
-times out is kept for `relink.within_s` s, and a new object where it would be continues it
-(relink.py).
+Pedestrian (then matching stops, tracking goes on; a window at twice a walking pace is looked
+at again, twice.py), the windows `rhythm.classify_track` uses on stored tracks. A track that
+times out is kept for `relink.within_s` s; a new object where it would be continues it.
 """
 
 from __future__ import annotations
@@ -43,7 +42,7 @@ from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
 from .split import Predicted, split_shared
 from .toolkit import PendingStep, SlotSteps, match_window
-from .twice import judge_at_half
+from .twice import second_look
 
 
 @dataclass
@@ -103,9 +102,7 @@ class OnlineTracker:
         self.relinked = 0  # tracks continued by `_relink`
         self.switches = 0  # tracks split by `_split_at_switch` (rule 29)
         self._camera = camera_tuple(cfg.camera)
-        walker_m, size = host_float(cfg.width.height), self.opt.size
-        self._look = None if size.twice_pace_heights <= 0 else (  # rule 37 (off)
-            lambda out, rows: judge_at_half(out, cfg, rows, self._camera, walker_m, size))
+        self._look = second_look(cfg, self._camera, self.opt.size)  # rule 37
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
         self._offsets = (tuple(float(off) for _, off in WINDOW_CANDIDATES)
@@ -433,8 +430,7 @@ class OnlineTracker:
             keep_rows(obj, slice(None, k))
 
     def _judge_afresh(self, obj: _Object, rows: slice) -> None:
-        """A new track of `obj`'s `rows` (a new id), judged on its own rows as online, then by
-        the final window rule, added to the finished tracks."""
+        """A new track (new id) of `obj`'s `rows`, judged as online, then as at its end."""
         cands = obj.candidate_rows
         part = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[rows],
                        vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows],

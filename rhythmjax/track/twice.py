@@ -19,13 +19,13 @@ import math
 import numpy as np
 
 from ..model.gates import walking_ok
-from ..model.params import Config
+from ..model.params import Config, host_float
 from ..model.status import Reason, Verdict
 from .options import SizeOptions
 from .size import median_height
 
 
-__all__ = ["judge_at_half"]
+__all__ = ["judge_at_half", "second_look"]
 
 
 def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: float,
@@ -54,3 +54,13 @@ def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: f
     return {**out, "verdict": np.asarray(int(Verdict.PEDESTRIAN), np.int32),
             "reason": np.asarray(int(Reason.MATCHED_TWICE), np.int32),
             "pace_hz": np.asarray(f1 / 2), "stride_m": np.asarray(2 * speed / f1)}
+
+
+def second_look(cfg: Config, camera, options: SizeOptions):
+    """`match_window`'s `second_look` for a tracker with `cfg`, `camera` (`camera_np.camera_tuple`)
+    and size `options`: `judge_at_half` on a window's outcome and rows; None when rule 37 is
+    off (`options.twice_pace_heights` 0)."""
+    if options.twice_pace_heights <= 0:
+        return None
+    walker_m = host_float(cfg.width.height)
+    return lambda out, rows: judge_at_half(out, cfg, rows, camera, walker_m, options)
