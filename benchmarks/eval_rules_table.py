@@ -116,7 +116,7 @@ TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "min_height_track": {"size.min_height_scope": "track"},
                 "recheck_all": {"recheck.earlier": "any"}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
-DEFAULT_ON = {"half_pace": ("synthetic", "count"), "high_foot": ("synthetic",), "hop": ALL,
+DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
               "velocity_jump": ALL, "still": ALL, "still_end": ALL,
               "stabilise": ALL, "reid": (), "candidates": (), "count_candidates": (),
