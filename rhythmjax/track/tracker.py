@@ -418,13 +418,13 @@ class OnlineTracker:
         30a) the window of the last N rows is read too. Rules 30, 30b (`recheck.earlier`, off):
         where a window before the deciding one is no walker's, rows ..k-1 (k: the deciding
         window's first row) become the new track and the rest keeps id and verdict."""
-        opt = self.opt.recheck
-        k = (None if opt.earlier == "off"
-             else earlier_switch_row(self.cfg, obj, pace=opt.earlier == "any"))
+        opt, look = self.opt.recheck, self._look  # windows judged as online (rule 37 too)
+        k = None if opt.earlier == "off" else earlier_switch_row(
+            self.cfg, obj, pace=opt.earlier == "any", second_look=look)
         if k is not None:
             self._judge_afresh(obj, slice(None, k))
             keep_rows(obj, slice(k, None))
-        k = switch_row(self.cfg, obj, tail=opt.tail)
+        k = switch_row(self.cfg, obj, tail=opt.tail, second_look=look)
         if k is not None:
             self._judge_afresh(obj, slice(k, None))
             keep_rows(obj, slice(None, k))
