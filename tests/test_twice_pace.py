@@ -78,11 +78,12 @@ def test_a_peak_inside_the_model_is_not_halved():
     assert judge_at_half(out, CFG, _rows(1.7), CFG.camera, 1.7, ON) is out
 
 
-def _walker_going_away(n: int = 128, pace_after: float = 4.0) -> SimpleNamespace:
+def _walker_going_away(look=None, n: int = 128, pace_after: float = 4.0) -> SimpleNamespace:
     """n rows of a 1.7 m walker going away from 22 m at 1.3 m/s in front of the paper's camera
     (its head inside the image, its top row measured), I(k) a sine at 2.0 Hz over the first 64
     rows and at `pace_after` Hz after them (4.0: twice its pace), amplitude 5, plus noise of
-    1.0 (a nearly pure sine puts Burg's peak near P_thr, phase by phase)."""
+    1.0 (a nearly pure sine puts Burg's peak near P_thr, phase by phase); `look`: the object's
+    `second_look` (None: without rule 37)."""
     rng = np.random.default_rng(0)
     t = np.arange(n) / 15.0
     y = 22.0 + 1.3 * t
@@ -92,36 +93,36 @@ def _walker_going_away(n: int = 128, pace_after: float = 4.0) -> SimpleNamespace
     sig = 20.0 + 5.0 * np.sin(2 * np.pi * np.cumsum(pace) / 15.0) + rng.normal(0, 1.0, n)
     rows = [TrackRow(k, float(t[k]), float(u[k]), float(v[k]), 20.0, float(sig[k]), 0.0,
                      float(y[k]), int(TrackState.OBSERVE), float(v_top[k])) for k in range(n)]
-    return SimpleNamespace(rows=rows, win_start=0, windows_done=0, result=None, decided=False)
+    return SimpleNamespace(rows=rows, win_start=0, windows_done=0, result=None, decided=False,
+                           second_look=look)
+
+
+def _judged_online(obj):
+    """`obj` after its windows judged as online, until one says Pedestrian."""
+    while not obj.decided and len(obj.rows) >= obj.win_start + CFG.thresholds.n:
+        match_window(CFG, obj)
+    return obj
 
 
 def test_rule_29_reads_later_windows_with_rule_37():
     """A walker judged Pedestrian at 2.0 Hz in rows 0-64 whose later windows read 4.0 Hz: rule
     29's recheck (`recheck.switch_row`) refuses a later window above the fastest pace (2.599
-    Hz) and cuts the track at row 64; judged as online with rule 37's second look, that window
-    is the walk at 2.0 Hz (matched-twice) and the track is not cut. A later window at 6.0 Hz
-    (half of it, 3.0 Hz, no pace either) is cut with or without it."""
+    Hz) and cuts the track at row 64; for an object with rule 37's second look (the tracker's)
+    that window is the walk at 2.0 Hz (matched-twice) and the track is not cut. A later window
+    at 6.0 Hz (half of it, 3.0 Hz, no pace either) is cut with or without it."""
     look = second_look(CFG, camera_tuple(CFG.camera), ON)
-    obj = _walker_going_away()
-    while not obj.decided and len(obj.rows) >= obj.win_start + CFG.thresholds.n:
-        match_window(CFG, obj, second_look=look)
-    assert obj.result["window"] == (0, 64) and int(obj.result["reason"]) == Reason.MATCHED
-    assert switch_row(CFG, obj) == 64
-    assert switch_row(CFG, obj, second_look=look) is None
-    later = match_window_outcome(_walker_going_away(), look, start=64)
-    assert int(later["reason"]) == Reason.MATCHED_TWICE
-    assert float(later["pace_hz"]) == pytest.approx(2.0, abs=0.05)
-    fast = _walker_going_away(pace_after=6.0)
-    while not fast.decided and len(fast.rows) >= fast.win_start + CFG.thresholds.n:
-        match_window(CFG, fast, second_look=look)
-    assert switch_row(CFG, fast, second_look=look) == 64
-
-
-def match_window_outcome(obj, look, start: int) -> dict:
-    """The outcome of `obj`'s window from row `start`, judged as online with `look`."""
-    obj.win_start = start
-    match_window(CFG, obj, second_look=look)
-    return obj.result
+    plain, seen = _judged_online(_walker_going_away()), _judged_online(_walker_going_away(look))
+    for obj in (plain, seen):
+        assert obj.result["window"] == (0, 64) and int(obj.result["reason"]) == Reason.MATCHED
+    assert switch_row(CFG, plain) == 64
+    assert switch_row(CFG, seen) is None
+    later = _walker_going_away(look)
+    later.win_start = 64
+    match_window(CFG, later)
+    assert int(later.result["reason"]) == Reason.MATCHED_TWICE
+    assert float(later.result["pace_hz"]) == pytest.approx(2.0, abs=0.05)
+    fast = _judged_online(_walker_going_away(look, pace_after=6.0))
+    assert switch_row(CFG, fast) == 64
 
 
 def test_the_tracker_judges_a_walker_going_away_at_its_pace():

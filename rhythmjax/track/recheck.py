@@ -5,8 +5,8 @@ Once a rhythm window has said Pedestrian the tracker stops judging windows (Sec.
 track that then follows a bicycle or a dog passing its walker (after a PREDICT stretch, a
 crossing or a re-acquisition) carries the walker's verdict onto it. At the end, the windows of
 N rows after the deciding one (starting at its end, one every `thresholds.hop_samples` rows,
-judged by (13)-(15) exactly as online: `toolkit.match_window`, with the tracker's
-`second_look`, rule 37, where given) are read until one is not a
+judged by (13)-(15) exactly as online: `toolkit.match_window`, with the object's
+`second_look`, rule 37, where it has one) are read until one is not a
 walker's (`not_a_walk`): its measured speed (12) exceeds the fastest walk the walking model
 (14) accepts for any rhythm (`params.walking_top_speed`, 2.57 m/s with Table 1), or it has a
 peak above P_thr (13) at a pace above the model's fastest (`params.walking_top_pace`, 2.60 Hz).
@@ -47,32 +47,29 @@ def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
     return peak and math.isfinite(pace) and pace > top_pace
 
 
-def _judged(cfg: Config, obj: RhythmWindows, start: int, second_look=None
-            ) -> tuple[dict | None, int]:
-    """(outcome, next first row) of `obj`'s window from row `start` (`match_window` on a copy,
-    with `second_look`): outcome None where the window is skipped for missing samples or runs
-    past the track, the next first row `start` + `thresholds.hop_samples`, or past the last
-    missing sample."""
+def _judged(cfg: Config, obj: RhythmWindows, start: int) -> tuple[dict | None, int]:
+    """(outcome, next first row) of `obj`'s window from row `start` (`match_window` on a copy):
+    outcome None where the window is skipped for missing samples or runs past the track, the
+    next first row `start` + `thresholds.hop_samples`, or past the last missing sample."""
     probe = copy.copy(obj)
     probe.win_start, probe.result, probe.decided = start, None, False
-    match_window(cfg, probe, second_look=second_look)
+    match_window(cfg, probe)
     return probe.result, probe.win_start
 
 
-def later_windows(cfg: Config, obj: RhythmWindows, *, tail: bool = False, second_look=None):
+def later_windows(cfg: Config, obj: RhythmWindows, *, tail: bool = False):
     """Each window after `obj`'s deciding window (its result["window"]) judged as online
     (`match_window`: N rows, one every `thresholds.hop_samples` from the deciding window's end,
     windows with too many missing samples skipped): yields each outcome (`RESULT_FIELDS` plus
     "window"); nothing where `obj` names no deciding window. tail (rule 30a): where these leave
     the track's last rows unjudged, the window of its last N rows follows (it may overlap the
-    deciding window). `obj` is not changed (copies are judged); `second_look`: as
-    `match_window`'s."""
+    deciding window). `obj` is not changed (copies are judged)."""
     if obj.result is None or "window" not in obj.result:
         return
     n, end = cfg.thresholds.n, len(obj.rows)
     start = covered = int(obj.result["window"][1])
     while start + n <= end:
-        result, after = _judged(cfg, obj, start, second_look)
+        result, after = _judged(cfg, obj, start)
         if result is not None:
             covered = int(result["window"][1])
             yield result
@@ -80,21 +77,20 @@ def later_windows(cfg: Config, obj: RhythmWindows, *, tail: bool = False, second
             break
         start = after
     if tail and covered < end:
-        result, _ = _judged(cfg, obj, end - n, second_look)
+        result, _ = _judged(cfg, obj, end - n)
         if result is not None:
             yield result
 
 
-def earlier_windows(cfg: Config, obj: RhythmWindows, second_look=None):
+def earlier_windows(cfg: Config, obj: RhythmWindows):
     """Each window before `obj`'s deciding one judged as online (from row 0, one every
     `thresholds.hop_samples`, skipped as `match_window` skips; first row before the deciding
-    window's, `second_look` as `match_window`'s): yields each outcome with its "window".
-    Nothing where no deciding window."""
+    window's): yields each outcome with its "window". Nothing where no deciding window."""
     if obj.result is None or "window" not in obj.result:
         return
     first, start = int(obj.result["window"][0]), 0
     while start < first:
-        result, after = _judged(cfg, obj, start, second_look)
+        result, after = _judged(cfg, obj, start)
         if result is not None:
             yield result
         if after == start:
@@ -107,23 +103,21 @@ def _pedestrian(obj: RhythmWindows) -> bool:
             and int(obj.result["verdict"]) == Verdict.PEDESTRIAN)
 
 
-def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False,
-               second_look=None) -> int | None:
+def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False) -> int | None:
     """The first row of the first of `later_windows` that `not_a_walk` refuses (the deciding
     window's end where that window starts inside it: `tail`); None where the track is not
-    judged Pedestrian or no later window is refused (`second_look`: as `match_window`'s)."""
+    judged Pedestrian or no later window is refused."""
     if not _pedestrian(obj):
         return None
     top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg)
     decided_end = int(obj.result["window"][1])
-    for result in later_windows(cfg, obj, tail=tail, second_look=second_look):
+    for result in later_windows(cfg, obj, tail=tail):
         if not_a_walk(result, top_speed, top_pace):
             return max(int(result["window"][0]), decided_end)
     return None
 
 
-def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
-                       second_look=None) -> int | None:
+def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True) -> int | None:
     """Rule 30: the deciding window's first row where one of `earlier_windows` is refused by
     `not_a_walk` (the rows before it followed something else; pace False, rule 30b: by its
     speed alone); None where the track is not judged Pedestrian, its deciding window starts at
@@ -131,7 +125,7 @@ def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
     if not _pedestrian(obj):
         return None
     top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg) if pace else math.inf
-    if any(not_a_walk(r, top_speed, top_pace) for r in earlier_windows(cfg, obj, second_look)):
+    if any(not_a_walk(r, top_speed, top_pace) for r in earlier_windows(cfg, obj)):
         return int(obj.result["window"][0])
     return None
 

@@ -31,7 +31,7 @@ from ..model.status import Reason, Verdict
 from .options import SizeOptions
 
 
-__all__ = ["median_height", "refuse_low", "too_low"]
+__all__ = ["median_height", "refuse_low", "rows_height", "too_low"]
 
 
 def median_height(camera: Camera | tuple, u, v, v_top, walker_height_m: float,
@@ -69,8 +69,8 @@ def too_low(verdict: int, height_m: float, rows: int, walker_height_m: float,
             and height_m < options.min_height_heights * walker_height_m)
 
 
-def _height_of(camera: Camera | tuple, rows: list, walker_height_m: float,
-               top_inside: float) -> tuple[float, int]:
+def rows_height(camera: Camera | tuple, rows: list, walker_height_m: float,
+                top_inside: float) -> tuple[float, int]:
     """`median_height` of `rows` (`rows.TrackRow`: u, v, v_top), rule 36's `top_inside`."""
     cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
     return median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2], walker_height_m,
@@ -91,11 +91,11 @@ def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m
     top = options.top_inside_heights
     if options.min_height_scope != "track" and "window" in result:
         first, end = result["window"]
-        height, n = _height_of(camera, rows[first:end], walker_height_m, top)
+        height, n = rows_height(camera, rows[first:end], walker_height_m, top)
         if options.min_height_scope == "window-or-track" and n < options.min_height_rows:
-            height, n = _height_of(camera, rows, walker_height_m, top)  # rule 26f: the track's
+            height, n = rows_height(camera, rows, walker_height_m, top)  # rule 26f: the track's
     else:
-        height, n = _height_of(camera, rows, walker_height_m, top)
+        height, n = rows_height(camera, rows, walker_height_m, top)
     if not too_low(int(result["verdict"]), height, n, walker_height_m, options):
         return result
     return {**result, "verdict": int(Verdict.NON_PEDESTRIAN), "reason": int(Reason.TOO_LOW)}

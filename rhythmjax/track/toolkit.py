@@ -157,7 +157,8 @@ class RhythmWindows(Protocol):
     decided: bool  # a window said Pedestrian: matching stops
     # optional, not part of the protocol: `candidate_rows`, per row a tuple of the candidate
     # windows' I(k) (`track.tracker`, `body.window_candidates`); absent or None: window B only;
-    # `pace_window` True: each tuple's last entry is the pace window's (rule 34)
+    # `pace_window` True: each tuple's last entry is the pace window's (rule 34);
+    # `second_look`, a callable (outcome, rows) -> outcome or None (rule 37, `track.twice`)
 
 
 def window_signal(obj, start: int, end: int, candidate: int = 0) -> np.ndarray:
@@ -176,8 +177,7 @@ def _outcome(res) -> dict:
 
 
 def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
-                 skip_missing: bool = True, measured_speed: bool = True,
-                 second_look=None) -> None:
+                 skip_missing: bool = True, measured_speed: bool = True) -> None:
     """(13)-(15) on the next completed window of N rows of `obj` (one starts every
     `thresholds.hop_samples` rows) until one says Pedestrian (Sec. 4.2): at most one window per
     call; the first window's outcome is kept, replaced by the first Pedestrian one.
@@ -194,8 +194,8 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
     the missing-sample rules read window B's I(k) only (a candidate is NaN exactly where it
     is). The pace window (`obj.pace_window`, rule 34) is judged in the same call and gives a
     Pedestrian window's pace and stride where it says Pedestrian too (`strongest`'s
-    pace_last). `second_look(outcome, rows)`, when given, may change a window's outcome from
-    its rows before it decides (`track.twice`, rule 37)."""
+    pace_last). The object's `second_look(outcome, rows)`, where it has one, may change a
+    window's outcome from its rows before it decides (`track.twice`, rule 37)."""
     n = cfg.thresholds.n
     rows = obj.rows
     k = obj.win_start
@@ -235,8 +235,9 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
                                  pace_last=getattr(obj, "pace_window", False))
         out = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}
         chosen = int(best[0])
-    if second_look is not None:
-        out = second_look(out, window)
+    look = getattr(obj, "second_look", None)
+    if look is not None:
+        out = look(out, window)
     obj.windows_done += 1
     pedestrian = int(out["verdict"]) == Verdict.PEDESTRIAN
     if obj.result is None or pedestrian:

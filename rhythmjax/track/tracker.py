@@ -14,14 +14,14 @@ or when the estimate leaves the range. Each tracked frame samples the rhythm sig
 window B at the foot point (with `body.window_candidates` also in window B moved by each offset
 of `io.files.WINDOW_CANDIDATES`); each completed window of N frames (one starts every
 `thresholds.hop_samples` frames) is matched with `rhythm.classify_window` until one says
-Pedestrian (then matching stops, tracking goes on; a window at twice a walking pace is looked
-at again, twice.py), the windows `rhythm.classify_track` uses on stored tracks. A track that
-times out is kept for `relink.within_s` s; a new object where it would be continues it.
+Pedestrian (then matching stops; a window at twice a walking pace looked at again, twice.py).
+A track that times out is kept for `relink.within_s` s; a new object there continues it.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -65,6 +65,7 @@ class _Object:
     # windows B (`io.files.WINDOW_CANDIDATES` order), then the pace window's where
     # `pace_window` (rule 34); NaN where `intensity` is; None: both options off
     pace_window: bool = False  # the last entry of each candidate_rows tuple is the pace window
+    second_look: Callable | None = None  # `match_window`'s look at a refused window (rule 37)
 
 
 class _Lost(NamedTuple):
@@ -204,7 +205,8 @@ class OnlineTracker:
                 s = free.pop(0)
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top,
                                          candidate_rows=[] if self._extra else None,
-                                         pace_window=self._pace_scale > 0)
+                                         pace_window=self._pace_scale > 0,
+                                         second_look=self._look)
                 present[s], reset[s] = True, True
                 if opt.body.side_anchor:
                     cut, det = det, sides.anchor_at_side(det, self._walker_px(det.u, det.v),
@@ -330,7 +332,7 @@ class OnlineTracker:
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
                                  float(mean[0]), float(mean[2]), int(obj.state), float(top)))
         obj.vel.append(Velocity(float(mean[1]), float(mean[3])))
-        match_window(self.cfg, obj, second_look=self._look)
+        match_window(self.cfg, obj)
         out_of_range = not (self._range[0] <= mean[2] <= self._range[1])
         if out_of_range or obj.predict_time > self._timeout:
             self._end(s, lost=not out_of_range)
@@ -360,7 +362,7 @@ class OnlineTracker:
             if anchor is not None:
                 self._lost.append(_Lost(obj, anchor, (obj.win_start, obj.result, obj.decided,
                                                       obj.windows_done)))
-        match_window(self.cfg, obj, final=True, second_look=self._look)
+        match_window(self.cfg, obj, final=True)
         self._finished.append(obj)
         self._slots[s] = None
 
@@ -411,20 +413,18 @@ class OnlineTracker:
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 
     def _split_at_switch(self, obj: _Object) -> None:
-        """Rule 29 (`recheck.py`): a track judged Pedestrian one of whose later windows is no
-        walker's keeps rows ..k-1 (k: that window's first row) and its verdict (its deciding
-        window ends at or before k); rows k.. become a new track, judged afresh on its own rows
-        (the same windows as online, then the final window rule); with `recheck.tail` (rule
-        30a) the window of the last N rows is read too. Rules 30, 30b (`recheck.earlier`, off):
-        where a window before the deciding one is no walker's, rows ..k-1 (k: the deciding
-        window's first row) become the new track and the rest keeps id and verdict."""
-        opt, look = self.opt.recheck, self._look  # windows judged as online (rule 37 too)
-        k = None if opt.earlier == "off" else earlier_switch_row(
-            self.cfg, obj, pace=opt.earlier == "any", second_look=look)
+        """Rule 29 (`recheck.py`): a Pedestrian track one of whose later windows is no walker's
+        keeps rows ..k-1 (k: that window's first row) and its verdict; rows k.. become a new
+        track judged afresh (`recheck.tail`, rule 30a: the last N rows' window read too). Rules
+        30, 30b (`recheck.earlier`, off): where a window before the deciding one is no walker's,
+        rows ..k-1 (k: the deciding window's first row) become the new track."""
+        opt = self.opt.recheck
+        k = (None if opt.earlier == "off"
+             else earlier_switch_row(self.cfg, obj, pace=opt.earlier == "any"))
         if k is not None:
             self._judge_afresh(obj, slice(None, k))
             keep_rows(obj, slice(k, None))
-        k = switch_row(self.cfg, obj, tail=opt.tail, second_look=look)
+        k = switch_row(self.cfg, obj, tail=opt.tail)
         if k is not None:
             self._judge_afresh(obj, slice(k, None))
             keep_rows(obj, slice(None, k))
@@ -434,11 +434,11 @@ class OnlineTracker:
         cands = obj.candidate_rows
         part = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[rows],
                        vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows],
-                       pace_window=obj.pace_window)
+                       pace_window=obj.pace_window, second_look=obj.second_look)
         self._next_id += 1
         while not part.decided and len(part.rows) >= part.win_start + self.cfg.thresholds.n:
-            match_window(self.cfg, part, second_look=self._look)
-        match_window(self.cfg, part, final=True, second_look=self._look)
+            match_window(self.cfg, part)
+        match_window(self.cfg, part, final=True)
         self._finished.append(part)
         self.switches += 1
 

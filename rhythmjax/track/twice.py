@@ -9,7 +9,7 @@ judged at half its strongest peak only where the object is as tall as a walker: 
 verdict is Non-pedestrian with reason no-model-match, whose strongest peak f1 (Hz) is above
 P_thr (13) with R above R_thr (15), fails (14) at (f1, v/f1) and passes it at (f1/2, 2 v/f1),
 is Pedestrian with pace f1/2, stride 2 v/f1 (v: the window's speed of (12), m/s) and reason
-matched-twice when its rows' median height (`size.median_height`, rules 26 and 36's rows) is at
+matched-twice when its rows' median height (`size.rows_height`, rules 26 and 36's rows) is at
 least `twice_pace_heights` walker heights over at least `min_height_rows` rows."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from ..model.gates import walking_ok
 from ..model.params import Config, host_float
 from ..model.status import Reason, Verdict
 from .options import SizeOptions
-from .size import median_height
+from .size import rows_height
 
 
 __all__ = ["judge_at_half", "second_look"]
@@ -46,9 +46,7 @@ def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: f
     if bool(walking_ok(cfg.walking, k3, f1, speed / f1)) or \
             not bool(walking_ok(cfg.walking, k3, f1 / 2, 2 * speed / f1)):
         return out
-    cols = np.asarray([(r.u, r.v, r.v_top) for r in rows], np.float64).reshape(-1, 3)
-    height, n = median_height(camera, cols[:, 0], cols[:, 1], cols[:, 2], walker_height_m,
-                              options.top_inside_heights)
+    height, n = rows_height(camera, rows, walker_height_m, options.top_inside_heights)
     if n < options.min_height_rows or not height >= options.twice_pace_heights * walker_height_m:
         return out
     return {**out, "verdict": np.asarray(int(Verdict.PEDESTRIAN), np.int32),
@@ -57,9 +55,9 @@ def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: f
 
 
 def second_look(cfg: Config, camera, options: SizeOptions):
-    """`match_window`'s `second_look` for a tracker with `cfg`, `camera` (`camera_np.camera_tuple`)
-    and size `options`: `judge_at_half` on a window's outcome and rows; None when rule 37 is
-    off (`options.twice_pace_heights` 0)."""
+    """A tracked object's `second_look` (`toolkit.match_window` calls it on each window) for a
+    tracker with `cfg`, `camera` (`camera_np.camera_tuple`) and size `options`: `judge_at_half`
+    on a window's outcome and rows; None when rule 37 is off (`options.twice_pace_heights` 0)."""
     if options.twice_pace_heights <= 0:
         return None
     walker_m = host_float(cfg.width.height)
