@@ -58,6 +58,12 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   reads rows where a walker's head would leave the image but the measured top lies inside it).
 - twice_pace: the tracker's `size.twice_pace_heights` 0.75 vs 0 (rule 37: a window refused by
   (14) judged at half its strongest peak where the height is a walker's).
+- count_twice: counting's `verdicts.twice_pace_heights` 0.75 vs 0 (rule 37 in the batch
+  classifier that judges count's tracks, heights from the tracks' v_top).
+- twice_edge: the tracker's `size.twice_pace_edge` True vs False (rule 37b: rule 37's height
+  reading also counts rows whose motion reaches the image's first row, at the height up to it).
+- count_edge: counting's `verdicts.twice_pace_edge` True vs False (rule 37's height reading also
+  counts rows whose blobs reach the image's first row, at the height up to it: a lower bound).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

@@ -108,6 +108,15 @@ RULES = {
     "twice_pace": ("tracker", "size.twice_pace_heights", 0.75, 0.0, TRACKER_SOURCES,
                    "nothing fitted (0.75 walker heights a priori; the twice-the-pace walkers seen "
                    "on own knees radial 2070001-2120001, rule 37)"),
+    "count_twice": ("count", "verdicts.twice_pace_heights", 0.75, 0.0, COUNT_SOURCES,
+                    "nothing fitted (the tracker's rule 37 in count's verdicts; decided on "
+                    "fresh own counting seeds 2430001-2460001)"),
+    "twice_edge": ("tracker", "size.twice_pace_edge", True, False, TRACKER_SOURCES,
+                   "nothing fitted (a lower bound, a priori; rule 37b in the tracker, decided on "
+                   "fresh own knees 2530001-2600001)"),
+    "count_edge": ("count", "verdicts.twice_pace_edge", True, False, COUNT_SOURCES,
+                   "nothing fitted (a lower bound, a priori; the cut heads seen on own counting "
+                   "seeds 2430001-2440001; decided on fresh 2490001-2520001)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -126,7 +135,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "recheck_tail": TRACKER_SOURCES, "recheck_speed": (),
               "core_column": (), "upper_column": (), "height_fallback": (),
               "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES,
-              "twice_pace": TRACKER_SOURCES}
+              "twice_pace": TRACKER_SOURCES, "count_twice": COUNT_SOURCES,
+              "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

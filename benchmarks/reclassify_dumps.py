@@ -1,6 +1,6 @@
 """Judge a counting run saved by `benchmarks/count_dump.py` again with another classifier setting,
 the tracks unchanged, and count it again: the counting tracker judges its tracks only once, at
-the end, from its tracks table (`count.counting.judge_tracks`), so with `explain` off (the
+the end, from its tracks table (`count.judge.judge_tracks`), so with `explain` off (the
 default) this gives exactly what `count` would report with the setting. Writes a dump of the
 same form (atomically) for `paired_dumps.py`. Issue 16, twenty-fourth round (docs/rules.md).
 
@@ -62,7 +62,8 @@ def rejudged(record: dict, cfg, width: str = "measured") -> dict:
     `counted` recomputed (`count.counting.counted`); every other column as saved. `width`
     "patch": the W_IMG of the width gate (10) is an average walker's at each measured row's foot
     point (the gate passes every row) instead of the blob's measured width."""
-    from rhythmjax.count.counting import counted, judge_tracks
+    from rhythmjax.count.counting import counted
+    from rhythmjax.count.judge import judge_tracks
 
     v = dict(record["verdicts"])
     tracks = record["tracks"]

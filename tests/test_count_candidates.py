@@ -25,7 +25,7 @@ from .test_pedestrians import CFG, FAST
 
 ON = with_changes(FAST, {"verdicts.window_candidates": True})
 TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity", "x_est", "y_est",
-                 "v_top", "u_top", "state", "vx", "vy", "du", "dv")
+                 "v_top", "u_top", "top_at_edge", "state", "vx", "vy", "du", "dv")
 
 
 @pytest.fixture(scope="module")
@@ -106,10 +106,10 @@ def test_an_offset_of_zero_gives_window_b_bit_for_bit_through_stitching(runs, it
 
 
 def test_the_classifier_is_given_the_candidates_and_its_choice_is_kept(items, monkeypatch):
-    import rhythmjax.model.batch as mb
+    import rhythmjax.count.judge as judge_module
 
     seen = []
-    inner = mb.classify_tracks
+    inner = judge_module.classify_tracks
 
     def spy(cfg, batch, **kw):
         seen.append(batch)
@@ -117,7 +117,7 @@ def test_the_classifier_is_given_the_candidates_and_its_choice_is_kept(items, mo
         out["candidate"] = np.full(len(out["track_id"]), len(CANDIDATE_COLUMNS), np.int64)
         return out
 
-    monkeypatch.setattr(mb, "classify_tracks", spy)
+    monkeypatch.setattr(judge_module, "classify_tracks", spy)
     judge = dataclasses.replace(ON, verdicts=dataclasses.replace(
         ON.verdicts, classify=True, online=False))
     res = count_frames(CFG, iter(items), options=judge)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from rhythmjax.count.widths import column_runs, measured_top, measured_width
+from rhythmjax.count.widths import column_runs, measured_top, measured_width, top_and_edge
 
 
 def _reference(labels, related, claimed, u, v, w, h, reach):
@@ -83,16 +83,18 @@ def test_matches_the_plain_loop_on_random_images():
         assert (math.isnan(got) and math.isnan(want)) or got == want, (u, v, w, h, reach)
 
 
-def _top_reference(labels, related, claimed, u, v, w, reach):
-    """Row by row from the top in plain Python (`measured_top`'s rule)."""
+def _top_reference(labels, related, claimed, u, v, w, reach, edge=False):
+    """Row by row from the top in plain Python (`measured_top`'s rule; `edge`: with
+    `top_and_edge`'s flag, the topmost on the image's first row)."""
     H, W = labels.shape
     y0, y1 = max(0, math.floor(v - reach + 0.5)), min(H, math.floor(v) + 1)
     a0, a1 = max(0, math.floor(u - w / 2 + 0.5)), min(W, math.floor(u + w / 2 + 0.5))
     for y in range(y0, y1):
         if any(int(labels[y, x]) in related and not (claimed is not None and claimed[y, x])
                for x in range(a0, a1)):
-            return math.nan if y == y0 else float(y)
-    return math.nan
+            top = math.nan if y == y0 else float(y)
+            return (top, y == 0) if edge else top
+    return (math.nan, False) if edge else math.nan
 
 
 def test_top_of_a_lone_blob():
@@ -111,8 +113,14 @@ def test_top_of_a_lone_blob():
     claimed[:31, :] = True  # an older patch took the upper part
     assert measured_top(labels, [3], claimed, 48.0, 60.0, 10.0, 60.0) == 31.0
     assert math.isnan(measured_top(labels, [4], None, 48.0, 60.0, 10.0, 60.0))
-    labels[0:20, 40:57] = 3  # reaching the image's first row: cut
+    labels[0:20, 40:57] = 3  # reaching the image's first row: cut, at the edge
     assert math.isnan(measured_top(labels, [3], None, 48.0, 60.0, 10.0, 200.0))
+    top, edge = top_and_edge(labels, [3], None, 48.0, 60.0, 10.0, 200.0)
+    assert math.isnan(top) and edge
+    # cut by the search (from row 20), not by the image: not at the edge
+    top, edge = top_and_edge(labels, [3], None, 48.0, 60.0, 10.0, 40.2)
+    assert math.isnan(top) and not edge
+    assert top_and_edge(labels, [4], None, 48.0, 60.0, 10.0, 200.0)[1] is False  # none
 
 
 def test_top_matches_the_plain_loop_on_random_images():
@@ -127,3 +135,6 @@ def test_top_matches_the_plain_loop_on_random_images():
         got = measured_top(labels, related, claimed, u, v, w, reach)
         want = _top_reference(labels, set(related), claimed, u, v, w, reach)
         assert (math.isnan(got) and math.isnan(want)) or got == want, (u, v, w, reach)
+        got_edge = top_and_edge(labels, related, claimed, u, v, w, reach)[1]
+        assert got_edge == _top_reference(labels, set(related), claimed, u, v, w, reach,
+                                          edge=True)[1], (u, v, w, reach)

@@ -58,6 +58,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 26c)", "size.min_height_scope", "window"),
     ("(new: issue 16, rule 36)", "size.top_inside_heights", 0.1),  # a top seen inside the image
     ("(new: issue 16, rule 37)", "size.twice_pace_heights", 0.75),  # a walker at twice its pace
+    ("(new: issue 16, rule 37b)", "size.twice_pace_edge", True),  # ... heads above the view
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
     ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
     ("(new: issue 16, rule 30)", "recheck.earlier", "off"),  # windows before the verdict
@@ -118,6 +119,8 @@ COUNT_DEFAULTS = [
     (None, "verdicts.speed_fit", "theil-sen"),  # issue 16, rule 25: Theil-Sen since round 28
     ("(new: issue 16 item 2)", "verdicts.window_candidates", False),  # candidate windows B
     ("(new: issue 16, rule 31)", "verdicts.head_speed", True),  # the speed under the heads
+    ("(new: issue 16, rule 37)", "verdicts.twice_pace_heights", 0.75),  # twice the pace
+    ("(new: issue 16, rule 37)", "verdicts.twice_pace_edge", True),  # ... heads above the view
     # the foot-point gates of `count.foot_gate` (options a and b), off
     (None, "placement.in_range", False),
     (None, "placement.gate_heights", 0.0),

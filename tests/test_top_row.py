@@ -25,7 +25,13 @@ def test_detection_top_row_of_a_block():
     assert d is not None and d.v == 149 and d.top == 60.0
     # the window's top cuts the block: the head may lie above it, no top row
     d = detect_in_window(m, (100, 150), (80, 160), fraction=0.1)  # window rows 70-229
-    assert d is not None and d.v == 149 and math.isnan(d.top)
+    assert d is not None and d.v == 149 and math.isnan(d.top) and not d.top_at_edge
+    # a block from the image's first row: cut there, at the edge (rule 37b's lower bound)
+    m[0:60, 90:110] = 1
+    d = detect_in_window(m, (100, 100), (80, 240), fraction=0.1)  # window rows -20-219
+    assert d is not None and d.v == 149 and math.isnan(d.top) and d.top_at_edge
+    d = detect_in_window(m, (100, 120), (80, 240), fraction=0.1)  # window rows 0-239
+    assert d is not None and math.isnan(d.top) and d.top_at_edge
 
 
 def _cols(with_top: bool) -> dict:
@@ -108,3 +114,22 @@ def test_tracker_top_row_near_the_true_head():
     # the motion's top is the head's top: within 2 px (median), 6 px (all but a tenth)
     assert abs(np.median(err)) <= 2.0 and np.percentile(np.abs(err), 90) <= 6.0, err
     assert np.all(np.isnan(cols["v_top"][~np.isfinite(cols["v"])]))
+    assert not cols["top_at_edge"].any()  # every head in view
+
+
+def test_tracker_rows_at_the_image_edge():
+    """The paper's camera, a walker at 8-10 m: its head is above the image's first row on every
+    frame (a 1.7 m walker's top is inside only from 15 m on), so its measured rows have no top
+    row and are marked at the edge (rule 37b's rows); predicted rows are not."""
+    cfg = Config()
+    act = walker(-1.5, 8.0, 0.1, pace_hz=2.0, step_length_m=0.7, height_m=1.7)
+    scene = render_scene(2, SceneSpec(n_frames=40, actors=(act,), camera=cfg.camera))
+    tr = OnlineTracker(cfg)
+    for k, fr in enumerate(scene.frames):
+        tr.update(k, k / scene.fps, fr)
+    cols, _, _ = tr.finish()
+    measured = np.isfinite(cols["v"])
+    assert measured.sum() >= 20
+    assert np.all(np.isnan(cols["v_top"]))
+    assert cols["top_at_edge"][measured].mean() >= 0.9
+    assert not cols["top_at_edge"][~measured].any()

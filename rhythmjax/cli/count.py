@@ -118,7 +118,7 @@ def cmd_count(args) -> int:
             write_mot(outs.path(out("mot.txt")), res.mot)
             write_mot(outs.path(out("mot_velocity.txt")), res.mot, VELOCITY_COLUMNS)
             write_table(outs.path(out("tracks.parquet")), res.tracks,
-                        TRACK_ORDER + ["v_top", "u_top", *VELOCITY_COLUMNS]
+                        TRACK_ORDER + ["v_top", "u_top", "top_at_edge", *VELOCITY_COLUMNS]
                         + candidate_columns(res.tracks))
             write_table(outs.path(out("verdicts.csv")), res.verdicts,
                         VERDICT_ORDER + list(GUESS_COLUMNS)

@@ -57,7 +57,6 @@ from typing import Any
 
 import numpy as np
 
-from ..io.files import CANDIDATE_COLUMNS
 from ..io.mot import VELOCITY_COLUMNS
 from ..model.params import Config, walking_top_speed
 from ..track.columns import candidate_table
@@ -65,6 +64,7 @@ from ..track.rows import TrackRow
 from ..vision.frames import drive_frames
 from .explain import explain_tracks, measured_points
 from .head_feet import head_ground_points
+from .judge import judge_tracks
 from .options import SPEED_FITS, CountOptions
 from .patches import ShapeModel
 from .pedestrian_level import END_REASONS, Pedestrian, PedestrianLevel
@@ -291,7 +291,10 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
     on = level.opt.verdicts.window_candidates  # the candidate windows B (`window_candidates`)
     tracks = tracks_table(peds, candidates=on)
     if peds and level.opt.verdicts.classify:
-        verdicts = judge_tracks(cfg, tracks, candidates=on)
+        vo = level.opt.verdicts
+        verdicts = judge_tracks(cfg, tracks, candidates=on,
+                                twice_pace_heights=vo.twice_pace_heights,
+                                twice_pace_edge=vo.twice_pace_edge)
     else:
         B, nan = len(peds), np.full(len(peds), np.nan)
         verdicts = {"track_id": np.arange(1, B + 1, dtype=np.int64),
@@ -337,40 +340,6 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
         summary["notes"].append(f"all {level.filter.slots} pedestrian slots were in use in "
                                 f"{len(set(level.full_frames))} frame(s); raise max_pedestrians")
     return CountResult(mot, tracks, verdicts, counts, detections, summary)
-
-
-def judge_tracks(cfg, tracks: dict, candidates: bool = False) -> dict[str, np.ndarray]:
-    """The rhythm paper's verdicts of a counting run's tracks (`tracks_table`, ids 1.. in
-    order, at least one track): `model.batch.classify_tracks` over the tracks cut at gaps longer
-    than the PREDICT time-out, with `candidates` the candidate windows B. Columns: track_id,
-    verdict, reason, pace_hz, stride_m, ratio, speed_mps, n_samples (and candidate), and
-    window_frame, the deciding window's first frame (-1: none). Depends on nothing but the
-    tracks, so a saved run can be judged again (`benchmarks/reclassify_dumps.py`)."""
-    from ..io.files import Tracks, to_batch
-    from ..model.batch import classify_tracks
-
-    n = cfg.thresholds.n
-    tr = Tracks(path="<count>", track_id=tracks["track_id"].astype(str).astype(object),
-                frame=tracks["frame"], t=tracks["t"], u=tracks["u"], v=tracks["v"],
-                width_px=tracks["width_px"], intensity=tracks["intensity"],
-                line=np.arange(len(tracks["frame"])), fps=cfg.camera.fps,
-                candidates=np.stack([tracks[c] for c in CANDIDATE_COLUMNS], axis=1)
-                if candidates else None)
-    gap = max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
-    batch = to_batch(tr, max_gap_frames=gap, min_len=n)
-    verdicts = classify_tracks(cfg, batch, progress=False)
-    # the deciding window's first frame (-1: none; the spectra): its batch row's time
-    w = np.asarray(verdicts["window_row"], np.int64)
-    b = np.arange(len(w))
-    first = tracks["frame"][np.r_[0, np.flatnonzero(np.diff(tracks["track_id"])) + 1]]
-    dt_frames = (batch.t[b, np.maximum(w, 0)] - batch.t[:, 0]) * float(cfg.camera.fps)
-    window_frame = np.where(w >= 0, first + np.round(dt_frames).astype(np.int64), -1)
-    keep = ("track_id", "verdict", "reason", "pace_hz", "stride_m", "ratio", "speed_mps",
-            "n_samples") + (("candidate",) if candidates else ())  # the deciding window B
-    out = {k: verdicts[k] for k in keep}
-    out["track_id"] = out["track_id"].astype(np.int64)
-    out["window_frame"] = window_frame
-    return out
 
 
 def explain_counted(level: PedestrianLevel, tracks: dict, verdicts: dict) -> None:

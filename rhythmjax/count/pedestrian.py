@@ -44,6 +44,7 @@ class Pedestrian:
     z_width: float = math.nan  # its measured width px (`widths.measured_width`), gate (10)
     z_top: float = math.nan  # its measured top row px (`widths.measured_top`; its blobs unshared)
     z_top_u: float = math.nan  # its head's column px at z_top: z's u + `widths.measured_lean`
+    z_top_edge: bool = False  # its blobs reached the image's first row (`widths.top_and_edge`)
     look: Appearance | None = None  # `appearance.enabled`: its descriptor (unshared frames)
     candidate_rows: list[tuple[float, ...]] | None = None  # `verdicts.window_candidates`: per
     # row, I(k) of the candidate windows B (`io.files.WINDOW_CANDIDATES` order, grey levels; NaN

@@ -77,7 +77,7 @@ from .rewind import keep_state, rewind, rewind_requests, rows_to_drop, state_sto
 from .rows import BlobRow, BoxRow, GroundRow
 from .slot_filter import FILTER_OUT, FilterOut, SlotFilter, filter_config
 from .still import duplicates, is_still
-from .widths import measured_lean, measured_top, measured_width
+from .widths import measured_lean, measured_width, top_and_edge
 from .window_candidates import sample_candidates
 
 
@@ -163,6 +163,7 @@ class PedestrianLevel:
         for p in self.peds:
             p.z, p.z_width = (math.nan, math.nan), math.nan  # unless placed
             p.z_top, p.z_top_u, p.merged, p.unseen = math.nan, math.nan, False, False
+            p.z_top_edge = False
         boxes = box_table(blobs)
         rel = self._relate(graph, blobs, boxes)
         S = self.filter.slots
@@ -278,7 +279,8 @@ class PedestrianLevel:
             p.z = z  # the object's width: its blob's run, a patch width around
             p.z_width = measured_width(labels, lab, claimed, pl.u, pl.v, pl.w, pl.h, pl.w)
             if k == 1:  # its blobs not shared: their top in its columns is its head
-                p.z_top = measured_top(labels, lab, claimed, pl.u, pl.v, pl.w, TOP_REACH * pl.h)
+                p.z_top, p.z_top_edge = top_and_edge(labels, lab, claimed, pl.u, pl.v, pl.w,
+                                                     TOP_REACH * pl.h)
                 p.z_top_u = p.z[0] + measured_lean(labels, lab, claimed, pl.u, pl.v, pl.w,
                                                    p.z_top, 0.5 * pl.w)
             if k == 1 and opt.appearance.enabled:  # its blobs not shared: its descriptor
@@ -339,7 +341,8 @@ class PedestrianLevel:
         state = TrackState.OBSERVE if measured else TrackState.PREDICT
         p.rows.append(TrackRow(index, t, p.z[0], p.z[1], p.z_width if measured else math.nan,
                                inten, gx, gy, int(state), p.z_top if measured else math.nan,
-                               p.z_top_u if measured else math.nan))
+                               p.z_top_u if measured else math.nan,
+                               measured and p.z_top_edge))
         p.boxes.append(BoxRow(index, eu - w / 2, ev - h, w, h, 1.0 if measured else 0.5, gx,
                               gy, bool(ok)))
         vx, vy = out.velocity[s] if self.opt.dynamics == "3d" else (math.nan, math.nan)

@@ -72,27 +72,37 @@ def measured_width(labels: np.ndarray, related, claimed: np.ndarray | None, u: f
 
 def measured_top(labels: np.ndarray, related, claimed: np.ndarray | None, u: float, v: float,
                  w: float, reach_px: float) -> float:
-    """Top row px of the object under the patch standing on (u, v) px, w px wide (module doc).
+    """Top row px of the object under the patch standing on (u, v) px, w px wide (module doc):
+    `top_and_edge`'s top."""
+    return top_and_edge(labels, related, claimed, u, v, w, reach_px)[0]
+
+
+def top_and_edge(labels: np.ndarray, related, claimed: np.ndarray | None, u: float, v: float,
+                 w: float, reach_px: float) -> tuple[float, bool]:
+    """(top row px, at the edge) of the object under the patch standing on (u, v) px, w px wide
+    (module doc).
 
     Pixels: those of the `related` labels in `labels` (H, W int), not `claimed` (H, W bool; None:
     none), in the patch's columns [floor(u - w/2 + 0.5), floor(u + w/2 + 0.5)) and the rows from
-    floor(v - reach_px + 0.5) down to floor(v). NaN when there is none, or when the topmost is
-    the first row searched or the image's first row (the object may go on above: cut)."""
+    floor(v - reach_px + 0.5) down to floor(v). The top is NaN when there is none, or when the
+    topmost is the first row searched or the image's first row (the object may go on above:
+    cut); at the edge is True when it is the image's first row (the object's height is at
+    least the one up to that row: rule 37's lower bound, `track.twice`)."""
     H, W = labels.shape
     if not all(math.isfinite(q) for q in (u, v, w, reach_px)):
-        return math.nan
+        return math.nan, False
     y0, y1 = max(0, int(math.floor(v - reach_px + 0.5))), min(H, int(math.floor(v)) + 1)
     a0 = max(0, int(math.floor(u - 0.5 * w + 0.5)))
     a1 = min(W, int(math.floor(u + 0.5 * w + 0.5)))
     if y1 <= y0 or a1 <= a0:
-        return math.nan
+        return math.nan, False
     mask = related_mask(labels[y0:y1, a0:a1], related)
     if claimed is not None:
         mask &= ~claimed[y0:y1, a0:a1]
     rows = np.flatnonzero(mask.any(axis=1))
     if rows.size == 0 or rows[0] == 0:  # none, or cut by the search or the image's top
-        return math.nan
-    return float(y0 + rows[0])
+        return math.nan, bool(rows.size and y0 == 0)
+    return float(y0 + rows[0]), False
 
 
 def measured_lean(labels: np.ndarray, related, claimed: np.ndarray | None, u: float, v: float,

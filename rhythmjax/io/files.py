@@ -60,16 +60,17 @@ CANDIDATE_COLUMNS = tuple(name for name, _ in WINDOW_CANDIDATES)
 # where a rhythm window says Pedestrian and the pace window over the same rows does too, that
 # window's pace and stride are the pace window's (`model.candidates.strongest`).
 PACE_COLUMN = "intensity_wide"
-OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top", "u_top", "state", *CANDIDATE_COLUMNS,
-                          PACE_COLUMN)
+OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top", "u_top", "top_at_edge", "state",
+                          *CANDIDATE_COLUMNS, PACE_COLUMN)
 LABELS = ("pedestrian", "bicycle", "dog", "car", "other")
 TRACK_STATES = ("none", "detect", "observe", "predict")  # `state` (`status.TrackState` names)
-MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top", "u_top",
+MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top", "u_top", "top_at_edge",
                 *CANDIDATE_COLUMNS, PACE_COLUMN)
 MAX_ABS = 1e12
 TRACK_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
                "width_px": "float", "intensity": "float", "label": "str", "x": "float",
-               "y": "float", "v_top": "float", "u_top": "float", "state": "str",
+               "y": "float", "v_top": "float", "u_top": "float", "top_at_edge": "float",
+               "state": "str",
                **{name: "float" for name in (*CANDIDATE_COLUMNS, PACE_COLUMN)}}
 TRACK_NOT_EMPTY = ("track_id", "frame", "t")
 TRACK_KEY = "track_id" + KEY_SUFFIX  # a Table's codes of its track ids (`tables.convert_parquet`)
@@ -97,6 +98,8 @@ class Tracks:
     fps: float | int | None = None
     v_top: np.ndarray | None = None  # top row px of the moving region (the head); NaN missing
     u_top: np.ndarray | None = None  # the head's column px at v_top; NaN missing
+    top_at_edge: np.ndarray | None = None  # 1: the moving region reached the image's first
+    # row (v_top NaN: the object goes on above it); 0 or NaN: not
     notes: list[str] = field(default_factory=list)
     track_key: np.ndarray | None = None  # int64 codes equal where track_id is (`run_key`)
     state: np.ndarray | None = None  # object array of `TRACK_STATES` ("" = not given)
@@ -138,7 +141,7 @@ class Tracks:
             u=take(self.u), v=take(self.v), width_px=take(self.width_px),
             intensity=take(self.intensity), line=take(self.line), label=take(self.label),
             x=take(self.x), y=take(self.y), v_top=take(self.v_top), u_top=take(self.u_top),
-            notes=[],
+            top_at_edge=take(self.top_at_edge), notes=[],
             track_key=take(self.track_key), state=take(self.state),
             candidates=take(self.candidates))
 
@@ -167,6 +170,7 @@ class TrackBatch:
     xy: np.ndarray | None = None  # (B, T, 2) m
     v_top: np.ndarray | None = None  # (B, T) px, the top row (head) where the file has it
     u_top: np.ndarray | None = None  # (B, T) px, the head's column at v_top, likewise
+    top_at_edge: np.ndarray | None = None  # (B, T): 1 where the region reached the image's top
     candidates: np.ndarray | None = None  # (B, T, K): the candidate windows' I(k), if any
     pace_window: bool = False  # the last candidates column is the pace window's (rule 34)
 
@@ -253,7 +257,7 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
                   u=col["u"], v=col["v"], width_px=col["width_px"], intensity=col["intensity"],
                   line=lines, unit=tab.unit, label=labels, x=col.get("x"), y=col.get("y"),
                   fps=None if fps is None else float(fps), v_top=col.get("v_top"),
-                  u_top=col.get("u_top"), notes=notes,
+                  u_top=col.get("u_top"), top_at_edge=col.get("top_at_edge"), notes=notes,
                   track_key=col.get(TRACK_KEY), state=col.get("state"), candidates=candidates,
                   pace_window=pace_window)
 
@@ -354,6 +358,7 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
                       t=tg.astype(np.float32), dt=dt.astype(np.float32), present=present,
                       length=length, labels=labels, xy=grid(tracks.x, tracks.y),
                       v_top=grid(tracks.v_top), u_top=grid(tracks.u_top),
+                      top_at_edge=grid(tracks.top_at_edge),
                       candidates=candidate_grid, pace_window=tracks.pace_window)
 
 

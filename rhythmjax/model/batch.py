@@ -116,7 +116,7 @@ def pick_segments(verdict: np.ndarray, owner: np.ndarray, n_tracks: int) -> np.n
 
 def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = True,
                     split: bool = True, segment_rows: int = SEGMENT_ROWS,
-                    devices=None) -> dict:
+                    devices=None, second_look=None) -> dict:
     """Classify every track of a `TrackBatch`; returns NumPy columns of the verdicts table
     (`VERDICT_COLUMNS`, verdict and reason as labels) plus `peak_*` arrays for plots and
     `n_segments` (Fig. 3 segments per track; `split` False: every track whole, one segment,
@@ -135,17 +135,23 @@ def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = Tr
     A track longer than `segment_rows` rows is classified by `long_tracks.classify_long_track`
     (its filter in segments of that many rows, the carry handed on; the same verdicts), so its
     memory does not grow with its length; the others as before, padded only to their own
-    longest (rounded up to a power of two)."""
+    longest (rounded up to a power of two).
+
+    `second_look` (res, track, start) -> res, where given, may change the outcome of each
+    window classified (window w: rows start[w] .. start[w] + N - 1 of track track[w] of
+    `batch`) before it decides, as the tracker's does (rule 37: `track.twice.
+    batch_second_look`; `fast_batch.classify_segments`)."""
     B = len(batch.ids)
     place = placement(devices)
     long = np.flatnonzero(np.asarray(batch.length) > segment_rows) if split and B else \
         np.zeros(0, np.int64)
     if long.size:
         return _with_long_tracks(cfg, batch, long, chunk=chunk, progress=progress,
-                                 segment_rows=segment_rows, place=place)
+                                 segment_rows=segment_rows, place=place,
+                                 second_look=second_look)
     if B == 0:
         return verdict_columns(batch, {k: np.zeros(0) for k in CODES}, np.zeros(0, np.int64))
-    res, owner = classify_fast(cfg, batch, chunk, place, split=split)
+    res, owner = classify_fast(cfg, batch, chunk, place, split=split, second_look=second_look)
     return verdict_columns(batch, res, owner)
 
 
@@ -178,7 +184,7 @@ def verdict_columns(batch, res: dict, owner: np.ndarray) -> dict:
 
 
 def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progress: bool,
-                      segment_rows: int, place) -> dict:
+                      segment_rows: int, place, second_look=None) -> dict:
     """`classify_tracks` when the tracks `long` are longer than `segment_rows`: those one by one
     in segments, the others as a batch truncated to their own length."""
     B = len(batch.ids)
@@ -195,7 +201,9 @@ def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progr
             present=take(batch.present), length=batch.length[short],
             labels=None if batch.labels is None else [batch.labels[i] for i in short],
             xy=take(batch.xy), candidates=take(batch.candidates))
-        res, owner = classify_fast(cfg, sub, chunk, place)
+        look = None if second_look is None else \
+            (lambda res, track, start: second_look(res, short[track], start))
+        res, owner = classify_fast(cfg, sub, chunk, place, second_look=look)
         parts.append({k: res[k] for k in CODES})
         owners.append(short[owner])
     for i in long:
@@ -205,7 +213,10 @@ def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progr
             signal = np.concatenate([signal[:, None], batch.candidates[i, :L]], axis=1)
         pieces = classify_long_track(cfg, batch.z[i, :L], batch.width[i, :L], signal,
                                      batch.dt[i, :L], segment_rows=segment_rows,
-                                     pace_last=batch.pace_window)
+                                     pace_last=batch.pace_window,
+                                     second_look=None if second_look is None else
+                                     (lambda res, start, i=i: second_look(
+                                         res, np.full(len(start), i), start)))
         parts.append({k: np.asarray([p[k] for p in pieces]) for k in CODES})
         owners.append(np.full(len(pieces), i))
     owner = np.concatenate(owners)

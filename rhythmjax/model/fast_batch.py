@@ -144,9 +144,12 @@ def classify_candidates(cfg: Config, segs: Segments, seg: np.ndarray, j: np.ndar
 
 
 def classify_segments(cfg: Config, segs: Segments, place: Placement | None = None,
-                      block: int = WINDOW_BLOCK) -> dict[str, np.ndarray]:
+                      block: int = WINDOW_BLOCK, second_look=None) -> dict[str, np.ndarray]:
     """Per segment (codes, NumPy columns `CODES`), `rhythm.classify_track`'s result: the first
-    complete window that says Pedestrian, else window 0 (module doc, step 2)."""
+    complete window that says Pedestrian, else window 0 (module doc, step 2). `second_look`
+    (res, track, start) -> res, where given, may change the outcomes of windows (leading axis)
+    from their rows: window w is rows start[w] .. start[w] + N - 1 of the batch's track
+    track[w] (rule 37, `track.twice.batch_second_look`)."""
     place = place or Placement()
     S = len(segs)
     nan = np.float32(np.nan)
@@ -171,6 +174,9 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
         seg = np.repeat(todo, count)
         j = lo + np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
         res, chosen = classify_candidates(cfg, segs, seg, j, place, block)
+        if second_look is not None:
+            res = second_look(res, segs.owner[seg], segs.first[seg] + segs.k0[seg]
+                              + segs.hop * j)
         ped = res["verdict"] == Verdict.PEDESTRIAN
         # per segment, its first Pedestrian window of the phase, else (phase 0) window 0
         take = np.zeros(len(seg), bool)
@@ -190,12 +196,12 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
 
 
 def classify_fast(cfg: Config, batch, rows: int = 256, place: Placement | None = None,
-                  split: bool = True) -> tuple[dict, np.ndarray]:
+                  split: bool = True, second_look=None) -> tuple[dict, np.ndarray]:
     """Cut the tracks of a TrackBatch at Fig. 3's ends and classify every segment (steps 1-3
     of the module doc). Returns per-segment codes (`CODES`) and each segment's track, segments
     in track then time order (as `segments.split_tracks` orders them). `split` False: every
-    track one segment."""
+    track one segment. `second_look`: `classify_segments`'."""
     place = place or Placement()
     rounds = list(filter_rounds(cfg, batch, rows, place, split))
     segs = Segments(cfg, rounds)
-    return classify_segments(cfg, segs, place), segs.owner
+    return classify_segments(cfg, segs, place, second_look=second_look), segs.owner

@@ -132,12 +132,15 @@ def _unclassified(reason: int, n_tracked: int) -> dict:
 
 
 def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
-                   window_chunk: int = WINDOW_CHUNK, pace_last: bool = False) -> dict:
+                   window_chunk: int = WINDOW_CHUNK, pace_last: bool = False,
+                   second_look=None) -> dict:
     """`rhythm.classify_track`'s result for one piece of track (rows not split by Fig. 3) from
     the filter's rows: the first complete window that says Pedestrian, else the first window
     (codes, NumPy scalars). `intensity` (T,), or (T, C) with candidate windows B in columns 1..
     (each window judged by the strongest, `candidates.strongest`; `candidate` its column;
-    `pace_last`: the last column is the pace window's, rule 34)."""
+    `pace_last`: the last column is the pace window's, rule 34). `second_look` (res, start)
+    -> res, where given, may change the outcomes of windows starting at the piece's rows
+    `start` (rule 37, `fast_batch.classify_segments`)."""
     n, hop = cfg.thresholds.n, cfg.thresholds.hop_samples
     k0 = int(np.argmax(started)) if len(started) else 0
     n_tracked = int(np.sum(present & started))
@@ -158,6 +161,8 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
             classify_window_rows(cfg, signals[..., c], dt[rows], xy[rows], observed[rows],
                                  block=min(window_chunk, WINDOW_BLOCK))
             for c in range(signals.shape[-1])], pace_last=pace_last)
+        if second_look is not None:
+            res = second_look(res, k0 + hop * j)
         res["candidate"] = chosen
         res["window_row"] = k0 + hop * j  # the window's first row in the piece
         if first is None:
@@ -177,11 +182,13 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
 
 def classify_long_track(cfg: Config, z: np.ndarray, width: np.ndarray, intensity: np.ndarray,
                         dt: np.ndarray, *, segment_rows: int = SEGMENT_ROWS,
-                        window_chunk: int = WINDOW_CHUNK, pace_last: bool = False) -> list[dict]:
+                        window_chunk: int = WINDOW_CHUNK, pace_last: bool = False,
+                        second_look=None) -> list[dict]:
     """One track's rows (no padding: z (T, 2) px, width, intensity (T,) or (T, C) with candidate
     windows B, the last of them the pace window's where `pace_last`, dt (T,) s, dt[0] the
     nominal step) cut at Fig. 3's ends; per piece, in time order, its `classify_piece` result.
-    `batch.pick_segments` then picks the track's verdict as for the batch path."""
+    `batch.pick_segments` then picks the track's verdict as for the batch path. `second_look`
+    (res, start) -> res: `classify_piece`'s, `start` the windows' first rows in the track."""
     T = len(dt)
     pieces = []
     first = 0
@@ -190,8 +197,11 @@ def classify_long_track(cfg: Config, z: np.ndarray, width: np.ndarray, intensity
         m, started, valid, xy = _first_piece(cfg, z[first:], width[first:], dt[first:], dt0,
                                              segment_rows)
         ds = np.concatenate([[dt0], dt[first + 1:first + m]]).astype(dt.dtype)
+        look = None if second_look is None else \
+            (lambda res, start, at=first: second_look(res, at + start))
         piece = classify_piece(cfg, z[first:first + m], intensity[first:first + m], ds,
-                               np.ones(m, bool), started, valid, xy, window_chunk, pace_last)
+                               np.ones(m, bool), started, valid, xy, window_chunk, pace_last,
+                               look)
         if piece["window_row"] >= 0:  # the deciding window's first row in the track
             piece["window_row"] = first + int(piece["window_row"])
         pieces.append(piece)

@@ -214,6 +214,11 @@ class SizeOptions:
     # the step (a walker seen from behind or in front: two bursts a step) is Pedestrian there
     # when its rows' median height is at least this many walker heights (`track.twice`; 0.75
     # a priori: a dog at its own trot reads the same pace and step, 0.5-0.7 m tall); 0: off
+    twice_pace_edge: bool = True  # rule 37b: rule 37's height reads also the rows whose
+    # motion reached the image's first row (the head above the view, `TrackRow.top_at_edge`),
+    # each at the height up to that row, a lower bound (`track.twice.twice_height`). On since
+    # issue 16's thirty-ninth round: fresh own knees radial 168 -> 170 of 210 walkers, crossing
+    # 62 -> 63 of 70, no non-walker more; dev, PETS09, UCSD, CASIA-B unchanged (docs/rules.md)
 
     def __post_init__(self):
         for name in ("top_inside_heights", "twice_pace_heights"):

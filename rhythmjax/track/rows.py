@@ -24,7 +24,9 @@ class TrackRow(NamedTuple):
     measured moving region (the head; NaN when not measured or clipped by the detection
     window), an optional column of the tracks format; u_top: the head's column px at v_top
     (`count` writes u + the silhouette's lean, `count.widths.measured_lean`; NaN where not
-    measured), optional likewise."""
+    measured), optional likewise; top_at_edge: the measured moving region reached the image's
+    first row, so v_top is NaN and the object goes on above it (`count` records it; the
+    tracker leaves it False), the optional column `top_at_edge` (1/0)."""
 
     frame: int
     t: float
@@ -37,6 +39,7 @@ class TrackRow(NamedTuple):
     state: int
     v_top: float = math.nan
     u_top: float = math.nan
+    top_at_edge: bool = False
 
 
 class Velocity(NamedTuple):

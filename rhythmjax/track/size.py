@@ -31,7 +31,7 @@ from ..model.status import Reason, Verdict
 from .options import SizeOptions
 
 
-__all__ = ["median_height", "refuse_low", "rows_height", "too_low"]
+__all__ = ["median_height", "refuse_low", "row_heights", "rows_height", "too_low"]
 
 
 def median_height(camera: Camera | tuple, u, v, v_top, walker_height_m: float,
@@ -46,6 +46,15 @@ def median_height(camera: Camera | tuple, u, v, v_top, walker_height_m: float,
     `top_inside_heights` > 0 (rule 36): a row where the walker's head would leave the image
     counts too when its top row v_top >= `top_inside_heights` x the walker's height in px
     there (its height then reads below a walker's: v - v_top < v < the walker's px)."""
+    H, read = row_heights(camera, u, v, v_top, walker_height_m, top_inside_heights)
+    H = H[read]
+    return (float(np.median(H)) if H.size else math.nan), int(H.size)
+
+
+def row_heights(camera: Camera | tuple, u, v, v_top, walker_height_m: float,
+                top_inside_heights: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Per row, (height m, read): the height of `median_height` and whether that reads it
+    (its rows: the same arguments and rules)."""
     u, v, v_top = (np.asarray(q, np.float64) for q in (u, v, v_top))
     _, walker_px, seen = upright_size(camera, u, v, 1.0, walker_height_m)
     with np.errstate(invalid="ignore"):
@@ -54,8 +63,7 @@ def median_height(camera: Camera | tuple, u, v, v_top, walker_height_m: float,
             head_in = head_in | (v_top >= top_inside_heights * walker_px)
         seen = seen & head_in
     H, ok = height_of_top(camera, u, v, v_top)
-    H = np.asarray(H)[np.asarray(ok) & seen]
-    return (float(np.median(H)) if H.size else math.nan), int(H.size)
+    return np.asarray(H, np.float64), np.asarray(ok) & seen
 
 
 def too_low(verdict: int, height_m: float, rows: int, walker_height_m: float,

@@ -109,8 +109,8 @@ def front_split(motion: np.ndarray, left: Iterable[int], shared: Iterable[int],
             continue
         whole = detect_in_window(motion, p.centre, (p.core[2], p.height), fraction=fraction,
                                  core=p.core, body_px=None)
-        out[s] = det if whole is None else dataclasses.replace(det, width=whole.width,
-                                                                top=whole.top)
+        out[s] = det if whole is None else dataclasses.replace(
+            det, width=whole.width, top=whole.top, top_at_edge=whole.top_at_edge)
     return out
 
 

@@ -61,9 +61,9 @@ class _Object:
     high_run: int = 0  # frames in a row its measured foot point lay too high (_foot_too_high)
     vel: list[Velocity] = field(default_factory=list)  # EKF ground velocity m/s per row
     top: float = math.nan  # top row px of the last detection (`detect.Detection.top`)
-    candidate_rows: list[tuple[float, ...]] | None = None  # per row, I(k) of the candidate
-    # windows B (`io.files.WINDOW_CANDIDATES` order), then the pace window's where
-    # `pace_window` (rule 34); NaN where `intensity` is; None: both options off
+    top_at_edge: bool = False  # ... its extent reached the image's first row (`Detection`)
+    candidate_rows: list[tuple[float, ...]] | None = None  # per row, I(k) of the candidate windows
+    # B (`WINDOW_CANDIDATES` order), then the pace window's (rule 34); NaN where `intensity` is
     pace_window: bool = False  # the last entry of each candidate_rows tuple is the pace window
     second_look: Callable | None = None  # `match_window`'s look at a refused window (rule 37)
 
@@ -111,7 +111,6 @@ class OnlineTracker:
         self._pace_scale = float(self.opt.body.pace_window_widths)  # rule 34; 0: off
         self._extra = len(self._offsets or ()) + (self._pace_scale > 0)  # entries a row
 
-    # ------------------------------------------------------------------------------------------
     def update(self, index: int, t: float, frame: np.ndarray | None) -> None:
         """Process one frame (None: undecodable, every object predicts)."""
         self.n_frames += 1
@@ -190,7 +189,7 @@ class OnlineTracker:
                 held.add(s)
             elif s not in shared:
                 z[s], width[s] = (own.u, own.v), own.width
-                self._slots[s].top = own.top
+                self._slots[s].top, self._slots[s].top_at_edge = own.top, own.top_at_edge
             boxes.append(det.box)
         outside = 0 if glitch else detect.motion_outside(M, boxes, opt.new.outside_margin_px)
         if not glitch and outside >= opt.new.min_area:
@@ -329,8 +328,10 @@ class OnlineTracker:
                                       window_b_extras(D, fu, fv, W, self._offsets or (),
                                                       self._pace_scale, mean=per_pixel))
         top, obj.top = (obj.top if measured else math.nan), math.nan  # this frame's only
+        edge, obj.top_at_edge = measured and obj.top_at_edge, False
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
-                                 float(mean[0]), float(mean[2]), int(obj.state), float(top)))
+                                 float(mean[0]), float(mean[2]), int(obj.state), float(top),
+                                 top_at_edge=bool(edge)))
         obj.vel.append(Velocity(float(mean[1]), float(mean[3])))
         match_window(self.cfg, obj)
         out_of_range = not (self._range[0] <= mean[2] <= self._range[1])
@@ -393,7 +394,6 @@ class OnlineTracker:
         self.relinked += 1
         return True
 
-    # ------------------------------------------------------------------------------------------
     def finish(self) -> tuple[dict, dict, list[_Object]]:
         """End every track; return (tracks columns, verdict columns, the objects)."""
         self._flush()

@@ -9,23 +9,101 @@ judged at half its strongest peak only where the object is as tall as a walker: 
 verdict is Non-pedestrian with reason no-model-match, whose strongest peak f1 (Hz) is above
 P_thr (13) with R above R_thr (15), fails (14) at (f1, v/f1) and passes it at (f1/2, 2 v/f1),
 is Pedestrian with pace f1/2, stride 2 v/f1 (v: the window's speed of (12), m/s) and reason
-matched-twice when its rows' median height (`size.rows_height`, rules 26 and 36's rows) is at
-least `twice_pace_heights` walker heights over at least `min_height_rows` rows."""
+matched-twice when its rows' median height (`twice_height`: `size.median_height`'s rows, rules
+26 and 36's, and rows whose moving region reached the image's first row, each read as the height
+up to that row, a lower bound) is at least `twice_pace_heights` walker heights over at least
+`min_height_rows` rows. The rows at the image's edge (`TrackRow.top_at_edge`: the tracker's
+`detect.Detection.top_at_edge`, count's `widths.top_and_edge`) are read where
+`options.twice_pace_edge` (rule 37b): near the camera walkers' heads leave the view (own
+scenes: 54-75 % of walker boxes), and without them rule 37 has no height to read there (issue
+16, thirty-ninth round).
+
+The tracker looks at each window as it completes (`second_look`, read by
+`toolkit.match_window`); the batch classifier (`model.batch.classify_tracks`, which `count`
+judges its tracks with) at each window it classifies (`batch_second_look`, from the batch's
+foot points and top rows `v_top`), so both judge a window the same way."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from ..model.camera_np import camera_tuple, height_of_top
 from ..model.gates import walking_ok
 from ..model.params import Config, host_float
 from ..model.status import Reason, Verdict
 from .options import SizeOptions
-from .size import rows_height
+from .size import row_heights
 
 
-__all__ = ["judge_at_half", "second_look"]
+__all__ = ["batch_second_look", "judge_at_half", "reads_twice", "second_look", "twice_height"]
+
+
+def reads_twice(res: dict, cfg: Config) -> np.ndarray:
+    """Per window of `res` (window outcomes, `toolkit.RESULT_FIELDS` with a leading window
+    axis: verdict (W,), peak_freq (W, peaks), ...), whether its peaks say rule 37 (module doc)
+    before the height is read: refused with no-model-match, strongest peak f1 > 0 above P_thr
+    with R above R_thr and a finite speed, (14) failing at (f1, v/f1) and passing at
+    (f1/2, 2 v/f1). Bool (W,)."""
+    thr = cfg.thresholds
+    verdict, reason = (np.atleast_1d(np.asarray(res[k])) for k in ("verdict", "reason"))
+    first = {k: np.asarray(res[k]).reshape(len(verdict), -1)[:, 0]
+             for k in ("peak_freq", "peak_power", "peak_mask")}
+    f1 = first["peak_freq"].astype(np.float64)
+    speed = np.atleast_1d(np.asarray(res["speed_mps"], np.float64))
+    ratio = np.atleast_1d(np.asarray(res["ratio"], np.float64))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        maybe = ((verdict == Verdict.NON_PEDESTRIAN) & (reason == Reason.NO_MODEL_MATCH)
+                 & first["peak_mask"].astype(bool) & (f1 > 0)
+                 & (first["peak_power"] > float(thr.p_thr)) & (ratio > float(thr.r_thr))
+                 & np.isfinite(speed))
+        f = np.where(maybe, f1, 1.0)
+        v = np.where(maybe, speed, 0.0)
+        k3 = float(thr.k_sigma3)
+        at_f1 = np.asarray(walking_ok(cfg.walking, k3, f, v / f))
+        at_half = np.asarray(walking_ok(cfg.walking, k3, f / 2, 2 * v / f))
+    return maybe & ~at_f1 & at_half
+
+
+def judged_at_half(res: dict, which: np.ndarray) -> dict:
+    """`res` with windows `which` (bool, leading window axis) Pedestrian, reason
+    matched-twice, pace f1/2 and stride 2 v/f1."""
+    f1 = np.asarray(res["peak_freq"], np.float64).reshape(len(which), -1)[:, 0]
+    speed = np.atleast_1d(np.asarray(res["speed_mps"], np.float64))
+    out = dict(res)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for key, value in (("verdict", int(Verdict.PEDESTRIAN)),
+                           ("reason", int(Reason.MATCHED_TWICE)),
+                           ("pace_hz", f1 / 2), ("stride_m", 2 * speed / f1)):
+            old = np.asarray(res[key])
+            out[key] = np.where(which, value, np.atleast_1d(old)).astype(old.dtype) \
+                .reshape(old.shape)
+    return out
+
+
+def twice_height(camera, u, v, v_top, at_edge, walker_height_m: float,
+                 top_inside_heights: float) -> tuple[float, int]:
+    """(median height m, rows read) of rule 37 over rows with foot points (u, v) px, top rows
+    v_top px (NaN where not measured) and `at_edge` (bool, or None: no row): each row that
+    `size.median_height` reads at its height, and each other row whose moving region reached
+    the image's first row (`at_edge`) at the height of the upright segment on its foot point
+    whose top is that row (`camera_np.height_of_top` at v_top = 0): the object is at least
+    that tall there, so the median over both is at most the median of its true heights."""
+    H, read = row_heights(camera, u, v, v_top, walker_height_m, top_inside_heights)
+    heights = H[read]
+    if at_edge is not None:
+        edge = np.asarray(at_edge, np.float64) > 0.5
+        u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
+        bound, ok = height_of_top(camera, u, v, np.zeros_like(v))
+        heights = np.concatenate([heights, np.asarray(bound)[edge & np.asarray(ok) & ~read]])
+    return (float(np.median(heights)) if heights.size else float("nan")), int(heights.size)
+
+
+def tall_enough(height_m: float, rows: int, walker_height_m: float,
+                options: SizeOptions) -> bool:
+    """Rule 37's height test: at least `min_height_rows` rows read, their median at least
+    `twice_pace_heights` walker heights."""
+    return rows >= options.min_height_rows and \
+        height_m >= options.twice_pace_heights * walker_height_m
 
 
 def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: float,
@@ -33,25 +111,16 @@ def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: f
     """`out` (a window's outcome: `toolkit.RESULT_FIELDS`) judged at half its strongest peak
     when rule 37 says so (module doc) for the window's `rows` (`rows.TrackRow`); `out` itself
     otherwise (and when `options.twice_pace_heights` is 0, off)."""
-    if (options.twice_pace_heights <= 0 or int(out["verdict"]) != Verdict.NON_PEDESTRIAN
-            or int(out["reason"]) != Reason.NO_MODEL_MATCH):
+    if options.twice_pace_heights <= 0 or not bool(reads_twice(out, cfg)[0]):
         return out
-    thr = cfg.thresholds
-    f1, p1, ok = (float(np.asarray(out[k])[0]) for k in ("peak_freq", "peak_power", "peak_mask"))
-    speed, r1 = float(out["speed_mps"]), float(out["ratio"])
-    if not (ok and f1 > 0 and p1 > float(thr.p_thr) and r1 > float(thr.r_thr)
-            and math.isfinite(speed)):
+    cols = np.asarray([(r.u, r.v, r.v_top, r.top_at_edge) for r in rows],
+                      np.float64).reshape(-1, 4)
+    height, n = twice_height(camera, cols[:, 0], cols[:, 1], cols[:, 2],
+                             cols[:, 3] if options.twice_pace_edge else None,
+                             walker_height_m, options.top_inside_heights)
+    if not tall_enough(height, n, walker_height_m, options):
         return out
-    k3 = float(thr.k_sigma3)
-    if bool(walking_ok(cfg.walking, k3, f1, speed / f1)) or \
-            not bool(walking_ok(cfg.walking, k3, f1 / 2, 2 * speed / f1)):
-        return out
-    height, n = rows_height(camera, rows, walker_height_m, options.top_inside_heights)
-    if n < options.min_height_rows or not height >= options.twice_pace_heights * walker_height_m:
-        return out
-    return {**out, "verdict": np.asarray(int(Verdict.PEDESTRIAN), np.int32),
-            "reason": np.asarray(int(Reason.MATCHED_TWICE), np.int32),
-            "pace_hz": np.asarray(f1 / 2), "stride_m": np.asarray(2 * speed / f1)}
+    return judged_at_half(out, np.ones(1, bool))
 
 
 def second_look(cfg: Config, camera, options: SizeOptions):
@@ -62,3 +131,32 @@ def second_look(cfg: Config, camera, options: SizeOptions):
         return None
     walker_m = host_float(cfg.width.height)
     return lambda out, rows: judge_at_half(out, cfg, rows, camera, walker_m, options)
+
+
+def batch_second_look(cfg: Config, batch, options: SizeOptions):
+    """`model.batch.classify_tracks`' `second_look` for `batch` (a `TrackBatch` with top rows
+    `v_top`): a callable (res, track, start) -> res that judges the windows of `res` (leading
+    window axis; window w holds rows start[w] .. start[w] + N - 1 of track track[w]) as
+    `judge_at_half` does, the rows' foot points from `batch.z` (and, with
+    `options.twice_pace_edge`, the rows at the image's edge from `batch.top_at_edge` where the
+    batch has them). None when rule 37 is off or the batch has no `v_top`."""
+    if options.twice_pace_heights <= 0 or getattr(batch, "v_top", None) is None:
+        return None
+    camera = camera_tuple(cfg.camera)
+    walker_m = host_float(cfg.width.height)
+    n = int(cfg.thresholds.n)
+    edges = batch.top_at_edge if options.twice_pace_edge else None
+
+    def look(res: dict, track: np.ndarray, start: np.ndarray) -> dict:
+        which = reads_twice(res, cfg)
+        for w in np.flatnonzero(which):
+            rows = slice(int(start[w]), int(start[w]) + n)
+            uv = batch.z[int(track[w]), rows]
+            height, count = twice_height(
+                camera, uv[:, 0], uv[:, 1], batch.v_top[int(track[w]), rows],
+                None if edges is None else edges[int(track[w]), rows], walker_m,
+                options.top_inside_heights)
+            which[w] = tall_enough(height, count, walker_m, options)
+        return judged_at_half(res, which) if which.any() else res
+
+    return look

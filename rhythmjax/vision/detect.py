@@ -57,7 +57,8 @@ class Detection:
     row), image width wid_IMG px, bounding box (x0, y0, w, h) px of the sliced extent, and area (the
     number of non-zero motion pixels in the box). `top`: the top row px of the sliced extent (the
     head) where `detect_in_window` measured it; NaN where the extent reaches the window's top
-    (clipped: the head may lie above it) and for `find_objects`."""
+    (clipped: the head may lie above it) and for `find_objects`. `top_at_edge`: the extent
+    reached the image's first row there (the object goes on above the view)."""
 
     u: float
     v: float
@@ -65,6 +66,7 @@ class Detection:
     box: WindowBox
     area: int
     top: float = math.nan
+    top_at_edge: bool = False
 
 
 def frame_difference(prev: np.ndarray, cur: np.ndarray) -> np.ndarray:
@@ -224,8 +226,11 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
             return None
     det = _bottom_point(crop, x0, y0, fraction, min_area, halo, column_fraction,
                         math.inf if core is None else core[2], column_rows)
-    if det is None or det.box[1] <= y0:  # the extent reaches the window's top: no top row
-        return det
+    if det is None:
+        return None
+    if det.box[1] <= y0:  # the extent reaches the window's top: no top row (at the image's
+        # first row: the object goes on above the view)
+        return dataclasses.replace(det, top_at_edge=True) if det.box[1] <= 0 else det
     return dataclasses.replace(det, top=float(det.box[1]))
 
 
