@@ -211,12 +211,11 @@ def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progr
         signal = batch.intensity[i, :L]
         if batch.candidates is not None:
             signal = np.concatenate([signal[:, None], batch.candidates[i, :L]], axis=1)
+        look = None if second_look is None else \
+            (lambda res, start, i=i: second_look(res, np.full(len(start), i), start))
         pieces = classify_long_track(cfg, batch.z[i, :L], batch.width[i, :L], signal,
                                      batch.dt[i, :L], segment_rows=segment_rows,
-                                     pace_last=batch.pace_window,
-                                     second_look=None if second_look is None else
-                                     (lambda res, start, i=i: second_look(
-                                         res, np.full(len(start), i), start)))
+                                     pace_last=batch.pace_window, second_look=look)
         parts.append({k: np.asarray([p[k] for p in pieces]) for k in CODES})
         owners.append(np.full(len(pieces), i))
     owner = np.concatenate(owners)

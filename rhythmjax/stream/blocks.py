@@ -70,9 +70,10 @@ def _gap(cfg) -> int:
 
 def prepare(cfg, tracks: Tracks, *, chunk: int, segment_rows: int) -> Prepared:
     """Group a block's tracks by length and pad each group (`to_batch`). The ground positions
-    and head rows and columns (x, y, v_top, u_top) are left out of the batches: the kernels do
-    not read them."""
-    slim = dataclasses.replace(tracks, x=None, y=None, v_top=None, u_top=None, state=None)
+    and head rows and columns (x, y, v_top, u_top, top_at_edge) are left out of the batches:
+    the kernels do not read them (`classify` judges without rule 37)."""
+    slim = dataclasses.replace(tracks, x=None, y=None, v_top=None, u_top=None, top_at_edge=None,
+                               state=None)
     groups, order = by_length(slim, chunk, segment_rows, cfg.thresholds.n)
     batches = [to_batch(g, max_gap_frames=_gap(cfg), min_len=cfg.thresholds.n) for g in groups]
     ids = np.asarray(tracks.ids, dtype=object)

@@ -145,7 +145,7 @@ def batch_second_look(cfg: Config, batch, options: SizeOptions):
     camera = camera_tuple(cfg.camera)
     walker_m = host_float(cfg.width.height)
     n = int(cfg.thresholds.n)
-    edges = batch.top_at_edge if options.twice_pace_edge else None
+    edges = getattr(batch, "top_at_edge", None) if options.twice_pace_edge else None
 
     def look(res: dict, track: np.ndarray, start: np.ndarray) -> dict:
         which = reads_twice(res, cfg)
