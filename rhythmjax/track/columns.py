@@ -38,8 +38,8 @@ def tracks_columns(objs: list, *, candidates: bool | None = None,
     out["frame"] = out["frame"].astype(np.int64)
     out["state"] = np.asarray([TrackState(int(s)).name.lower() for s in out["state"]],
                               dtype=object)
-    for k in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est", "v_top"):
-        out[k] = out[k].astype(np.float64)
+    for k in ("t", "u", "v", "width_px", "intensity", "x_est", "y_est", "v_top", "top_at_edge"):
+        out[k] = out[k].astype(np.float64)  # top_at_edge: 1/0, the tracks format's float
     if candidates is None:
         candidates = any(getattr(o, "candidate_rows", None) is not None for o in objs)
     names = (*(CANDIDATE_COLUMNS if candidates else ()), *((PACE_COLUMN,) if pace else ()))
