@@ -17,7 +17,13 @@ from rhythmjax.model.params import config_from_dict
 from rhythmjax.model.status import Reason, Verdict
 from rhythmjax.track.options import SizeOptions
 from rhythmjax.track.rows import TrackRow
-from rhythmjax.track.twice import batch_second_look, judge_at_half, reads_twice, twice_height
+from rhythmjax.track.twice import (
+    batch_second_look,
+    judge_at_half,
+    reads_twice,
+    tall_enough,
+    twice_height,
+)
 
 
 CFG = config_from_dict({"thresholds": {"range_max_m": 40.0}})  # the paper's, range to 40 m: a
@@ -168,15 +174,20 @@ def test_judge_tracks_reads_the_top_rows():
 
 def test_a_row_at_the_image_edge_reads_the_height_up_to_the_first_row():
     """Rows at 10 m whose region reached row 0 (v_top NaN): each reads the height H whose top
-    projects to row 0 (checked by projecting (0, 10 m, H) forward: row 0 within 1e-3 px), about
-    1.47 m, not a walker's 1.7 m but more than 0.75 of it; without the edge flag no row is read."""
+    projects to row 0, against H found by bisection on the forward projection (3) of
+    (0, 10 m, H) (within 0.1 mm): about 1.47 m, tall enough for 0.75 walker heights (1.275 m)
+    and not for 0.9 (1.53 m); without the edge flag no row is read."""
     y = np.full(12, 10.0)
     u, v = project_3d(CFG.camera, 0 * y, y, 0 * y)
     nan, edge = np.full(12, np.nan), np.ones(12)
     height, n = twice_height(CFG.camera, u, v, nan, edge, 1.7, 0.1)
-    assert n == 12
-    assert float(project_3d(CFG.camera, 0.0, 10.0, height)[1]) == pytest.approx(0.0, abs=1e-3)
-    assert 1.275 < height < 1.7
+    lo, hi = 0.0, 5.0  # the top's row falls as H grows: bisect for row 0
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if float(project_3d(CFG.camera, 0.0, 10.0, mid)[1]) > 0 else (lo, mid)
+    assert n == 12 and height == pytest.approx(lo, abs=1e-4)
+    assert tall_enough(height, n, 1.7, ON)
+    assert not tall_enough(height, n, 1.7, SizeOptions(twice_pace_heights=0.9))
     assert twice_height(CFG.camera, u, v, nan, None, 1.7, 0.1)[1] == 0
     assert twice_height(CFG.camera, u, v, nan, 0 * edge, 1.7, 0.1)[1] == 0
     # rows read at their height are not read again as edge rows; the median over both kinds

@@ -35,7 +35,8 @@ from .options import SizeOptions
 from .size import row_heights
 
 
-__all__ = ["batch_second_look", "judge_at_half", "reads_twice", "second_look", "twice_height"]
+__all__ = ["batch_second_look", "judge_at_half", "judged_at_half", "reads_twice", "second_look",
+           "tall_enough", "twice_height"]
 
 
 def reads_twice(res: dict, cfg: Config) -> np.ndarray:
