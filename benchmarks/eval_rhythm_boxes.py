@@ -11,10 +11,18 @@ classifier measured apart from the tracker. Nothing here is chosen on these sour
   true foot point (`*_truth.csv`, rows with the foot point in the image) and the bottom centre
   of the silhouette box (the truth JSON's bbox, as MOT text), with the dev camera (f 0.004 m,
   a = b = 125000 px/m, h 1 m, tilt 15 deg, principal point 255.5, 255.5).
+- Own scenes (`--only own --seeds S,...`): `eval_synthetic.scene_specs` (10 scenes a seed, the
+  walkers with knees; `--lateral`: paths within 30 deg of crossing the view, eval_all's
+  synthetic_lateral), each object's truth box (`eval_count.truth_boxes`: clipped to the image,
+  so a head above the view gives a box at the image's first row) as MOT text, the frames as a
+  lossless PNG folder, the demo's config (`eval_synthetic.RECOMMENDED`). Per object its box
+  track's verdict; walkers / non-walkers judged Pedestrian and the walkers' pace MAE.
 
-`--set SECTION.KEY=VALUE` (repeatable) writes a key into every config, as in eval_all.py.
-Every run is `rhythmjax rhythm VIDEO --boxes BOXES -c CONFIG -o DIR --no-camera-check` (the check
-only adds notes). Prints one line per box track and writes eval_rhythm_boxes.json.
+`--set SECTION.KEY=VALUE` (repeatable) writes a key into every config, as in eval_all.py;
+`--twice-pace-heights H` and `--min-height-heights H` are passed to every run (rules 37 and 26;
+0: off). Every run is
+`rhythmjax rhythm VIDEO --boxes BOXES -c CONFIG -o DIR --no-camera-check` (the check only adds
+notes). Prints one line per box track and writes eval_rhythm_boxes.json.
 """
 
 from __future__ import annotations
@@ -23,6 +31,7 @@ import argparse
 import csv
 import json
 import os
+import shutil
 import sys
 import tempfile
 
@@ -46,6 +55,7 @@ DEV_CAMERA = {"f_m": 0.004, "a_px_per_m": 125000.0, "b_px_per_m": 125000.0, "h_m
 
 
 SETS: list = []  # (section, key, value) of --set, written into every config
+EXTRA: list = []  # further arguments of every `rhythm` run
 
 
 def run(video, boxes, config: dict, work: str, name: str, fps=None) -> list[dict]:
@@ -54,7 +64,7 @@ def run(video, boxes, config: dict, work: str, name: str, fps=None) -> list[dict
         json.dump(apply_set(config, SETS), f)
     out = os.path.join(work, name)
     argv = ["rhythm", str(video), "--boxes", str(boxes), "-c", cfg, "-o", out, "--quiet",
-            "--json", "--no-camera-check"] + (["--fps", str(fps)] if fps else [])
+            "--json", "--no-camera-check"] + (["--fps", str(fps)] if fps else []) + EXTRA
     import contextlib
     import io
 
@@ -154,6 +164,57 @@ def dev(work: str) -> dict:
     return out
 
 
+def own(work: str, seeds: list[int], lateral: bool) -> dict:
+    import cv2
+    import eval_count as ec
+    import eval_synthetic as es
+
+    from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.scene import render_scene
+
+    conf = es.RECOMMENDED
+    camera = config_from_dict(conf).camera
+    out = {}
+    for seed in seeds:
+        specs = es.scene_specs(seed, 10, camera=camera, lateral_deg=30.0 if lateral else None)
+        for i, (scene_seed, spec) in enumerate(specs):
+            scene = render_scene(scene_seed, spec)
+            name = f"own_{seed}_{i}"
+            folder = os.path.join(work, name + "_frames")
+            os.makedirs(folder)
+            for k, frame in enumerate(scene.frames):
+                cv2.imwrite(os.path.join(folder, f"{k:05d}.png"), np.asarray(frame))
+            truth, kinds = ec.truth_boxes(scene)
+            mot = os.path.join(work, name + ".txt")
+            write_mot(mot, {**truth, "frame": truth["frame"] + 1})
+            rows = run(folder, mot, conf, work, name, fps=scene.fps)
+            res = []
+            for r in rows:
+                o = scene.truth[int(r["track_id"]) - 1]  # MOT id = actor index + 1
+                res.append({"kind": kinds[int(r["track_id"])], "verdict": r["verdict"],
+                            "reason": r["reason"], "pace": float(r["pace_hz"] or "nan"),
+                            "pace_true": float(o.pace_hz), "stride": float(r["stride_m"] or "nan"),
+                            "stride_true": float(o.step_length_m)})
+            out[name] = res
+            shutil.rmtree(folder)
+    return out
+
+
+def own_table(d: dict) -> dict:
+    """Walkers / non-walkers judged Pedestrian (of all box tracks) and the walkers' pace MAE."""
+    rows = [r for res in d.values() for r in res]
+    walk = [r for r in rows if r["kind"] == "pedestrian"]
+    other = [r for r in rows if r["kind"] != "pedestrian"]
+    ped = [r for r in walk if r["verdict"] == "pedestrian"]
+    err = [abs(r["pace"] - r["pace_true"]) for r in ped if np.isfinite(r["pace"])]
+    return {"walkers": len(walk), "walkers_pedestrian": len(ped),
+            "walkers_unclassified": sum(r["verdict"] == "unclassified" for r in walk),
+            "others": len(other),
+            "others_pedestrian": sum(r["verdict"] == "pedestrian" for r in other),
+            "matched_twice": sum(r["reason"] == "matched-twice" for r in rows),
+            "pace_mae_hz": float(np.mean(err)) if err else float("nan")}
+
+
 def dev_table(d: dict) -> dict:
     """Per variant: (kind, classifiable) -> verdict counts."""
     tab: dict = {}
@@ -169,12 +230,21 @@ def dev_table(d: dict) -> dict:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--only", choices=("pets", "ucsd", "dev"))
+    p.add_argument("--only", choices=("pets", "ucsd", "dev", "own"))
+    p.add_argument("--seeds", default="", help="own scenes' seeds, comma-separated (--only own)")
+    p.add_argument("--lateral", action="store_true", help="own scenes crossing the view")
+    p.add_argument("--twice-pace-heights", type=float, default=None, metavar="H",
+                   help="rule 37 in every run (`rhythm --twice-pace-heights`; default: its own)")
+    p.add_argument("--min-height-heights", type=float, default=None, metavar="H",
+                   help="rule 26 in every run (`rhythm --min-height-heights`; default: its own)")
     p.add_argument("-o", "--output", default="eval_rhythm_boxes.json")
     p.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                    help="override a config key in every run (eval_all.py's --set)")
     a = p.parse_args(argv)
     SETS[:] = parse_set(a.set)
+    for flag in ("twice_pace_heights", "min_height_heights"):
+        if getattr(a, flag) is not None:
+            EXTRA.extend(["--" + flag.replace("_", "-"), str(getattr(a, flag))])
     out = {}
     with tempfile.TemporaryDirectory() as work:
         if a.only in (None, "pets"):
@@ -201,6 +271,13 @@ def main(argv=None) -> int:
                               f"{t['pace_hz']} stride {t['stride_m']}")
             out["dev_table"] = dev_table(r)
             print(json.dumps(out["dev_table"], indent=1))
+        if a.only == "own":
+            r = out["own"] = own(work, [int(x) for x in a.seeds.split(",") if x], a.lateral)
+            for name, rows in r.items():
+                print(name, " ".join(f"{t['kind'][:4]}:{t['verdict'][:7]}/{t['reason']}"
+                                     for t in rows))
+            out["own_table"] = own_table(r)
+            print(json.dumps(out["own_table"], indent=1))
     with open(a.output, "w") as f:
         json.dump(out, f, indent=1)
     return 0

@@ -20,7 +20,9 @@ from ..io.mot import read_mot_numbered
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
 from ..model.params import ConfigError
 from ..track.boxes import box_intensities, check_in_image, tracks_from_mot, window_widths
-from ..track.options import BodyOptions
+from ..track.options import BodyOptions, SizeOptions
+from ..track.size import batch_size_look
+from ..track.twice import batch_second_look
 from .common import (
     add_camera_check,
     add_common,
@@ -56,6 +58,8 @@ def read_boxes(path: str, *, fps: float, frame_base: int | None, scale: float):
                               else {"row": int(tr.line[k])}), column="frame")
         tr.t = tr.frame / float(fps)
         tr.u, tr.v, tr.width_px = tr.u * scale, tr.v * scale, tr.width_px * scale
+        tr.v_top = None if tr.v_top is None else tr.v_top * scale
+        tr.u_top = None if tr.u_top is None else tr.u_top * scale
         tr.intensity = np.full(len(tr.frame), np.nan)
         return tr, None
     mot = read_mot_numbered(path)
@@ -82,12 +86,23 @@ def cmd_rhythm(args) -> int:
     rhythm window judged by the candidate with the strongest spectral peak.
     --window-per-pixel: each I(k) the mean of the difference over its window instead of the
     sum (the tracker's body.window_per_pixel, rule 35).
+    --twice-pace-heights H: a window whose strongest peak is twice a walker's pace (two bursts
+    a step) is judged at half that peak where the object's median height is at least H walker
+    heights (rule 37, the tracker's size.twice_pace_heights; 0: off). Each box's top row gives
+    its height through the camera; a box cut by the image's top edge, a lower bound of it.
+    --min-height-heights H: a window judged Pedestrian whose boxes' median height is below H
+    walker heights is Non-pedestrian, reason too-low (rule 26, the tracker's
+    size.min_height_heights: a trotting dog; 0: off).
 
     Writes DIR/tracks.parquet (the tracks format with intensity) and DIR/verdicts.csv; prints
     the verdicts (or a --json summary). The two replace the previous pair together, and nothing
     is written when the input is bad or the run is interrupted."""
     if args.box_scale is None or not (np.isfinite(args.box_scale) and args.box_scale > 0):
         raise ConfigError("--box-scale", f"must be a number > 0, got {args.box_scale}")
+    for flag in ("twice_pace_heights", "min_height_heights"):
+        if not getattr(args, flag) >= 0:  # NaN too
+            raise ConfigError("--" + flag.replace("_", "-"), f"must be a number >= 0 (0: off), "
+                              f"got {getattr(args, flag)}")
     out_tracks = os.path.join(args.output, "tracks.parquet")
     out_verdicts = os.path.join(args.output, "verdicts.csv")
     with output_set(args.output, ("tracks.parquet", "verdicts.csv"),
@@ -118,7 +133,11 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
     n = cfg.thresholds.n
     batch = to_batch(tracks, max_gap_frames=max(1, round(float(cfg.thresholds.predict_timeout)
                                                          * cfg.camera.fps)), min_len=n)
-    verdicts = classify_tracks(cfg, batch, progress=not (args.quiet or args.json))
+    size = SizeOptions(twice_pace_heights=args.twice_pace_heights,
+                       min_height_heights=args.min_height_heights)
+    look = batch_size_look(cfg, batch, size, then=batch_second_look(cfg, batch, size))
+    verdicts = classify_tracks(cfg, batch, progress=not (args.quiet or args.json),
+                               second_look=look)
     order = list(VERDICT_COLUMNS)
     labels = None if batch.labels is None else np.asarray(batch.labels, dtype=object)
     if labels is not None:
@@ -130,6 +149,10 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
     if tracks.label is not None:
         cols["label"] = tracks.label
         track_order.append("label")
+    for name in ("v_top", "top_at_edge"):  # the heights rule 37 read (a file without: absent)
+        if getattr(tracks, name) is not None:
+            cols[name] = getattr(tracks, name)
+            track_order.append(name)
     if sig.candidates is not None:
         cols.update({c: sig.candidates[:, j] for j, c in enumerate(CANDIDATE_COLUMNS)})
         track_order += list(CANDIDATE_COLUMNS)
@@ -176,6 +199,12 @@ def register(sub, formatter=None) -> None:
                    "camera.fps, else the file's; needed for a frame folder without camera.fps")
     add_window_candidates(p, BodyOptions().window_candidates)
     add_window_per_pixel(p, BodyOptions().window_per_pixel)
+    p.add_argument("--twice-pace-heights", type=float, default=SizeOptions().twice_pace_heights,
+                   metavar="H", help="judge a window read at twice a walker's pace at half "
+                   "it where the boxes are at least H walker heights tall (rule 37; 0: off)")
+    p.add_argument("--min-height-heights", type=float, default=SizeOptions().min_height_heights,
+                   metavar="H", help="refuse a window judged Pedestrian where the boxes' median "
+                   "height is below H walker heights (rule 26; 0: off)")
     add_camera_check(p)
     add_strict(p)
     add_common(p)

@@ -6,6 +6,9 @@ text) or a foot point and width (the tracks format). Here each box becomes a tra
 - the foot point (u, v) px is the box's bottom centre (`foot_points`), in the library's pixel
   convention (pixel centres at integers; a box edge at e spans pixel columns e .. e + w - 1);
 - width_px is the box width (the width gate (10) reads it);
+- v_top is the box's top row and top_at_edge 1 where that row is the image's first
+  (`top_rows`): the object goes on above the view. Rule 37 (`track.twice`) reads the object's
+  height from them, as it does from the tracker's moving regions;
 - I(k) (grey levels) is the sum over window B of the absolute difference D = |I_k - I_(k-1)| of
   successive 8-bit grey frames (`vision.detect.window_b_intensity`, as the online tracker
   computes it): W px wide and W/5 px high, its bottom row at the foot row v, where W is the
@@ -37,8 +40,8 @@ from ..vision.window_b import window_b_candidates
 from .options import MotionOptions
 
 
-__all__ = ["BoxSignal", "box_intensities", "check_in_image", "foot_points", "tracks_from_mot",
-           "window_widths"]
+__all__ = ["BoxSignal", "box_intensities", "check_in_image", "foot_points", "top_rows",
+           "tracks_from_mot", "window_widths"]
 
 
 def foot_points(left, top, width, height, scale: float = 1.0) -> tuple[np.ndarray | np.floating,
@@ -51,12 +54,23 @@ def foot_points(left, top, width, height, scale: float = 1.0) -> tuple[np.ndarra
     return L + w / 2 - 0.5, T + h - 1.0
 
 
+def top_rows(top, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(v_top px, top_at_edge) of boxes whose top edge is `top` px at `scale` times smaller
+    resolution: v_top = the scaled top (the box's first row), top_at_edge 1.0 where that row is
+    the image's first (scaled top < 1 px: the box was cut by the image's edge or goes on above
+    it; v_top NaN there, as the tracker records such a row), else 0.0. Float64 arrays."""
+    T = np.asarray(top, np.float64) * scale
+    edge = T < 1.0
+    return np.where(edge, np.nan, T), edge.astype(np.float64)
+
+
 def tracks_from_mot(mot: dict, path: str, *, fps: float, frame_base: int = 1,
                     scale: float = 1.0) -> Tracks:
     """The tracks (io.Tracks, sorted by id then frame) of MOT boxes `mot` (`io.mot.read_mot`
     columns, with `line` from `read_mot_numbered`): track_id = the MOT id, frame = the MOT frame
     - `frame_base` (the video's 0-based index), t = frame / fps (s), (u, v) = `foot_points`,
-    width_px = the scaled box width, intensity NaN (to be measured). The MOT x, y, z columns are
+    width_px = the scaled box width, (v_top, top_at_edge) = `top_rows`, intensity NaN (to be
+    measured). The MOT x, y, z columns are
     ignored. Raises BadInput (file and line) for a frame before the video's first and for two
     boxes of one id in one frame."""
     frame = np.asarray(mot["frame"], np.int64) - int(frame_base)
@@ -74,12 +88,13 @@ def tracks_from_mot(mot: dict, path: str, *, fps: float, frame_base: int = 1,
         raise BadInput(path, f"a second box for id {int(ids[k])} in frame {int(mot['frame'][k])}",
                        line=int(line[k]))
     u, v = foot_points(mot["bb_left"], mot["bb_top"], mot["bb_width"], mot["bb_height"], scale)
+    v_top, at_edge = top_rows(mot["bb_top"], scale)
     tid = np.asarray([str(i) for i in ids[order]], dtype=object)
     f = frame[order]
     return Tracks(path=path, track_id=tid, frame=f, t=f / float(fps), u=u[order], v=v[order],
                   width_px=np.asarray(mot["bb_width"], np.float64)[order] * scale,
                   intensity=np.full(len(f), np.nan), line=line[order], unit="line",
-                  fps=float(fps))
+                  fps=float(fps), v_top=v_top[order], top_at_edge=at_edge[order])
 
 
 def check_in_image(tracks: Tracks, width: int, height: int, mot: dict | None = None,

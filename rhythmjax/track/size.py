@@ -25,13 +25,14 @@ import math
 
 import numpy as np
 
-from ..model.camera_np import height_of_top, upright_size
-from ..model.params import Camera
+from ..model.camera_np import camera_tuple, height_of_top, upright_size
+from ..model.params import Camera, Config, host_float
 from ..model.status import Reason, Verdict
 from .options import SizeOptions
 
 
-__all__ = ["median_height", "refuse_low", "row_heights", "rows_height", "too_low"]
+__all__ = ["batch_size_look", "median_height", "refuse_low", "row_heights", "rows_height",
+           "too_low"]
 
 
 def median_height(camera: Camera | tuple, u, v, v_top, walker_height_m: float,
@@ -107,3 +108,44 @@ def refuse_low(result: dict, camera: Camera | tuple, rows: list, walker_height_m
     if not too_low(int(result["verdict"]), height, n, walker_height_m, options):
         return result
     return {**result, "verdict": int(Verdict.NON_PEDESTRIAN), "reason": int(Reason.TOO_LOW)}
+
+
+def batch_size_look(cfg: Config, batch, options: SizeOptions, then=None):
+    """`model.batch.classify_tracks`' `second_look` that applies rule 26 to every window it
+    classifies (`batch`: a `TrackBatch` with top rows `v_top`; window w holds rows start[w] ..
+    start[w] + N - 1 of track track[w]): after `then` (another look, e.g. rule 37's
+    `twice.batch_second_look`, or None), a window judged Pedestrian whose rows' `median_height`
+    (rule 36's rows with `options.top_inside_heights`) is below `options.min_height_heights`
+    walker heights over at least `options.min_height_rows` rows is Non-pedestrian, reason
+    too-low. Each window is read on its own rows (the tracker's scope "window", rule 26c, for
+    each window rather than the deciding one only). `then` itself when rule 26 is off
+    (`min_height_heights` 0) or the batch has no `v_top`."""
+    if options.min_height_heights <= 0 or getattr(batch, "v_top", None) is None:
+        return then
+    camera = camera_tuple(cfg.camera)
+    walker_m = host_float(cfg.width.height)
+    n = int(cfg.thresholds.n)
+
+    def look(res: dict, track: np.ndarray, start: np.ndarray) -> dict:
+        if then is not None:
+            res = then(res, track, start)
+        verdict = np.atleast_1d(np.asarray(res["verdict"]))
+        low = np.zeros(len(verdict), bool)
+        for w in np.flatnonzero(verdict == Verdict.PEDESTRIAN):
+            rows = slice(int(start[w]), int(start[w]) + n)
+            uv = batch.z[int(track[w]), rows]
+            height, count = median_height(camera, uv[:, 0], uv[:, 1],
+                                          batch.v_top[int(track[w]), rows], walker_m,
+                                          options.top_inside_heights)
+            low[w] = too_low(int(verdict[w]), height, count, walker_m, options)
+        if not low.any():
+            return res
+        out = dict(res)
+        for key, value in (("verdict", int(Verdict.NON_PEDESTRIAN)),
+                           ("reason", int(Reason.TOO_LOW))):
+            old = np.asarray(res[key])
+            out[key] = np.where(low, value, np.atleast_1d(old)).astype(old.dtype) \
+                .reshape(old.shape)
+        return out
+
+    return look
