@@ -64,6 +64,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   reading also counts rows whose motion reaches the image's first row, at the height up to it).
 - count_edge: counting's `verdicts.twice_pace_edge` True vs False (rule 37's height reading also
   counts rows whose blobs reach the image's first row, at the height up to it: a lower bound).
+- count_low: counting's `verdicts.min_height_heights` 0.5 vs 0 (rule 26 in count's verdicts:
+  a window judged Pedestrian lower than half a walker is refused, too-low).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

@@ -117,6 +117,9 @@ RULES = {
     "count_edge": ("count", "verdicts.twice_pace_edge", True, False, COUNT_SOURCES,
                    "nothing fitted (a lower bound, a priori; the cut heads seen on own counting "
                    "seeds 2430001-2440001; decided on fresh 2490001-2520001)"),
+    "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
+                  "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
+                  "own counting seeds 2730001-2760001: no verdict changed)"),
 }
 # the sources where the rule is ON in the defaults eval_all.py runs with (the own scenes use
 # sim.presets' SYNTHETIC_CONFIG and SYNTHETIC_OPTIONS)
@@ -136,7 +139,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "core_column": (), "upper_column": (), "height_fallback": (),
               "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES,
               "twice_pace": TRACKER_SOURCES, "count_twice": COUNT_SOURCES,
-              "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES}
+              "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES,
+              "count_low": COUNT_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -121,6 +121,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16, rule 31)", "verdicts.head_speed", True),  # the speed under the heads
     ("(new: issue 16, rule 37)", "verdicts.twice_pace_heights", 0.75),  # twice the pace
     ("(new: issue 16, rule 37)", "verdicts.twice_pace_edge", True),  # ... heads above the view
+    ("(new: issue 16, rule 26)", "verdicts.min_height_heights", 0.5),  # the size rule in count
     # the foot-point gates of `count.foot_gate` (options a and b), off
     (None, "placement.in_range", False),
     (None, "placement.gate_heights", 0.0),

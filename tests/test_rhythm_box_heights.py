@@ -18,7 +18,7 @@ from rhythmjax.model.params import config_from_dict
 from rhythmjax.model.status import Reason, Verdict
 from rhythmjax.track.boxes import top_rows, tracks_from_mot
 from rhythmjax.track.options import SizeOptions
-from rhythmjax.track.size import batch_size_look
+from rhythmjax.track.size import batch_size_look, median_height, too_low
 from rhythmjax.track.twice import batch_second_look
 
 
@@ -131,6 +131,38 @@ def test_the_size_look_leaves_other_verdicts_and_reads_each_window_on_its_rows()
                                        Verdict.NON_PEDESTRIAN]
     assert got["reason"].tolist() == [Reason.MATCHED, Reason.NO_MODEL_MATCH, Reason.TOO_LOW]
     assert got["verdict"].dtype == np.int32 and res["reason"][2] == Reason.MATCHED  # a copy
+
+
+def test_the_size_look_equals_rule_26_window_by_window():
+    """40 windows on tracks of 0.5-1.9 m with noisy top rows, some rows unmeasured (NaN) and
+    tracks whose near rows have a walker's head above the image: the vectorised look refuses
+    exactly the Pedestrian windows that `too_low(median_height(...))` refuses on their rows."""
+    rng = np.random.default_rng(3)
+    objs = []
+    for k, top in enumerate(rng.uniform(0.5, 1.9, 6)):
+        o = _object(float(top), n=160, seed=k)
+        o["v_top"] = o["v_top"] + rng.normal(0, 1.5, 160)
+        o["v_top"][rng.random(160) < 0.3] = np.nan
+        if k % 3 == 0:  # from 2 m on: a walker's head leaves the image at the near rows
+            y = np.linspace(2.0, 8.0, 160)
+            o["u"], o["v"] = (np.asarray(a) for a in project_3d(CFG.camera, 0 * y, y, 0 * y))
+        objs.append(o)
+    z = np.stack([np.stack([o["u"], o["v"]], -1) for o in objs])
+    batch = type("B", (), {"z": z, "v_top": np.stack([o["v_top"] for o in objs])})()
+    W = 40
+    track, start = rng.integers(0, 6, W), rng.integers(0, 160 - 64 + 1, W)
+    verdict = np.where(rng.random(W) < 0.8, Verdict.PEDESTRIAN, Verdict.NON_PEDESTRIAN)
+    res = {"verdict": verdict.astype(np.int32), "reason": np.zeros(W, np.int32)}
+    options = SizeOptions()
+    got = batch_size_look(CFG, batch, options)(res, track, start)
+    want = []
+    for w in range(W):
+        o, rows = objs[track[w]], slice(start[w], start[w] + 64)
+        h, n = median_height(CFG.camera, o["u"][rows], o["v"][rows], o["v_top"][rows],
+                             WALKER_M, options.top_inside_heights)
+        want.append(too_low(int(verdict[w]), h, n, WALKER_M, options))
+    assert (got["reason"] == Reason.TOO_LOW).tolist() == want
+    assert 5 <= sum(want) <= 35  # both kinds of windows are there
 
 
 def test_rhythm_writes_the_box_tops_and_refuses_a_bad_height(tmp_path, capsys):

@@ -19,6 +19,7 @@ from ..io import (
     read_config_dict,
 )
 from ..model.params import Config, ConfigError
+from ..track.options import SizeOptions
 
 
 __all__ = ["EPILOG", "TRACK_ORDER", "VERDICT_ORDER", "Formatter", "add_camera_check",
@@ -75,6 +76,28 @@ def add_window_per_pixel(p: argparse.ArgumentParser, default: bool) -> None:
                    default=default, help="I(k) as the mean of the frame difference over window "
                    "B (grey levels per pixel) instead of its sum: no trend from a walker's "
                    "image growing or shrinking as it comes nearer or goes away")
+
+
+def add_height_rules(p: argparse.ArgumentParser) -> None:
+    """--twice-pace-heights and --min-height-heights: rules 37 and 26 in the batch classifier,
+    from the tracks' top rows (v_top, top_at_edge; the tracker's `size` options' defaults)."""
+    p.add_argument("--twice-pace-heights", type=float, default=SizeOptions().twice_pace_heights,
+                   metavar="H", help="judge a window read at twice a walker's pace at half "
+                   "it where the object is at least H walker heights tall (rule 37; 0: off)")
+    p.add_argument("--min-height-heights", type=float, default=SizeOptions().min_height_heights,
+                   metavar="H", help="refuse a window judged Pedestrian where the object's "
+                   "median height is below H walker heights (rule 26; 0: off)")
+
+
+def height_rules(args) -> SizeOptions:
+    """The `SizeOptions` of `add_height_rules`' flags; ConfigError naming the flag for a value
+    below 0 or NaN."""
+    for flag in ("twice_pace_heights", "min_height_heights"):
+        if not getattr(args, flag) >= 0:  # NaN too
+            raise ConfigError("--" + flag.replace("_", "-"), f"must be a number >= 0 (0: off), "
+                              f"got {getattr(args, flag)}")
+    return SizeOptions(twice_pace_heights=args.twice_pace_heights,
+                       min_height_heights=args.min_height_heights)
 
 
 def reading_check(args, src, notes=None) -> None:

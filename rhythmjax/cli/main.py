@@ -33,9 +33,11 @@ from .common import (
     EPILOG,
     Formatter,
     add_common,
+    add_height_rules,
     amount_arg,
     count_arg,
     emit_json,
+    height_rules,
     load_config,
     print_verdicts,
     say,
@@ -111,7 +113,13 @@ def cmd_classify(args) -> int:
 
     With -o, a report is written beside the verdicts when they are done: VERDICTS' stem +
     .report.html (a folder DIR/: DIR.report.html), the summary, the first 5000 verdict rows and
-    the config on one page (--no-report skips it)."""
+    the config on one page (--no-report skips it).
+
+    Where the tracks have top rows (columns v_top, top_at_edge: `run`, `count` and `rhythm`
+    write them), a window read at twice a walker's pace is judged at half it where the object
+    is as tall as a walker (--twice-pace-heights, rule 37), and a window judged Pedestrian
+    whose object is lower than half a walker is refused, too-low (--min-height-heights, rule
+    26), as the tracker judges."""
 
     from ..stream.classify import classify_source, classify_whole
 
@@ -130,6 +138,7 @@ def cmd_classify(args) -> int:
         raise BadInput(inputs[0], "--whole-file reads one tracks file into one verdicts file")
     source = inputs if len(inputs) > 1 else inputs[0]
     cfg = load_config(args.config)
+    size = height_rules(args)
     progress = not (args.quiet or args.json)
     devices = _device_count(args.devices)
     if args.dask:
@@ -139,17 +148,17 @@ def cmd_classify(args) -> int:
                                 n_workers=args.dask_workers, chunk=args.chunk,
                                 segment_rows=args.segment_rows, progress=progress,
                                 resume=not args.no_resume, devices=devices,
-                                log=lambda msg: say(args, msg))
+                                log=lambda msg: say(args, msg), size=size)
     elif args.whole_file:
         summary = classify_whole(cfg, source, args.output, chunk=args.chunk,
                                  segment_rows=args.segment_rows, progress=progress,
-                                 devices=devices)
+                                 devices=devices, size=size)
     else:
         summary = classify_source(cfg, source, args.output, chunk=args.chunk,
                                   segment_rows=args.segment_rows, progress=progress,
                                   resume=not args.no_resume, devices=devices,
                                   block_tracks=args.block_tracks,
-                                  log=lambda msg: say(args, msg))
+                                  log=lambda msg: say(args, msg), size=size)
     verdicts = summary.pop("verdicts_table", None)
     summary = {"input": inputs[0] if len(inputs) == 1 else inputs, "output": args.output,
                **summary}
@@ -286,6 +295,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="workers of the local Dask cluster")
     p.add_argument("--no-report", action="store_true", help="skip the report beside the "
                    "verdicts (VERDICTS' stem + .report.html: summary, verdict table, config)")
+    add_height_rules(p)
     add_common(p)
     p.set_defaults(func=cmd_classify)
 

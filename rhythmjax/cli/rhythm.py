@@ -20,16 +20,18 @@ from ..io.mot import read_mot_numbered
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
 from ..model.params import ConfigError
 from ..track.boxes import box_intensities, check_in_image, tracks_from_mot, window_widths
-from ..track.options import BodyOptions, SizeOptions
+from ..track.options import BodyOptions
 from ..track.size import batch_size_look
 from ..track.twice import batch_second_look
 from .common import (
     add_camera_check,
     add_common,
+    add_height_rules,
     add_strict,
     add_window_candidates,
     add_window_per_pixel,
     fps_arg,
+    height_rules,
     load_config_dict,
     open_source,
     output_set,
@@ -99,10 +101,7 @@ def cmd_rhythm(args) -> int:
     is written when the input is bad or the run is interrupted."""
     if args.box_scale is None or not (np.isfinite(args.box_scale) and args.box_scale > 0):
         raise ConfigError("--box-scale", f"must be a number > 0, got {args.box_scale}")
-    for flag in ("twice_pace_heights", "min_height_heights"):
-        if not getattr(args, flag) >= 0:  # NaN too
-            raise ConfigError("--" + flag.replace("_", "-"), f"must be a number >= 0 (0: off), "
-                              f"got {getattr(args, flag)}")
+    height_rules(args)  # a bad value fails before anything is read
     out_tracks = os.path.join(args.output, "tracks.parquet")
     out_verdicts = os.path.join(args.output, "verdicts.csv")
     with output_set(args.output, ("tracks.parquet", "verdicts.csv"),
@@ -133,8 +132,7 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
     n = cfg.thresholds.n
     batch = to_batch(tracks, max_gap_frames=max(1, round(float(cfg.thresholds.predict_timeout)
                                                          * cfg.camera.fps)), min_len=n)
-    size = SizeOptions(twice_pace_heights=args.twice_pace_heights,
-                       min_height_heights=args.min_height_heights)
+    size = height_rules(args)
     look = batch_size_look(cfg, batch, size, then=batch_second_look(cfg, batch, size))
     verdicts = classify_tracks(cfg, batch, progress=not (args.quiet or args.json),
                                second_look=look)
@@ -199,12 +197,7 @@ def register(sub, formatter=None) -> None:
                    "camera.fps, else the file's; needed for a frame folder without camera.fps")
     add_window_candidates(p, BodyOptions().window_candidates)
     add_window_per_pixel(p, BodyOptions().window_per_pixel)
-    p.add_argument("--twice-pace-heights", type=float, default=SizeOptions().twice_pace_heights,
-                   metavar="H", help="judge a window read at twice a walker's pace at half "
-                   "it where the boxes are at least H walker heights tall (rule 37; 0: off)")
-    p.add_argument("--min-height-heights", type=float, default=SizeOptions().min_height_heights,
-                   metavar="H", help="refuse a window judged Pedestrian where the boxes' median "
-                   "height is below H walker heights (rule 26; 0: off)")
+    add_height_rules(p)
     add_camera_check(p)
     add_strict(p)
     add_common(p)

@@ -294,7 +294,8 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
         vo = level.opt.verdicts
         verdicts = judge_tracks(cfg, tracks, candidates=on,
                                 twice_pace_heights=vo.twice_pace_heights,
-                                twice_pace_edge=vo.twice_pace_edge)
+                                twice_pace_edge=vo.twice_pace_edge,
+                                min_height_heights=vo.min_height_heights)
     else:
         B, nan = len(peds), np.full(len(peds), np.nan)
         verdicts = {"track_id": np.arange(1, B + 1, dtype=np.int64),

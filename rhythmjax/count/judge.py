@@ -8,6 +8,7 @@ import numpy as np
 from ..io.files import CANDIDATE_COLUMNS, Tracks, to_batch
 from ..model.batch import classify_tracks
 from ..track.options import SizeOptions
+from ..track.size import batch_size_look
 from ..track.twice import batch_second_look
 from .options import VerdictOptions
 
@@ -17,7 +18,8 @@ __all__ = ["judge_tracks"]
 
 def judge_tracks(cfg, tracks: dict, candidates: bool = False,
                  twice_pace_heights: float = VerdictOptions.twice_pace_heights,
-                 twice_pace_edge: bool = VerdictOptions.twice_pace_edge
+                 twice_pace_edge: bool = VerdictOptions.twice_pace_edge,
+                 min_height_heights: float = VerdictOptions.min_height_heights
                  ) -> dict[str, np.ndarray]:
     """The rhythm paper's verdicts of a counting run's tracks (`tracks_table`, ids 1.. in
     order, at least one track): `model.batch.classify_tracks` over the tracks cut at gaps longer
@@ -26,7 +28,8 @@ def judge_tracks(cfg, tracks: dict, candidates: bool = False,
     window_frame, the deciding window's first frame (-1: none). `twice_pace_heights` > 0:
     rule 37 on each window, from the tracks' top rows `v_top` (`track.twice.
     batch_second_look`; `VerdictOptions`' defaults), with the rows at the image's edge where
-    `twice_pace_edge` (column top_at_edge). Depends on nothing but the
+    `twice_pace_edge` (column top_at_edge). `min_height_heights` > 0: rule 26 after it on each
+    window judged Pedestrian (`track.size.batch_size_look`). Depends on nothing but the
     tracks, so a saved run can be judged again (`benchmarks/reclassify_dumps.py`)."""
     n = cfg.thresholds.n
     tr = Tracks(path="<count>", track_id=tracks["track_id"].astype(str).astype(object),
@@ -39,8 +42,9 @@ def judge_tracks(cfg, tracks: dict, candidates: bool = False,
                 if candidates else None)
     gap = max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
     batch = to_batch(tr, max_gap_frames=gap, min_len=n)
-    look = batch_second_look(cfg, batch, SizeOptions(twice_pace_heights=twice_pace_heights,
-                                                     twice_pace_edge=twice_pace_edge))
+    size = SizeOptions(twice_pace_heights=twice_pace_heights, twice_pace_edge=twice_pace_edge,
+                       min_height_heights=min_height_heights)
+    look = batch_size_look(cfg, batch, size, then=batch_second_look(cfg, batch, size))
     verdicts = classify_tracks(cfg, batch, progress=False, second_look=look)
     # the deciding window's first frame (-1: none; the spectra): its batch row's time
     w = np.asarray(verdicts["window_row"], np.int64)

@@ -250,6 +250,12 @@ class VerdictOptions:
     # column top_at_edge). On since issue 16's thirty-ninth round: on fresh own counting seeds
     # 2490001-2520001 the per-clip errors 20.7 -> 16.3 %, no non-walker more; dev crowds and
     # PETS09 unchanged; one bicycle counted more on an own reporting source (docs/rules.md)
+    min_height_heights: float = 0.5  # rule 26 in the verdicts (the tracker's `size.
+    # min_height_heights`, `track.size.batch_size_look`): a window judged Pedestrian whose
+    # rows' median height (from the tracks' v_top, rule 36's rows) is below this many walker
+    # heights over at least 10 rows is Non-pedestrian, reason too-low (a trotting dog); 0: off.
+    # On since issue 16's fortieth round, as the tracker's: on fresh own counting seeds
+    # 2730001-2760001, the dev crowds and PETS09 it changed no verdict (docs/rules.md)
 
 
 @dataclass(frozen=True)
@@ -297,6 +303,7 @@ class CountOptions:
                            ("life.max_dv_w", self.life.max_dv_w),
                            ("life.jump_sigma", self.life.jump_sigma),
                            ("life.merge_hold_s", self.life.merge_hold_s),
-                           ("verdicts.twice_pace_heights", self.verdicts.twice_pace_heights)):
+                           ("verdicts.twice_pace_heights", self.verdicts.twice_pace_heights),
+                           ("verdicts.min_height_heights", self.verdicts.min_height_heights)):
             if not (value >= 0 and math.isfinite(value)):  # NaN too
                 raise ValueError(f"{key} must be >= 0 (0: off), got {value!r}")

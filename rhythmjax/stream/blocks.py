@@ -16,6 +16,9 @@ from ..io.files import Tracks, read_tracks, to_batch, validated_tracks, write_ta
 from ..io.stream import BATCH_ROWS, BLOCK_ROWS, BLOCK_TRACKS, Partition, by_length, iter_blocks
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, merge_verdicts, summarise
 from ..model.long_tracks import SEGMENT_ROWS
+from ..track.options import SizeOptions
+from ..track.size import batch_size_look
+from ..track.twice import batch_second_look
 
 
 # ----------------------------------------------------------------------------------------------
@@ -68,12 +71,29 @@ def _gap(cfg) -> int:
     return max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
 
 
-def prepare(cfg, tracks: Tracks, *, chunk: int, segment_rows: int) -> Prepared:
+def reads_heights(size: SizeOptions | None) -> bool:
+    """Whether the verdicts read the tracks' top rows: rule 37 or rule 26 on in `size`."""
+    return size is not None and (size.twice_pace_heights > 0 or size.min_height_heights > 0)
+
+
+def height_looks(cfg, batch, size: SizeOptions | None):
+    """`classify_tracks`' `second_look` of rules 37 and 26 (`size`; None: neither) for
+    `batch`: rule 37 (`track.twice.batch_second_look`), then rule 26 (`track.size.
+    batch_size_look`). None when both are off or the batch has no top rows."""
+    if not reads_heights(size):
+        return None
+    return batch_size_look(cfg, batch, size, then=batch_second_look(cfg, batch, size))
+
+
+def prepare(cfg, tracks: Tracks, *, chunk: int, segment_rows: int,
+            size: SizeOptions | None = None) -> Prepared:
     """Group a block's tracks by length and pad each group (`to_batch`). The ground positions
-    and head rows and columns (x, y, v_top, u_top, top_at_edge) are left out of the batches:
-    the kernels do not read them (`classify` judges without rule 37)."""
-    slim = dataclasses.replace(tracks, x=None, y=None, v_top=None, u_top=None, top_at_edge=None,
-                               state=None)
+    and the heads' columns (x, y, u_top) are left out of the batches: the kernels do not read
+    them; so are the top rows (v_top, top_at_edge) unless rules 37 or 26 read them (`size`)."""
+    keep = reads_heights(size)
+    slim = dataclasses.replace(tracks, x=None, y=None, u_top=None, state=None,
+                               v_top=tracks.v_top if keep else None,
+                               top_at_edge=tracks.top_at_edge if keep else None)
     groups, order = by_length(slim, chunk, segment_rows, cfg.thresholds.n)
     batches = [to_batch(g, max_gap_frames=_gap(cfg), min_len=cfg.thresholds.n) for g in groups]
     ids = np.asarray(tracks.ids, dtype=object)
@@ -85,12 +105,13 @@ def prepare(cfg, tracks: Tracks, *, chunk: int, segment_rows: int) -> Prepared:
 
 
 def classify_prepared(cfg, prep: Prepared, *, chunk: int, segment_rows: int,
-                      devices=None) -> dict:
+                      devices=None, size: SizeOptions | None = None) -> dict:
     """The verdict columns (`classify_tracks`' plus "label" when labelled) of a prepared block,
-    in the block's track order."""
+    in the block's track order; rules 37 and 26 where `size` has them (`height_looks`)."""
     kw = {} if devices is None else {"devices": devices}
     parts = [classify_tracks(cfg, b, chunk=chunk, segment_rows=segment_rows, progress=False,
-                             **kw) for b in prep.batches]
+                             second_look=height_looks(cfg, b, size), **kw)
+             for b in prep.batches]
     back = np.empty(len(prep.order), np.int64)
     back[prep.order] = np.arange(len(prep.order))
     cols = {k: np.concatenate([np.asarray(p[k]) for p in parts])[back] for k in parts[0]}
@@ -113,7 +134,8 @@ def verdict_order(labelled: bool) -> list[str]:
 def classify_partition(cfg, partition: Partition, *, chunk: int = 256,
                        segment_rows: int = SEGMENT_ROWS, devices=None,
                        return_notes: bool = False, block_tracks: int = BLOCK_TRACKS,
-                       block_rows: int = BLOCK_ROWS, batch_rows: int = BATCH_ROWS):
+                       block_rows: int = BLOCK_ROWS, batch_rows: int = BATCH_ROWS,
+                       size: SizeOptions | None = None):
     """Classify the whole tracks in `partition` (rows [row_start, row_stop) of one file, cut at
     track boundaries by `io.stream.plan_partitions`). Returns the verdict columns as
     `model.batch.classify_tracks` returns them (NumPy arrays, `VERDICT_COLUMNS` plus peak_* and
@@ -121,15 +143,15 @@ def classify_partition(cfg, partition: Partition, *, chunk: int = 256,
     track order; with `return_notes`, (columns, notes). Validation as `io.files.read_tracks`
     (`BadInput` with the file's own line or row numbers), block by block, so memory is bounded
     by the block size, not the partition's. `devices` is passed on to `classify_tracks` when
-    not None."""
+    not None; `size`: rules 37 and 26 (`height_looks`; None: neither)."""
     out, notes = [], Notes()
     for p, block in iter_blocks(partition, block_tracks=block_tracks, block_rows=block_rows,
                                 batch_rows=batch_rows):
         tracks = validated_tracks(p, block, fps=cfg.camera.fps, grouped=True)
-        prep = prepare(cfg, tracks, chunk=chunk, segment_rows=segment_rows)
+        prep = prepare(cfg, tracks, chunk=chunk, segment_rows=segment_rows, size=size)
         notes.add(prep.notes)
         out.append(classify_prepared(cfg, prep, chunk=chunk, segment_rows=segment_rows,
-                                     devices=devices))
+                                     devices=devices, size=size))
     if not out:  # no rows: the columns of an empty batch
         empty = np.zeros(0)
         tracks = Tracks(path=partition.path, track_id=np.zeros(0, object),
@@ -158,11 +180,13 @@ class Notes:
 
 # ----------------------------------------------------------------------------------------------
 def classify_whole(cfg, path, output, *, chunk: int = 256, segment_rows: int = SEGMENT_ROWS,
-                   progress: bool = False, devices=None) -> dict:
+                   progress: bool = False, devices=None, size: SizeOptions | None = None
+                   ) -> dict:
     """The whole-file path (before streaming; for files whose tracks' rows are not contiguous):
     read and validate the whole file (`read_tracks`), pad it (`to_batch`, a track longer than
-    `segment_rows` apart), classify, write `output` (None: return the verdicts in the summary's
-    "verdicts_table"). Memory grows with the file."""
+    `segment_rows` apart), classify (rules 37 and 26 where `size` has them), write `output`
+    (None: return the verdicts in the summary's "verdicts_table"). Memory grows with the
+    file."""
     t0 = time.perf_counter()
     tracks = read_tracks(path, fps=cfg.camera.fps)
     blind = blind_note(cfg, camera_counts(cfg, tracks.u, tracks.v))
@@ -174,7 +198,8 @@ def classify_whole(cfg, path, output, *, chunk: int = 256, segment_rows: int = S
     for group in tracks.by_span(segment_rows):  # a long track pads no other
         batch = to_batch(group, max_gap_frames=_gap(cfg), min_len=cfg.thresholds.n)
         part = classify_tracks(cfg, batch, chunk=chunk, segment_rows=segment_rows,
-                               progress=progress, **kw)
+                               progress=progress, second_look=height_looks(cfg, batch, size),
+                               **kw)
         if batch.labels is not None:
             part["label"] = np.asarray(batch.labels, dtype=object)
         parts.append(part)

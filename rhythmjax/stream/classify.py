@@ -29,6 +29,7 @@ rows are not contiguous, which the stream cannot group: a note says so).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import os
@@ -57,6 +58,7 @@ from ..io.stream import (
 from ..model.batch import summarise
 from ..model.long_tracks import SEGMENT_ROWS
 from ..model.params import config_to_dict
+from ..track.options import SizeOptions
 from .blocks import (
     Notes,
     blind_note,
@@ -66,6 +68,7 @@ from .blocks import (
     classify_whole,
     concat_columns,
     prepare,
+    reads_heights,
     verdict_order,
 )
 
@@ -91,13 +94,15 @@ def _add_counts(a: dict, b: dict) -> dict:
 
 
 def run_key(cfg, files: list[str], *, chunk: int, segment_rows: int, block_tracks: int,
-            block_rows: int) -> dict:
+            block_rows: int, size: SizeOptions | None = None) -> dict:
     """What a resumed run must share with the interrupted one: the inputs' fingerprint, the
-    config's hash, the settings that fix the blocks and the package version."""
+    config's hash, the settings that fix the blocks, the height rules (`size`: rules 37 and
+    26, None off) and the package version."""
     text = json.dumps(config_to_dict(cfg), sort_keys=True, default=str)
+    heights = None if not reads_heights(size) else dataclasses.asdict(size)
     return {"input": fingerprint(files), "config": hashlib.sha256(text.encode()).hexdigest(),
             "chunk": chunk, "segment_rows": segment_rows, "block_tracks": block_tracks,
-            "block_rows": block_rows, "version": __version__}
+            "block_rows": block_rows, "heights": heights, "version": __version__}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -119,7 +124,7 @@ class _Stats:
 
 
 def _reader(q: queue.Queue, stop: threading.Event, cfg, files, skip: int, st: _Stats, *,
-            chunk, segment_rows, block_tracks, block_rows, batch_rows) -> None:
+            chunk, segment_rows, block_tracks, block_rows, batch_rows, size) -> None:
     """The reader thread: ("block", Prepared) for each block after the first `skip` (done by
     an earlier run: read, not validated or prepared), then ("end", blocks read); ("error",
     exception) on any failure. Stops when `stop` is set."""
@@ -151,7 +156,7 @@ def _reader(q: queue.Queue, stop: threading.Event, cfg, files, skip: int, st: _S
             st.hold(len(tracks.ids))
             t1 = time.perf_counter()
             st.read_s += t1 - t0
-            prep = prepare(cfg, tracks, chunk=chunk, segment_rows=segment_rows)
+            prep = prepare(cfg, tracks, chunk=chunk, segment_rows=segment_rows, size=size)
             del tracks
             st.prepare_s += time.perf_counter() - t1
             i += 1
@@ -168,7 +173,8 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
                     block_tracks: int = BLOCK_TRACKS, block_rows: int = BLOCK_ROWS,
                     batch_rows: int = BATCH_ROWS, prefetch: int = PREFETCH,
                     kernel_threads: int = KERNEL_THREADS,
-                    on_part: Callable[[dict], None] | None = None) -> dict:
+                    on_part: Callable[[dict], None] | None = None,
+                    size: SizeOptions | None = None) -> dict:
     """Classify every track of `source` (a tracks file, a list of files or a folder of them)
     streaming: read by record batches, classify block by block while the next is prepared,
     write each block's verdicts as a part beside `output`, then assemble `output` (CSV or
@@ -181,6 +187,7 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
     resumes after the parts done (`resume`; `log` says so); a changed input or config starts
     over (`log` says so). A file whose tracks' rows are not contiguous is classified whole
     (`classify_whole`, a note says so); for a list or folder of files that is a `BadInput`.
+    `size`: rules 37 and 26 from the tracks' top rows (`blocks.height_looks`; None: neither).
     `devices` is passed on to `classify_tracks` when not None; `on_part(entry)` is called after
     each part is written (tests). Up to `kernel_threads` blocks are classified at once, each
     on its own thread (the first block alone: it compiles the programs); the parts are
@@ -198,7 +205,7 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
     parts = None
     if out is not None:
         key = run_key(cfg, files, chunk=chunk, segment_rows=segment_rows,
-                      block_tracks=block_tracks, block_rows=block_rows)
+                      block_tracks=block_tracks, block_rows=block_rows, size=size)
         parts = VerdictParts(out, key, dataset=dataset)
         msg = parts.open(resume=resume)
         if msg:
@@ -211,7 +218,7 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
         target=_reader, args=(q, stop, cfg, files, skip, st), daemon=True,
         name="rhythmjax-reader", kwargs=dict(chunk=chunk, segment_rows=segment_rows,
                                              block_tracks=block_tracks, block_rows=block_rows,
-                                             batch_rows=batch_rows))
+                                             batch_rows=batch_rows, size=size))
     notes, counts, camera = Notes(), {}, [0, 0, 0]
     kept: list[dict] = []
     labelled: bool | None = None
@@ -227,7 +234,7 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
     def kernels(prep):
         t1 = time.perf_counter()
         cols = classify_prepared(cfg, prep, chunk=chunk, segment_rows=segment_rows,
-                                 devices=devices)
+                                 devices=devices, size=size)
         return cols, time.perf_counter() - t1
 
     def finish() -> None:
@@ -288,7 +295,7 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
                                      "rows are contiguous (sort it by track_id)",
                            track_id=e.track_id) from None
         summary = classify_whole(cfg, files[0], out, chunk=chunk, segment_rows=segment_rows,
-                                 progress=progress, devices=devices)
+                                 progress=progress, devices=devices, size=size)
         summary["notes"].insert(0, f"{e}: read the whole file into memory instead of "
                                    "streaming it (sort the file by track_id to stream it)")
         summary["timing"]["total_s"] = round(time.perf_counter() - t_start, 3)
@@ -317,7 +324,8 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
         if parts is not None:
             parts.discard()
         return classify_whole(cfg, files[0], out if not dataset else None, chunk=chunk,
-                              segment_rows=segment_rows, progress=False, devices=devices)
+                              segment_rows=segment_rows, progress=False, devices=devices,
+                              size=size)
     t3 = time.perf_counter()
     verdicts = None
     if parts is not None:

@@ -50,6 +50,7 @@ from ..io.stream import (
 from ..model.batch import VERDICT_COLUMNS, summarise
 from ..model.long_tracks import SEGMENT_ROWS
 from ..model.params import Config, config_from_dict, config_to_dict
+from ..track.options import SizeOptions
 from .classify import classify_partition, classify_source, run_key
 from .cluster import local_cluster
 
@@ -110,9 +111,11 @@ def worker_setup(cache_dir: str | None) -> str | None:
 
 
 def run_partition(wire: str, partition: Partition, *, chunk: int, segment_rows: int,
-                  cache_dir: str | None, devices: int | str | None = None) -> dict:
+                  cache_dir: str | None, devices: int | str | None = None,
+                  size: SizeOptions | None = None) -> dict:
     """One task, on a worker: classify `partition` with the config of `wire` (`devices`: a
-    count or "all" of the worker's own devices, as `classify_tracks` takes it).
+    count or "all" of the worker's own devices, as `classify_tracks` takes it; `size`: rules
+    37 and 26, `blocks.height_looks`).
 
     Returns {"columns": the verdict columns (`VERDICT_COLUMNS`, "label" when the file has
     labels), "notes", "seconds", "worker"}, or {"bad_input": fields} for a `BadInput`
@@ -122,7 +125,7 @@ def run_partition(wire: str, partition: Partition, *, chunk: int, segment_rows: 
     cfg = config_from_wire(wire)
     try:
         res, notes = classify_partition(cfg, partition, chunk=chunk, segment_rows=segment_rows,
-                                        devices=devices, return_notes=True)
+                                        devices=devices, return_notes=True, size=size)
     except BadInput as e:
         return {"bad_input": {k: getattr(e, k) for k in _BAD_INPUT_FIELDS}}
     return {"columns": {k: res[k] for k in (*VERDICT_COLUMNS, "label") if k in res},
@@ -178,13 +181,13 @@ def default_cache_dir() -> str | None:
 
 
 def dask_key(cfg: Config, files: list[str], *, chunk: int, segment_rows: int,
-             rows_per_partition: int) -> dict:
+             rows_per_partition: int, size: SizeOptions | None = None) -> dict:
     """The manifest's key of a Dask run: `stream.classify.run_key` (the inputs' fingerprint,
     the config's hash, the settings, the version) plus the partitions' size. A rerun with the
     same key resumes after the parts listed; the single-process path cuts other blocks, so its
     parts are not taken up (and the reverse): the run starts over, and says so."""
     return {**run_key(cfg, files, chunk=chunk, segment_rows=segment_rows,
-                      block_tracks=BLOCK_TRACKS, block_rows=BLOCK_ROWS),
+                      block_tracks=BLOCK_TRACKS, block_rows=BLOCK_ROWS, size=size),
             "engine": "dask", "rows_per_partition": int(rows_per_partition)}
 
 
@@ -192,7 +195,7 @@ def classify_dask(cfg: Config, source, output, *, scheduler=None, n_workers: int
                   rows_per_partition: int = ROWS_PER_PARTITION, chunk: int = 256,
                   segment_rows: int = SEGMENT_ROWS, progress: bool = True, resume: bool = True,
                   cache_dir: str | None = None, devices: int | str | None = None,
-                  log=print_stderr) -> dict:
+                  log=print_stderr, size: SizeOptions | None = None) -> dict:
     """Classify every track of `source` (a tracks file, a list or a folder of them) on a Dask
     cluster, as `stream.classify.classify_source` does on one process, with the same verdicts:
     `output` a verdicts file (CSV or Parquet, the input's track order), a folder (the parts stay
@@ -223,18 +226,19 @@ def classify_dask(cfg: Config, source, output, *, scheduler=None, n_workers: int
             raise
         summary = classify_source(cfg, files[0], output, chunk=chunk,
                                   segment_rows=segment_rows, progress=progress, resume=resume,
-                                  devices=devices, log=log)
+                                  devices=devices, log=log, size=size)
         summary["notes"].insert(0, f"{e}: classified on this process, not the cluster")
         return summary
     if not partitions:  # no track: the single process writes the empty table
         return classify_source(cfg, files, output, chunk=chunk, segment_rows=segment_rows,
-                               progress=False, resume=resume, devices=devices, log=log)
+                               progress=False, resume=resume, devices=devices, log=log,
+                               size=size)
     timing["plan_s"] = time.perf_counter() - t0
     dataset = out is not None and (out.endswith(("/", os.sep)) or os.path.isdir(out))
     parts = None
     if out is not None:
         parts = VerdictParts(out, dask_key(cfg, files, chunk=chunk, segment_rows=segment_rows,
-                                           rows_per_partition=rows_per_partition),
+                                           rows_per_partition=rows_per_partition, size=size),
                              dataset=dataset)
         msg = parts.open(resume=resume)
         if msg and log:
@@ -252,7 +256,8 @@ def classify_dask(cfg: Config, source, output, *, scheduler=None, n_workers: int
             t2 = time.perf_counter()
             bar = progress_bar(len(partitions), start, progress)
             ordered = in_order(client, config_wire(cfg), partitions, start, chunk=chunk,
-                               segment_rows=segment_rows, cache_dir=cache, devices=devices)
+                               segment_rows=segment_rows, cache_dir=cache, devices=devices,
+                               size=size)
             with contextlib.closing(ordered):
                 for k, res in ordered:
                     t3 = time.perf_counter()
@@ -341,7 +346,8 @@ def added(a: dict, b: dict) -> dict:
 
 def in_order(client, wire: str, partitions: list[Partition], start: int, *, chunk: int,
              segment_rows: int, cache_dir: str | None,
-             devices: int | str | None = None) -> Iterator[tuple[int, dict]]:
+             devices: int | str | None = None,
+             size: SizeOptions | None = None) -> Iterator[tuple[int, dict]]:
     """Submit `run_partition` for partitions[start:] (earlier ones first) and yield (index,
     result) in partition order as they come in. A partition's `BadInput` is raised in its
     turn, after the partitions before it (so the error is the first in file order, as on one
@@ -354,7 +360,7 @@ def in_order(client, wire: str, partitions: list[Partition], start: int, *, chun
     n, token = len(partitions), uuid.uuid4().hex[:8]
     futures = [client.submit(run_partition, wire, partitions[k], chunk=chunk,
                              segment_rows=segment_rows, cache_dir=cache_dir, devices=devices,
-                             key=f"rhythmjax-partition-{k:06d}-{token}", priority=n - k)
+                             size=size, key=f"rhythmjax-partition-{k:06d}-{token}", priority=n - k)
                for k in range(start, n)]
     index = {f.key: start + i for i, f in enumerate(futures)}
     waiting: dict[int, dict] = {}

@@ -130,14 +130,20 @@ def batch_size_look(cfg: Config, batch, options: SizeOptions, then=None):
         if then is not None:
             res = then(res, track, start)
         verdict = np.atleast_1d(np.asarray(res["verdict"]))
+        ped = np.flatnonzero(verdict == Verdict.PEDESTRIAN)
+        if not ped.size:
+            return res
+        tr = np.asarray(track)[ped, None]
+        rows = np.asarray(start)[ped, None] + np.arange(n)  # (windows, N) batch rows
+        H, read = row_heights(camera, batch.z[tr, rows, 0], batch.z[tr, rows, 1],
+                              batch.v_top[tr, rows], walker_m, options.top_inside_heights)
+        count = read.sum(axis=1)
+        height = np.full(len(ped), np.nan)  # a window with no row read: never too low
+        some = count > 0
+        height[some] = np.nanmedian(np.where(read[some], H[some], np.nan), axis=1)
         low = np.zeros(len(verdict), bool)
-        for w in np.flatnonzero(verdict == Verdict.PEDESTRIAN):
-            rows = slice(int(start[w]), int(start[w]) + n)
-            uv = batch.z[int(track[w]), rows]
-            height, count = median_height(camera, uv[:, 0], uv[:, 1],
-                                          batch.v_top[int(track[w]), rows], walker_m,
-                                          options.top_inside_heights)
-            low[w] = too_low(int(verdict[w]), height, count, walker_m, options)
+        low[ped] = (count >= options.min_height_rows) & np.isfinite(height) & \
+            (height < options.min_height_heights * walker_m)  # `too_low` on each window
         if not low.any():
             return res
         out = dict(res)
