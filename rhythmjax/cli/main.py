@@ -115,11 +115,11 @@ def cmd_classify(args) -> int:
     .report.html (a folder DIR/: DIR.report.html), the summary, the first 5000 verdict rows and
     the config on one page (--no-report skips it).
 
-    Where the tracks have top rows (columns v_top, top_at_edge: `run`, `count` and `rhythm`
-    write them), a window read at twice a walker's pace is judged at half it where the object
-    is as tall as a walker (--twice-pace-heights, rule 37), and a window judged Pedestrian
-    whose object is lower than half a walker is refused, too-low (--min-height-heights, rule
-    26), as the tracker judges."""
+    Where the tracks have top rows (columns v_top, top_at_edge: `run`, `track`, `count` and
+    `rhythm` write them), a window read at twice a walker's pace is judged at half it where
+    the object is as tall as a walker (--twice-pace-heights, rule 37), and a window judged
+    Pedestrian whose object is lower than half a walker is refused, too-low
+    (--min-height-heights, rule 26), as the tracker judges."""
 
     from ..stream.classify import classify_source, classify_whole
 

@@ -20,9 +20,8 @@ from ..io.mot import read_mot_numbered
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
 from ..model.params import ConfigError
 from ..track.boxes import box_intensities, check_in_image, tracks_from_mot, window_widths
+from ..track.looks import height_looks
 from ..track.options import BodyOptions
-from ..track.size import batch_size_look
-from ..track.twice import batch_second_look
 from .common import (
     add_camera_check,
     add_common,
@@ -132,10 +131,8 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
     n = cfg.thresholds.n
     batch = to_batch(tracks, max_gap_frames=max(1, round(float(cfg.thresholds.predict_timeout)
                                                          * cfg.camera.fps)), min_len=n)
-    size = height_rules(args)
-    look = batch_size_look(cfg, batch, size, then=batch_second_look(cfg, batch, size))
     verdicts = classify_tracks(cfg, batch, progress=not (args.quiet or args.json),
-                               second_look=look)
+                               second_look=height_looks(cfg, batch, height_rules(args)))
     order = list(VERDICT_COLUMNS)
     labels = None if batch.labels is None else np.asarray(batch.labels, dtype=object)
     if labels is not None:

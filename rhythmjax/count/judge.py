@@ -7,9 +7,8 @@ import numpy as np
 
 from ..io.files import CANDIDATE_COLUMNS, Tracks, to_batch
 from ..model.batch import classify_tracks
+from ..track.looks import height_looks
 from ..track.options import SizeOptions
-from ..track.size import batch_size_look
-from ..track.twice import batch_second_look
 from .options import VerdictOptions
 
 
@@ -44,8 +43,8 @@ def judge_tracks(cfg, tracks: dict, candidates: bool = False,
     batch = to_batch(tr, max_gap_frames=gap, min_len=n)
     size = SizeOptions(twice_pace_heights=twice_pace_heights, twice_pace_edge=twice_pace_edge,
                        min_height_heights=min_height_heights)
-    look = batch_size_look(cfg, batch, size, then=batch_second_look(cfg, batch, size))
-    verdicts = classify_tracks(cfg, batch, progress=False, second_look=look)
+    verdicts = classify_tracks(cfg, batch, progress=False,
+                               second_look=height_looks(cfg, batch, size))
     # the deciding window's first frame (-1: none; the spectra): its batch row's time
     w = np.asarray(verdicts["window_row"], np.int64)
     b = np.arange(len(w))

@@ -16,9 +16,8 @@ from ..io.files import Tracks, read_tracks, to_batch, validated_tracks, write_ta
 from ..io.stream import BATCH_ROWS, BLOCK_ROWS, BLOCK_TRACKS, Partition, by_length, iter_blocks
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, merge_verdicts, summarise
 from ..model.long_tracks import SEGMENT_ROWS
+from ..track.looks import height_looks, reads_heights
 from ..track.options import SizeOptions
-from ..track.size import batch_size_look
-from ..track.twice import batch_second_look
 
 
 # ----------------------------------------------------------------------------------------------
@@ -69,20 +68,6 @@ def blind_note(cfg, counts: list[int]) -> str | None:
 
 def _gap(cfg) -> int:
     return max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
-
-
-def reads_heights(size: SizeOptions | None) -> bool:
-    """Whether the verdicts read the tracks' top rows: rule 37 or rule 26 on in `size`."""
-    return size is not None and (size.twice_pace_heights > 0 or size.min_height_heights > 0)
-
-
-def height_looks(cfg, batch, size: SizeOptions | None):
-    """`classify_tracks`' `second_look` of rules 37 and 26 (`size`; None: neither) for
-    `batch`: rule 37 (`track.twice.batch_second_look`), then rule 26 (`track.size.
-    batch_size_look`). None when both are off or the batch has no top rows."""
-    if not reads_heights(size):
-        return None
-    return batch_size_look(cfg, batch, size, then=batch_second_look(cfg, batch, size))
 
 
 def prepare(cfg, tracks: Tracks, *, chunk: int, segment_rows: int,

@@ -58,6 +58,7 @@ from ..io.stream import (
 from ..model.batch import summarise
 from ..model.long_tracks import SEGMENT_ROWS
 from ..model.params import config_to_dict
+from ..track.looks import reads_heights
 from ..track.options import SizeOptions
 from .blocks import (
     Notes,
@@ -68,7 +69,6 @@ from .blocks import (
     classify_whole,
     concat_columns,
     prepare,
-    reads_heights,
     verdict_order,
 )
 
@@ -187,7 +187,7 @@ def classify_source(cfg, source, output, *, chunk: int = 256, segment_rows: int 
     resumes after the parts done (`resume`; `log` says so); a changed input or config starts
     over (`log` says so). A file whose tracks' rows are not contiguous is classified whole
     (`classify_whole`, a note says so); for a list or folder of files that is a `BadInput`.
-    `size`: rules 37 and 26 from the tracks' top rows (`blocks.height_looks`; None: neither).
+    `size`: rules 37 and 26 from the tracks' top rows (`track.looks.height_looks`; None: neither).
     `devices` is passed on to `classify_tracks` when not None; `on_part(entry)` is called after
     each part is written (tests). Up to `kernel_threads` blocks are classified at once, each
     on its own thread (the first block alone: it compiles the programs); the parts are

@@ -115,7 +115,7 @@ def run_partition(wire: str, partition: Partition, *, chunk: int, segment_rows: 
                   size: SizeOptions | None = None) -> dict:
     """One task, on a worker: classify `partition` with the config of `wire` (`devices`: a
     count or "all" of the worker's own devices, as `classify_tracks` takes it; `size`: rules
-    37 and 26, `blocks.height_looks`).
+    37 and 26, `track.looks.height_looks`).
 
     Returns {"columns": the verdict columns (`VERDICT_COLUMNS`, "label" when the file has
     labels), "notes", "seconds", "worker"}, or {"bad_input": fields} for a `BadInput`
