@@ -56,14 +56,16 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   mean of D over window B, grey levels per pixel, instead of its sum).
 - top_inside: the tracker's `size.top_inside_heights` 0.1 vs 0 (rule 36: the size rule also
   reads rows where a walker's head would leave the image but the measured top lies inside it).
-- twice_pace: the tracker's `size.twice_pace_heights` 0.75 vs 0 (rule 37: a window refused by
-  (14) judged at half its strongest peak where the height is a walker's).
-- count_twice: counting's `verdicts.twice_pace_heights` 0.75 vs 0 (rule 37 in the batch
+- twice_pace: the tracker's `size.twice_pace_heights` 0.57 (fitted) vs 0 (rule 37: a window
+  refused by (14) judged at half its strongest peak where the height is a walker's).
+- count_twice: counting's `verdicts.twice_pace_heights` 0.57 vs 0 (rule 37 in the batch
   classifier that judges count's tracks, heights from the tracks' v_top).
 - twice_edge: the tracker's `size.twice_pace_edge` True vs False (rule 37b: rule 37's height
   reading also counts rows whose motion reaches the image's first row, at the height up to it).
 - count_edge: counting's `verdicts.twice_pace_edge` True vs False (rule 37's height reading also
   counts rows whose blobs reach the image's first row, at the height up to it: a lower bound).
+- twice_fitted: the tracker's `size.twice_pace_heights` at its fitted 0.57 vs the a priori 0.75
+  (`benchmarks/fit_height_threshold.py`); count_twice_fitted: counting's, the same values.
 - count_low: counting's `verdicts.min_height_heights` 0.5 vs 0 (rule 26 in count's verdicts:
   a window judged Pedestrian lower than half a walker is refused, too-low).
 - still_end: only the still rule's end of a track that stands still (patched off in this

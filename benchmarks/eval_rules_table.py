@@ -105,18 +105,25 @@ RULES = {
     "top_inside": ("tracker", "size.top_inside_heights", 0.1, 0.0, TRACKER_SOURCES,
                    "nothing fitted (0.1 walker heights a priori; the case seen on own seed 12's "
                    "dog, rule 36)"),
-    "twice_pace": ("tracker", "size.twice_pace_heights", 0.75, 0.0, TRACKER_SOURCES,
-                   "nothing fitted (0.75 walker heights a priori; the twice-the-pace walkers seen "
-                   "on own knees radial 2070001-2120001, rule 37)"),
-    "count_twice": ("count", "verdicts.twice_pace_heights", 0.75, 0.0, COUNT_SOURCES,
-                    "nothing fitted (the tracker's rule 37 in count's verdicts; decided on "
-                    "fresh own counting seeds 2430001-2460001)"),
+    "twice_pace": ("tracker", "size.twice_pace_heights", 0.57, 0.0, TRACKER_SOURCES,
+                   "the case seen on own knees radial 2070001-2120001 (rule 37, 0.75 a priori); "
+                   "0.57 fitted on own knees 5555, 6666, 2830001-2860001 (fortieth round)"),
+    "count_twice": ("count", "verdicts.twice_pace_heights", 0.57, 0.0, COUNT_SOURCES,
+                    "the tracker's rule 37 in count's verdicts (decided on fresh own counting "
+                    "seeds 2430001-2460001 at 0.75; the tracker's fitted 0.57 since the fortieth "
+                    "round)"),
     "twice_edge": ("tracker", "size.twice_pace_edge", True, False, TRACKER_SOURCES,
                    "nothing fitted (a lower bound, a priori; rule 37b in the tracker, decided on "
                    "fresh own knees 2530001-2600001)"),
     "count_edge": ("count", "verdicts.twice_pace_edge", True, False, COUNT_SOURCES,
                    "nothing fitted (a lower bound, a priori; the cut heads seen on own counting "
                    "seeds 2430001-2440001; decided on fresh 2490001-2520001)"),
+    "twice_fitted": ("tracker", "size.twice_pace_heights", 0.57, 0.75, TRACKER_SOURCES,
+                     "fitted (fit.heights on own knees 5555, 6666, 2830001-2860001, held out "
+                     "2870001-2920001; OFF is the a priori 0.75)"),
+    "count_twice_fitted": ("count", "verdicts.twice_pace_heights", 0.57, 0.75, COUNT_SOURCES,
+                           "fitted (the tracker's fitted rule 37 threshold; OFF the a priori "
+                           "0.75)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -140,7 +147,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES,
               "twice_pace": TRACKER_SOURCES, "count_twice": COUNT_SOURCES,
               "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES,
-              "count_low": COUNT_SOURCES}
+              "count_low": COUNT_SOURCES, "twice_fitted": (),
+              "count_twice_fitted": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

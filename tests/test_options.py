@@ -57,7 +57,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 26)", "size.min_height_rows", 10),
     ("(new: issue 16, rule 26c)", "size.min_height_scope", "window"),
     ("(new: issue 16, rule 36)", "size.top_inside_heights", 0.1),  # a top seen inside the image
-    ("(new: issue 16, rule 37)", "size.twice_pace_heights", 0.75),  # a walker at twice its pace
+    ("(new: issue 16, rule 37)", "size.twice_pace_heights", 0.57),  # a walker at twice its pace
     ("(new: issue 16, rule 37b)", "size.twice_pace_edge", True),  # ... heads above the view
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
     ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
@@ -119,7 +119,7 @@ COUNT_DEFAULTS = [
     (None, "verdicts.speed_fit", "theil-sen"),  # issue 16, rule 25: Theil-Sen since round 28
     ("(new: issue 16 item 2)", "verdicts.window_candidates", False),  # candidate windows B
     ("(new: issue 16, rule 31)", "verdicts.head_speed", True),  # the speed under the heads
-    ("(new: issue 16, rule 37)", "verdicts.twice_pace_heights", 0.75),  # twice the pace
+    ("(new: issue 16, rule 37)", "verdicts.twice_pace_heights", 0.57),  # twice the pace
     ("(new: issue 16, rule 37)", "verdicts.twice_pace_edge", True),  # ... heads above the view
     ("(new: issue 16, rule 26)", "verdicts.min_height_heights", 0.5),  # the size rule in count
     # the foot-point gates of `count.foot_gate` (options a and b), off
