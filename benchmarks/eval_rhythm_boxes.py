@@ -165,6 +165,8 @@ def dev(work: str) -> dict:
 
 
 def own(work: str, seeds: list[int], lateral: bool) -> dict:
+    """Per own scene ("own_SEED_I"): each truth box track's kind, verdict, reason, pace and
+    stride with the truth's (module doc); the frames are written to `work` and removed."""
     import cv2
     import eval_count as ec
     import eval_synthetic as es

@@ -94,9 +94,10 @@ class HeightFit:
 
 def fit_height_threshold(height: np.ndarray, labels: np.ndarray, test: np.ndarray, *,
                          start: float = 0.5, grid=GRID) -> HeightFit:
-    """Fit rule 26's threshold (module doc) on the tracks not in `test` (bool) and report on
-    both; `height` in walker heights (NaN: left out), `labels` the kinds. Raises ValueError when
-    the training tracks lack a class."""
+    """Fit a height rule's threshold (rule 26's or rule 37's, by the heights given; module
+    doc) on the tracks not in `test` (bool) and report on both; `height` in walker heights
+    (NaN: left out), `labels` the kinds. Raises ValueError when the training tracks lack a
+    class."""
     height, labels = np.asarray(height, np.float64), np.asarray(labels, dtype=object)
     use = np.isfinite(height) & ((labels == POSITIVE) | np.isin(labels, LOWER))
     positive = labels == POSITIVE

@@ -205,9 +205,11 @@ def classify_dask(cfg: Config, source, output, *, scheduler=None, n_workers: int
     address ("tcp://host:8786") or a `dask.distributed.Client`. A partition holds whole tracks,
     about `rows_per_partition` rows. A rerun after an interruption resumes from the parts done
     (`resume`; `log` says so). `cache_dir`: the workers' compilation cache (None: the client's,
-    "": none). `devices`: a count or "all" of each worker's devices (`classify_tracks`). A
-    single file whose tracks' rows are not contiguous cannot be partitioned: it is classified
-    whole here, by `classify_source` (a note says so).
+    "": none). `devices`: a count or "all" of each worker's devices (`classify_tracks`).
+    `size`: rules 37 and 26 from the tracks' top rows (`track.looks.height_looks`; None:
+    neither), on every worker and in the resume key. A single file whose tracks' rows are not
+    contiguous cannot be partitioned: it is classified whole here, by `classify_source` (a note
+    says so).
 
     Returns a summary: n_tracks, verdicts, reasons, labels (when labelled), notes, engine,
     partitions, parts, resumed_parts, workers (in the cluster), workers_used (that ran a task),

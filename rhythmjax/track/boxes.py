@@ -7,8 +7,8 @@ text) or a foot point and width (the tracks format). Here each box becomes a tra
   convention (pixel centres at integers; a box edge at e spans pixel columns e .. e + w - 1);
 - width_px is the box width (the width gate (10) reads it);
 - v_top is the box's top row and top_at_edge 1 where that row is the image's first
-  (`top_rows`): the object goes on above the view. Rule 37 (`track.twice`) reads the object's
-  height from them, as it does from the tracker's moving regions;
+  (`top_rows`): the object goes on above the view. Rules 37 and 26 (`track.looks`) read the
+  object's height from them, as they do from the tracker's moving regions;
 - I(k) (grey levels) is the sum over window B of the absolute difference D = |I_k - I_(k-1)| of
   successive 8-bit grey frames (`vision.detect.window_b_intensity`, as the online tracker
   computes it): W px wide and W/5 px high, its bottom row at the foot row v, where W is the
@@ -70,9 +70,8 @@ def tracks_from_mot(mot: dict, path: str, *, fps: float, frame_base: int = 1,
     columns, with `line` from `read_mot_numbered`): track_id = the MOT id, frame = the MOT frame
     - `frame_base` (the video's 0-based index), t = frame / fps (s), (u, v) = `foot_points`,
     width_px = the scaled box width, (v_top, top_at_edge) = `top_rows`, intensity NaN (to be
-    measured). The MOT x, y, z columns are
-    ignored. Raises BadInput (file and line) for a frame before the video's first and for two
-    boxes of one id in one frame."""
+    measured). The MOT x, y, z columns are ignored. Raises BadInput (file and line) for a frame
+    before the video's first and for two boxes of one id in one frame."""
     frame = np.asarray(mot["frame"], np.int64) - int(frame_base)
     line = np.asarray(mot["line"], np.int64)
     bad = np.flatnonzero(frame < 0)
