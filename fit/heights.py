@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fit.walking import balanced_accuracy as walking_accuracy
+from rhythmjax.model.status import Verdict
 from rhythmjax.track.size import median_height
 from rhythmjax.track.twice import twice_height
 
@@ -72,14 +74,10 @@ def roc_auc(score: np.ndarray, positive: np.ndarray) -> float:
 
 def balanced_accuracy(height: np.ndarray, positive: np.ndarray, thresholds) -> np.ndarray:
     """0.5 (TPR + TNR) of "walker where height >= threshold" at each threshold (walker
-    heights); NaN where a class is empty."""
-    thr = np.asarray(thresholds, np.float64)[:, None]
-    kept = np.asarray(height)[None, :] >= thr
-    npos, nneg = positive.sum(), (~positive).sum()
-    with np.errstate(invalid="ignore", divide="ignore"):
-        tpr = (kept & positive).sum(1) / npos
-        tnr = (~kept & ~positive).sum(1) / nneg
-    return 0.5 * (tpr + tnr)
+    heights): `fit.walking.balanced_accuracy` on those verdicts; NaN where a class is empty."""
+    kept = np.asarray(height)[None, :] >= np.asarray(thresholds, np.float64)[:, None]
+    verdict = np.where(kept, int(Verdict.PEDESTRIAN), int(Verdict.NON_PEDESTRIAN))
+    return walking_accuracy(verdict, np.asarray(positive), np.ones(kept.shape[1], bool))[0]
 
 
 @dataclass
