@@ -28,7 +28,6 @@ import cv2
 import numpy as np
 
 from ..model.camera_np import (
-    HostCamera,
     camera_tuple,
     depth_3d as depth_3d,
     ground_of_pixels as _ground_of_pixels,
@@ -36,12 +35,11 @@ from ..model.camera_np import (
 )
 from ..model.params import Camera
 from . import actors as sa
+from .draw import MIN_DEPTH, draw_actor
 from .placement import PlacementError, check_room, place_path
 
 
 KINDS = ("pedestrian", "bicycle", "dog")
-_SHIFT = 4  # fixed-point bits for sub-pixel polygon vertices
-_MIN_DEPTH = 0.2  # m; an actor with any vertex closer than this to the image plane is not drawn
 
 
 @dataclass(frozen=True)
@@ -211,49 +209,9 @@ def _noise_luts(std: float) -> tuple[np.ndarray, np.ndarray]:
 # rendering
 
 
-def _world(parts, x, y, heading):
-    """Concatenate the parts' body-frame points and map them to the world."""
-    pts = np.concatenate([np.asarray(p[1], np.float64) for p in parts], 0)
-    c, s = math.cos(heading), math.sin(heading)
-    wx = x + pts[:, 0] * c - pts[:, 1] * s
-    wy = y + pts[:, 0] * s + pts[:, 1] * c
-    return wx, wy, pts[:, 2]
-
-
-def _draw(img, camera: HostCamera, afs: float, kind: str, a: dict, tau: float, bx: float, by: float,
-          heading: float):
-    """Draw one actor; return (umin, umax, vmax) px of its drawn extent, or None if not drawn."""
-    parts = sa.object_parts(kind, tau, a)
-    wx, wy, wz = _world(parts, bx, by, heading)
-    d = depth_3d(camera, wy, wz)
-    if d.min() < _MIN_DEPTH:
-        return None
-    u, v = project_3d(camera, wx, wy, wz)
-    uv = np.clip(np.stack([u, v], 1), -4000.0, 4000.0)
-    idx = np.cumsum([0] + [len(p[1]) for p in parts])
-    anchor_y = np.array([p[4] for p in parts]) * math.cos(heading)  # ground y of (0, l, 0) - by
-    scale = afs / float(np.mean(d))  # px per m at the actor
-    umin, umax, vmax = math.inf, -math.inf, -math.inf
-    for i in np.argsort(-anchor_y, kind="stable"):
-        mode, _, grey, thick, _ = parts[i]
-        q = uv[idx[i]:idx[i + 1]]
-        if mode == "hull":
-            q = cv2.convexHull(q.astype(np.float32))[:, 0, :]
-            pts = np.rint(q * (1 << _SHIFT)).astype(np.int32)
-            cv2.fillPoly(img, [pts], int(grey), cv2.LINE_AA, _SHIFT)
-            r = 0.0
-        else:
-            pts = np.rint(q * (1 << _SHIFT)).astype(np.int32)
-            t = max(1, int(round(thick * scale)))
-            cv2.polylines(img, [pts], mode == "closed", int(grey), t, cv2.LINE_AA, _SHIFT)
-            r = 0.5 * t
-        umin, umax = min(umin, float(q[:, 0].min()) - r), max(umax, float(q[:, 0].max()) + r)
-        vmax = max(vmax, float(q[:, 1].max()) + r)
-    return umin, umax, vmax
-
-
-def _paths(spec: SceneSpec):
-    """Per actor: alive mask, local time, body position, truth foot ground point (arrays of T)."""
+def actor_paths(spec: SceneSpec):
+    """Per actor: (alive mask, local time s, body x, body y, truth foot ground x, y m), each an
+    array over the spec's frames."""
     T, fps = spec.n_frames, float(spec.camera.fps)
     k = np.arange(T)
     out = []
@@ -288,7 +246,7 @@ def render_scene(key_or_seed, spec: SceneSpec) -> Scene:
     jitter = (r_jit.standard_normal((T, 2)) * spec.jitter_px if spec.jitter_px > 0
               else np.zeros((T, 2)))
     lut_p, lut_n = _noise_luts(spec.noise_std) if spec.noise_std > 0 else (None, None)
-    paths = _paths(spec)
+    paths = actor_paths(spec)
     attrs = [act.attrs() for act in spec.actors]
     nobj = len(spec.actors)
     wid = np.full((nobj, T), np.nan)
@@ -300,7 +258,7 @@ def render_scene(key_or_seed, spec: SceneSpec) -> Scene:
         live.sort(key=lambda i: -(paths[i][3][k]))  # far first
         for i in live:
             act = spec.actors[i]
-            ext = _draw(img, host, afs, act.kind, attrs[i], float(paths[i][1][k]),
+            ext = draw_actor(img, host, afs, act.kind, attrs[i], float(paths[i][1][k]),
                         float(paths[i][2][k]), float(paths[i][3][k]), act.heading_rad)
             if ext is not None:
                 wid[i, k], vlow[i, k] = ext[1] - ext[0], ext[2]
@@ -318,7 +276,7 @@ def render_scene(key_or_seed, spec: SceneSpec) -> Scene:
         u, v = project_3d(host, fx, fy, 0.0)
         v = np.where(np.isfinite(vlow[i]), vlow[i], v)  # the lowest drawn point (see module doc)
         u, v = u + jitter[:, 0], v + jitter[:, 1]
-        front = depth_3d(host, fy, 0.0) > _MIN_DEPTH
+        front = depth_3d(host, fy, 0.0) > MIN_DEPTH
         vis = alive & front & (u >= 0) & (u <= W - 1) & (v >= 0) & (v <= H - 1)
         nan = np.where(alive & front, 1.0, np.nan)
         truth.append(ObjectTruth(
@@ -419,7 +377,7 @@ def random_spec(seed, n_walkers: int = 5, n_bicycles: int = 1, n_dogs: int = 1,
                      jitter_px=jitter_px)
 
 
-__all__ = ["KINDS", "ActorSpec", "ObjectTruth", "PlacementError", "Scene", "SceneSpec", "bicycle",
-           "check_room", "depth_3d", "dog",
+__all__ = ["KINDS", "ActorSpec", "ObjectTruth", "PlacementError", "Scene", "SceneSpec",
+           "actor_paths", "bicycle", "check_room", "depth_3d", "dog",
            "project_3d", "random_spec", "render_background", "render_scene",
            "scene_to_tracks_truth", "walker"]
