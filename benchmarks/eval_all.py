@@ -2,8 +2,10 @@
 
 Columns (each names its own denominator; "-" where the source has no truth for it):
 - walkers judged Pedestrian of those judged (tracked >= N frames: the paper's Table 3 convention)
-  and of all classifiable walkers (own scenes: every walker; dev clips: `classifiable` of the
-  truth JSON, >= 64 clean frames; PETS: the 19 annotated people);
+  and of all classifiable walkers (own scenes: `sim.clean.classifiable`, the dev renderer's
+  convention computed from the own renderer's silhouettes, every walker in runs stored before
+  issue 16's forty-first round; dev clips: `classifiable` of the truth JSON, >= 64 clean
+  frames; PETS: the 19 annotated people);
 - non-walkers judged Pedestrian, of all non-walkers and of those judged;
 - pace MAE (Hz) and step-length median error (cm) over the walkers judged Pedestrian;
 - count: walkers counted / true, and the per-clip errors summed, sum_c |counted_c - true_c| /

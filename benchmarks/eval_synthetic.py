@@ -7,8 +7,10 @@ of them, a dog: 35 walkers, 10 bicycles, 5 dogs. The walkers bend their knees an
 feet heel to toe (`random_spec`'s articulated, `sim.legs`; since issue 16's thirty-eighth round:
 before it they had straight legs, `--legs rods`).
 Every scene goes through the online tracker (detect + Fig. 3 state machine + rhythm windows) and
-`evaluate.score`; prints pace MAE, step-length median error, walkers judged Pedestrian, bicycles
-and dogs judged Non-pedestrian, and missed / unclassified counts; writes the figures as JSON.
+`evaluate.score`; prints pace MAE, step-length median error, walkers judged Pedestrian (of all
+and of the classifiable ones: `sim.clean`, the dev renderer's convention, a run of N frames
+with the feet in the image, 3-20 m away and not hidden), bicycles and dogs judged
+Non-pedestrian, and missed / unclassified counts; writes the figures as JSON.
 
     python benchmarks/eval_synthetic.py [-o eval_synthetic.json] [--config C.json] [--scenes 10]
                                         [--seed S] [--legs knees|rods]
@@ -60,6 +62,7 @@ def run_scene(cfg, seed, spec, options=None):
     """Render, track and score one scene; returns (score dict with each object's verdict from
     the windows that looked at it, tracks, verdicts, scene, score dict with each object's
     verdict from the track assigned to it); see `evaluate.score`."""
+    from rhythmjax.sim.clean import classifiable
     from rhythmjax.sim.evaluate import deciding_windows, score
     from rhythmjax.sim.scene import render_scene
     from rhythmjax.track import track_frames
@@ -68,8 +71,11 @@ def run_scene(cfg, seed, spec, options=None):
     frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
     tracks, verdicts, objs, _ = track_frames(cfg, frames, progress=False,
                                              options=options or synthetic_options())
-    by_window = score(tracks, verdicts, scene.truth, windows=deciding_windows(objs))
-    return by_window, tracks, verdicts, scene, score(tracks, verdicts, scene.truth)
+    clean = classifiable(scene, n=int(cfg.thresholds.n))
+    by_window = score(tracks, verdicts, scene.truth, windows=deciding_windows(objs),
+                      classifiable=clean)
+    return (by_window, tracks, verdicts, scene,
+            score(tracks, verdicts, scene.truth, classifiable=clean))
 
 
 def evaluate(cfg, specs, options=None, verbose=True) -> dict:
@@ -146,13 +152,16 @@ def main(argv=None) -> int:
     print(f"| pace MAE (Hz) | {f(out['pace_mae_hz'])} | {f(b['pace_mae_hz'])} | <= 0.03 |")
     print(f"| step-length median error (m) | {f(out['stride_median_err_m'])} | "
           f"{f(b['stride_median_err_m'])} | <= 0.03 |")
-    for name, key, judged in (("walkers judged Pedestrian, of all", "walker_pedestrian_rate",
-                               "walkers"),
-                              ("... of those tracked >= N frames (Table 3)",
-                               "walker_pedestrian_rate_judged", "walkers_judged")):
+    for name, ped, key, judged, target in (
+            ("walkers judged Pedestrian, of all", "walkers_pedestrian",
+             "walker_pedestrian_rate", "walkers", ""),
+            ("... of the classifiable ones (sim.clean)", "classifiable_pedestrian",
+             "walker_pedestrian_rate_classifiable", "walkers_classifiable", ">= 90 %"),
+            ("... of those tracked >= N frames (Table 3)", "walkers_pedestrian",
+             "walker_pedestrian_rate_judged", "walkers_judged", ">= 95 %")):
         print(f"| {name} | " + " | ".join(
-            f"{o['walkers_pedestrian']}/{o[judged]} ({100 * o[key]:.1f} %)" for o in (out, b))
-            + " | >= 92 % |")
+            f"{o[ped]}/{o[judged]} ({100 * o[key]:.1f} %)" for o in (out, b))
+            + f" | {target} |")
     for kind in ("bicycle", "dog"):
         print(f"| {kind}s judged Non-pedestrian | " + " | ".join(
             f"{o[kind + '_non-pedestrian']}/{o[kind + '_n']} (pedestrian "

@@ -72,3 +72,25 @@ def test_window_on_two_objects_half_each_goes_to_the_nearer_and_far_ones_to_none
     on_bike = _tracks([(1, k, BIKE.u)])
     assert window_objects(on_bike, [brief], {1: (0, 63)}) == {}
     assert window_objects(on_bike, [brief], {1: (0, 30)}) == {1: brief}
+
+
+def test_classifiable_walkers_are_counted_apart():
+    """Two walkers, one judged Pedestrian by its track, one missed; the missed one has too few
+    clean frames to be classifiable: 1 of 2 walkers judged Pedestrian, 1 of 1 classifiable."""
+    other = _obj("ped002", "pedestrian", 400.0, -1.0)
+    k = np.arange(N)
+    tracks = _tracks([(1, k, WALKER.u)])
+    verdicts = _verdicts([(1, "pedestrian", 2.0, 0.7, 100)])
+    clean = {"ped000": (100, True), "ped002": (40, False), "bic001": (70, True)}
+    res = score(tracks, verdicts, [WALKER, other, BIKE], classifiable=clean)
+    rows = {r["object"]: (r["verdict"], r["clean_frames"], r["classifiable"])
+            for r in res["objects"]}
+    assert rows == {"ped000": ("pedestrian", 100, True), "ped002": ("missed", 40, False),
+                    "bic001": ("missed", 70, True)}
+    assert (res["walkers"], res["walkers_pedestrian"]) == (2, 1)
+    assert (res["walkers_classifiable"], res["classifiable_pedestrian"]) == (1, 1)
+    assert res["walker_pedestrian_rate"] == 0.5
+    assert res["walker_pedestrian_rate_classifiable"] == 1.0
+    plain = score(tracks, verdicts, [WALKER, other, BIKE])  # without: every walker counts
+    assert "classifiable" not in plain["objects"][0]
+    assert plain["walkers_classifiable"] == 2 and plain["classifiable_pedestrian"] == 1

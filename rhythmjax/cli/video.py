@@ -9,6 +9,7 @@ import numpy as np
 
 from ..io import table_suffix, write_table
 from ..model.params import ConfigError, config_from_dict, config_to_dict
+from ..sim.clean import classifiable
 from ..sim.evaluate import deciding_windows, match_tracks, score, window_objects
 from ..sim.presets import SCENE_OPTIONS, SYNTHETIC_CONFIG, synthetic_options
 from ..sim.scene import random_spec, render_scene, scene_to_tracks_truth
@@ -250,7 +251,8 @@ def cmd_demo(args) -> int:
                 cfg, frames, n_frames=len(scene.frames), on_frame=_drawer(overlay, cfg, sampler),
                 progress=not (args.quiet or args.json), options=synthetic_options())
             windows = deciding_windows(objs)
-            result = score(tracks, verdicts, scene.truth, windows=windows)
+            result = score(tracks, verdicts, scene.truth, windows=windows,
+                           classifiable=classifiable(scene, n=int(cfg.thresholds.n)))
             ids = truth_links(tracks, scene.truth, windows)
             spectra = _write_outputs(outs, args.output, cfg, tracks, verdicts, objs,
                                      truth_ids=ids)
@@ -280,7 +282,8 @@ def cmd_demo(args) -> int:
            for r in result["objects"]):
         print("* the spectral peak of an object judged non-pedestrian: not a gait, its pace and "
               "stride are not meaningful", file=sys.stderr)
-    print(f"walkers judged pedestrian: {result['walkers_pedestrian']}/{result['walkers']}; "
+    print(f"walkers judged pedestrian: {result['walkers_pedestrian']}/{result['walkers']} "
+          f"({result['classifiable_pedestrian']}/{result['walkers_classifiable']} classifiable); "
           f"others judged non-pedestrian: {result['others_non_pedestrian']}/"
           f"{result['others_judged']} judged of {result['others']}; pace MAE "
           f"{result['pace_mae_hz']:.3f} Hz; wrote {args.output}/", file=sys.stderr)

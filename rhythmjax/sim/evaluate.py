@@ -84,14 +84,17 @@ def window_objects(tracks: dict, truth, windows: dict, *, max_px: float = 15.0,
 
 
 def score(tracks: dict, verdicts: dict, truth, *, max_px: float = 15.0,
-          windows: dict | None = None) -> dict:
+          windows: dict | None = None, classifiable: dict | None = None) -> dict:
     """Per-object outcome rows and summary figures (pace MAE, stride median error, rates).
 
     Each track is assigned to one object (`match_tracks`); an object's verdict is that of its
     longest classified track. With `windows` (`deciding_windows`), each judged track's verdict
     goes instead to the object it followed during its deciding window (`window_objects`):
     Pedestrian when any such window said so, else Non-pedestrian when any judged it; an object
-    no window judged is unclassified when a track followed it, else missed."""
+    no window judged is unclassified when a track followed it, else missed. With
+    `classifiable` ({object track_id: (longest clean run, whether classifiable)}, as
+    `sim.clean.classifiable` gives), each row carries `clean_frames` and `classifiable`, and the
+    figures count the classifiable walkers apart."""
     assigned = match_tracks(tracks, truth, max_px=max_px)
     judged = None if windows is None else window_objects(tracks, truth, windows, max_px=max_px)
     vid = [int(t) for t in verdicts["track_id"]]
@@ -121,16 +124,25 @@ def score(tracks: dict, verdicts: dict, truth, *, max_px: float = 15.0,
             row.update(verdict=str(verdicts["verdict"][best]),
                        pace=float(verdicts["pace_hz"][best]),
                        stride=float(verdicts["stride_m"][best]))
+        if classifiable is not None:
+            row["clean_frames"], row["classifiable"] = classifiable[obj.track_id]
         rows.append(row)
     return {"objects": rows, **summarise(rows)}
 
 
 def summarise(rows: list[dict]) -> dict:
+    """Figures from per-object rows: walkers judged Pedestrian of all, of those judged (Table 3)
+    and of the classifiable ones (rows without `classifiable` count as classifiable), non-walkers
+    judged Non-pedestrian, pace MAE and maximum error (Hz) and the step-length median error (m)
+    over the walkers judged Pedestrian."""
     walkers = [r for r in rows if r["kind"] == "pedestrian"]
     others = [r for r in rows if r["kind"] != "pedestrian"]
     judged_w = [r for r in walkers if r["verdict"] in ("pedestrian", "non-pedestrian")]
     judged_o = [r for r in others if r["verdict"] in ("pedestrian", "non-pedestrian")]
     ped = [r for r in judged_w if r["verdict"] == "pedestrian"]
+    # classifiable (`sim.clean`, where the rows carry it; else every walker counts)
+    cl = [r for r in walkers if r.get("classifiable", True)]
+    cl_ped = sum(r["verdict"] == "pedestrian" for r in cl)
     pace_err = [abs(r["pace"] - r["pace_true"]) for r in ped if math.isfinite(r["pace"])]
     stride_err = [abs(r["stride"] - r["stride_true"]) for r in ped if math.isfinite(r["stride"])]
     return {
@@ -140,6 +152,9 @@ def summarise(rows: list[dict]) -> dict:
         "walker_pedestrian_rate": len(ped) / len(walkers) if walkers else math.nan,
         # the paper's Table 3 counts only objects tracked for N frames or more (judged):
         "walker_pedestrian_rate_judged": len(ped) / len(judged_w) if judged_w else math.nan,
+        "walkers_classifiable": len(cl),
+        "classifiable_pedestrian": cl_ped,
+        "walker_pedestrian_rate_classifiable": cl_ped / len(cl) if cl else math.nan,
         "others": len(others),
         "others_judged": len(judged_o),
         "others_non_pedestrian": sum(r["verdict"] == "non-pedestrian" for r in judged_o),
