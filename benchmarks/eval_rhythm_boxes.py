@@ -172,6 +172,7 @@ def own(work: str, seeds: list[int], lateral: bool) -> dict:
     import eval_synthetic as es
 
     from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.clean import classifiable
     from rhythmjax.sim.scene import render_scene
 
     conf = es.RECOMMENDED
@@ -190,10 +191,12 @@ def own(work: str, seeds: list[int], lateral: bool) -> dict:
             mot = os.path.join(work, name + ".txt")
             write_mot(mot, {**truth, "frame": truth["frame"] + 1})
             rows = run(folder, mot, conf, work, name, fps=scene.fps)
+            clean = classifiable(scene, n=int(config_from_dict(conf).thresholds.n))
             res = []
             for r in rows:
                 o = scene.truth[int(r["track_id"]) - 1]  # MOT id = actor index + 1
                 res.append({"kind": kinds[int(r["track_id"])], "verdict": r["verdict"],
+                            "classifiable": clean[o.track_id][1],
                             "reason": r["reason"], "pace": float(r["pace_hz"] or "nan"),
                             "pace_true": float(o.pace_hz), "stride": float(r["stride_m"] or "nan"),
                             "stride_true": float(o.step_length_m)})
@@ -203,14 +206,18 @@ def own(work: str, seeds: list[int], lateral: bool) -> dict:
 
 
 def own_table(d: dict) -> dict:
-    """Walkers / non-walkers judged Pedestrian (of all box tracks) and the walkers' pace MAE."""
+    """Walkers / non-walkers judged Pedestrian (of all box tracks; walkers also of the
+    classifiable ones, `sim.clean`) and the walkers' pace MAE."""
     rows = [r for res in d.values() for r in res]
     walk = [r for r in rows if r["kind"] == "pedestrian"]
+    cl = [r for r in walk if r.get("classifiable", True)]
     other = [r for r in rows if r["kind"] != "pedestrian"]
     ped = [r for r in walk if r["verdict"] == "pedestrian"]
     err = [abs(r["pace"] - r["pace_true"]) for r in ped if np.isfinite(r["pace"])]
     return {"walkers": len(walk), "walkers_pedestrian": len(ped),
             "walkers_unclassified": sum(r["verdict"] == "unclassified" for r in walk),
+            "walkers_classifiable": len(cl),
+            "classifiable_pedestrian": sum(r["verdict"] == "pedestrian" for r in cl),
             "others": len(other),
             "others_pedestrian": sum(r["verdict"] == "pedestrian" for r in other),
             "matched_twice": sum(r["reason"] == "matched-twice" for r in rows),

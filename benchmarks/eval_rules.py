@@ -58,6 +58,9 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   reads rows where a walker's head would leave the image but the measured top lies inside it).
 - twice_pace: the tracker's `size.twice_pace_heights` 0.57 (fitted) vs 0 (rule 37: a window
   refused by (14) judged at half its strongest peak where the height is a walker's).
+- trend: `thresholds.trend_max_cycles` 2 vs 0 (rule 38: a window not judged Pedestrian whose
+  strongest peak completes fewer than 2 cycles over the window, a trend, judged again with its
+  least-squares line removed; every classifier, tracker and count alike).
 - count_twice: counting's `verdicts.twice_pace_heights` 0.57 vs 0 (rule 37 in the batch
   classifier that judges count's tracks, heights from the tracks' v_top).
 - twice_edge: the tracker's `size.twice_pace_edge` True vs False (rule 37b: rule 37's height

@@ -124,6 +124,11 @@ RULES = {
     "count_twice_fitted": ("count", "verdicts.twice_pace_heights", 0.57, 0.75, COUNT_SOURCES,
                            "fitted (the tracker's fitted rule 37 threshold; OFF the a priori "
                            "0.75)"),
+    "trend": ("config", ("thresholds", "trend_max_cycles"), 2.0, 0.0,
+              TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",),
+              "nothing fitted (2 cycles a window a priori: fewer is a trend, not a rhythm); the "
+              "case seen on own 20240603, 777001, 11, 12 (study_missed_walkers: 7 of 9 walkers "
+              "judged no-model-match had their strongest peak at 0.11-0.53 Hz)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -147,7 +152,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES,
               "twice_pace": TRACKER_SOURCES, "count_twice": COUNT_SOURCES,
               "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES,
-              "count_low": COUNT_SOURCES, "twice_fitted": (),
+              "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (),
               "count_twice_fitted": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",

@@ -4,9 +4,10 @@ The complement of `study_false_positives.py`: the same tracks (rendered and trac
 `eval_synthetic.evaluate` does, cached under ``-d DIR`` by `study_false_positives.track_scene`
 and `dev_scenes`; the dev clips as `eval_all.run_dev` tracks them), scored by track as eval_all
 and eval_rules score them (`sim.evaluate.score`: an object's verdict is that of its longest
-judged assigned track). Every walker not judged Pedestrian that counts against a target (own
-scenes: every walker; dev clips: the truth's `classifiable` ones, and any judged one) gets one
-cause:
+judged assigned track). Every walker not judged Pedestrian that counts against a target (the
+classifiable ones, and any judged one: the dev clips' truth's `classifiable`, the own scenes'
+`sim.clean.classifiable`, the same convention; every own walker before issue 16's forty-first
+round) gets one cause:
 - (a) `no track`: no track is assigned to it (`match_tracks`); sub-cause `never detected` (no
   tracked row within the scoring limit of its foot point, max(15 px, 0.35 x its width)) or
   `rows only in others' tracks` (tracks whose rows were nearest it, assigned elsewhere);
@@ -49,6 +50,7 @@ import collections
 import json
 import math
 import sys
+import types
 from pathlib import Path
 
 import numpy as np
@@ -319,14 +321,18 @@ def own_source(cfg, seed: int, n_scenes: int, cache: Path, true_foot: bool, chan
     """(scene name, cfg, tracks, objs, truth, D or None) of one seed's own scenes; `changes`:
     tracker options changed from the scenes' (`synthetic_options`), tracked into their own
     cache directory."""
+    from rhythmjax.sim.clean import classifiable
     from rhythmjax.sim.scene import render_scene
     from rhythmjax.track.options import with_changes
 
     opt = with_changes(synthetic_options(), changes or {})
     for i, (s, spec) in enumerate(scene_specs(seed, n_scenes, camera=cfg.camera)):
         tracks, _, objs, truth = track_scene(cfg, s, spec, cache / str(seed), opt)
-        D = (ew.differences(list(render_scene(s, spec).frames), synthetic_options())
-             if true_foot else None)
+        scene = render_scene(s, spec)
+        flags = classifiable(scene, n=int(cfg.thresholds.n))
+        truth = [types.SimpleNamespace(**vars(x), classifiable=flags[x.track_id][1])
+                 for x in truth]  # the dev convention (sim.clean), as the dev clips' truth
+        D = ew.differences(list(scene.frames), synthetic_options()) if true_foot else None
         yield f"{seed}:{i}", cfg, tracks, objs, truth, D
 
 

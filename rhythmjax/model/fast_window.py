@@ -13,15 +13,12 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from . import mem
 from .params import Config
 from .rhythm import (
     MAX_DT_JITTER,
     MAX_MISSING_FRACTION,
     RhythmResult,
-    match,
-    spectral_sum,
-    window_spectrum,
+    judge_window_looks,
 )
 from .status import Reason, Verdict
 
@@ -48,8 +45,8 @@ def classify_window_fast(cfg: Config, intensity: Float[Array, " n"], t: Float[Ar
     """`rhythm.classify_window(cfg, intensity, t, xy, True, observed, speed=speed)` of a
     complete window (intensity, may hold NaN; t s from the window's first sample; the speed
     of (12), m/s, given), dt_med by `median_small`: Sec. 4.1's Burg MEM spectrum of the
-    normalised window, the peaks, S of (13) over every local maximum, (14) and (15)."""
-    thr = cfg.thresholds
+    normalised window, the peaks, S of (13) over every local maximum, (14) and (15), and
+    rule 38 where it is on (`rhythm.judge_window_looks`)."""
     n = intensity.shape[0]
     known = jnp.isfinite(intensity)
     n_missing = n - jnp.sum(known)
@@ -58,14 +55,9 @@ def classify_window_fast(cfg: Config, intensity: Float[Array, " n"], t: Float[Ar
     dt_ok = jnp.all(jnp.abs(dts - dt_med) <= MAX_DT_JITTER * dt_med) & (dt_med > 0)
     signal_ok = (n_missing <= MAX_MISSING_FRACTION * n) & dt_ok
     step = jnp.where(dt_ok, dt_med, 1.0)
-    spec, nonconstant = window_spectrum(intensity, step, thr.m)
-    keep = lambda pk: pk.mask & nonconstant & spec.ok
-    white = lambda pk: mem.Peaks(pk.freq, jnp.where(keep(pk), pk.power / step, 0.0), keep(pk))
-    peaks = white(spec.peaks)
-    total = spectral_sum(white(mem.local_maxima(spec.psd, spec.freqs)), thr.p_thr)  # (13)
-    verdict, reason, pace, stride, ratio = match(peaks, speed, cfg.walking, thr, total)
+    verdict, reason, pace, stride, ratio, peaks = judge_window_looks(cfg, intensity, step, speed)
     bad = ~signal_ok
-    nan = jnp.asarray(jnp.nan, spec.psd.dtype)
+    nan = jnp.asarray(jnp.nan, pace.dtype)
     return RhythmResult(
         verdict=jnp.where(bad, Verdict.UNCLASSIFIED, verdict).astype(jnp.int32),
         reason=jnp.where(bad, Reason.BAD_SIGNAL, reason).astype(jnp.int32),

@@ -178,7 +178,11 @@ class Thresholds(eqx.Module):
     passes (14) is refused when a peak within 10 % of twice its frequency holds at least this
     fraction of its power (a trotting dog's half-pace component; 0, the default: off, the
     paper's (13)-(15) exactly; 0.25 was the default until issue 16: it helped on the project's
-    own scenes only); see `rhythm.half_pace`.
+    own scenes only); see `rhythm.half_pace`. trend_cycles (rule 38): a window the paper's
+    (13)-(15) does not judge Pedestrian whose strongest peak completes fewer than this many
+    cycles over the window (F N dt < trend_cycles: a trend, not a rhythm) is judged again with
+    its least-squares line removed, and is Pedestrian when that says so (reason
+    matched-detrended); 0, the default: off; see `rhythm.judge_window_looks`.
     """
 
     p_thr: Float[Array, ""] = eqx.field(converter=_f32, default=10.0)
@@ -193,6 +197,7 @@ class Thresholds(eqx.Module):
     n: int = eqx.field(static=True, default=64)
     m: int = eqx.field(static=True, default=15)
     hop: int = eqx.field(static=True, default=0)
+    trend_cycles: float = eqx.field(static=True, default=0.0)
 
     @property
     def hop_samples(self) -> int:
@@ -225,7 +230,7 @@ _WIDTH_KEYS = ("mean_m", "std_m", "height_m")
 _WALKING_KEYS = ("pace_mean_hz", "pace_std_hz", "stride_mean_m", "stride_std_m")
 _THRESHOLD_KEYS = ("p_thr", "r_thr", "k_sigma1", "k_sigma2", "k_sigma3", "n_samples", "ar_order",
                    "range_min_m", "range_max_m", "predict_timeout_s", "window_hop_samples",
-                   "harmonic_max_ratio", "window_s")
+                   "harmonic_max_ratio", "trend_max_cycles", "window_s")
 WINDOW_S = 64 / 15  # s: the rhythm window of Table 1, N = 64 samples at 15 fps
 SECTIONS = {"camera": _CAMERA_KEYS, "noise": _NOISE_KEYS, "width": _WIDTH_KEYS,
             "walking": _WALKING_KEYS, "thresholds": _THRESHOLD_KEYS}
@@ -279,6 +284,7 @@ def config_to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
             "ar_order": int(t.m), "range_min_m": _s(t.range_min), "range_max_m": _s(t.range_max),
             "predict_timeout_s": _s(t.predict_timeout), "window_hop_samples": int(t.hop),
             "harmonic_max_ratio": _s(t.harmonic_ratio),
+            "trend_max_cycles": float(t.trend_cycles),
         },
     }
 
@@ -415,6 +421,8 @@ def config_from_dict(d: Any) -> Config:
         n=n_samples, m=ar_order,
         hop=_num("thresholds", "window_hop_samples", t["window_hop_samples"], lo=0, lo_open=False,
                  hi=n_samples, hi_open=False, integer=True),
+        trend_cycles=_num("thresholds", "trend_max_cycles", t["trend_max_cycles"], lo=0.0,
+                          lo_open=False, hi=n_samples / 2, hi_open=False),
     )
     return Config(camera, noise, width, walking, thresholds)
 

@@ -123,10 +123,11 @@ def fill_gaps(x: Float[Array, " n"], known: Bool[Array, " n"]) -> Float[Array, "
     return jnp.where(known, x, filled)
 
 
-def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order: int
-                    ) -> tuple[mem.Spectrum, Bool[Array, ""]]:
+def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order: int,
+                    detrend: str | None = None) -> tuple[mem.Spectrum, Bool[Array, ""]]:
     """(Sec. 4.1's MEM spectrum of the normalised window, False for a constant window; with
-    `DETREND` "line" the window's least-squares line removed first, `remove_line`): the
+    `detrend` "line" (default: `DETREND`) the window's least-squares line removed first,
+    `remove_line`): the
     missing samples (NaN) interpolated linearly (`fill_gaps`) when `GAPS` is "interpolate",
     left out of Burg's sums (`mem.burg`'s `known`, the fit pooled over the known runs) when it
     is "segments" ("segments_taper": each run tapered as a window of its own, `run_taper`).
@@ -134,16 +135,17 @@ def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order
     if GAPS not in ("interpolate", "segments", "segments_taper"):
         raise ValueError(f"rhythm.GAPS must be 'interpolate', 'segments' or 'segments_taper', "
                          f"got {GAPS!r}")
-    if DETREND not in ("mean", "line"):
-        raise ValueError(f"rhythm.DETREND must be 'mean' or 'line', got {DETREND!r}")
+    detrend = DETREND if detrend is None else detrend
+    if detrend not in ("mean", "line"):
+        raise ValueError(f"rhythm.DETREND must be 'mean' or 'line', got {detrend!r}")
     known = jnp.isfinite(intensity)
     if GAPS in ("segments", "segments_taper"):
-        x = remove_line(intensity, known) if DETREND == "line" else intensity
+        x = remove_line(intensity, known) if detrend == "line" else intensity
         x, nonconstant = normalise_window(x, known)
         return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS, known=known,
                             run_taper=GAPS == "segments_taper"), nonconstant
     x = fill_gaps(intensity, known)
-    x, nonconstant = normalise_window(remove_line(x) if DETREND == "line" else x)
+    x, nonconstant = normalise_window(remove_line(x) if detrend == "line" else x)
     return mem.spectrum(x, step, order, n_freqs=N_FREQS, n_peaks=N_PEAKS), nonconstant
 
 
@@ -239,6 +241,44 @@ def match(
             jnp.where(has, stride[pick], nan), jnp.where(has, r_best, nan))
 
 
+def judge_window(cfg: Config, intensity: Float[Array, " n"], step: Float[Array, ""],
+                 speed: Float[Array, ""], detrend: str | None = None):
+    """Sec. 4.1 and (13)-(15) on one window: its spectrum (`window_spectrum`, `step` s the
+    sample interval), the peaks' power in white-noise units (power / step: white noise of unit
+    variance has P = 1), S of (13) over every local maximum and `match` at `speed` m/s.
+    Returns (verdict, reason, pace Hz, stride m, ratio, peaks); a constant window has none."""
+    thr = cfg.thresholds
+    spec, nonconstant = window_spectrum(intensity, step, thr.m, detrend)
+    keep = lambda pk: pk.mask & nonconstant & spec.ok
+    white = lambda pk: mem.Peaks(pk.freq, jnp.where(keep(pk), pk.power / step, 0.0), keep(pk))
+    peaks = white(spec.peaks)
+    total = spectral_sum(white(mem.local_maxima(spec.psd, spec.freqs)), thr.p_thr)  # (13)
+    return (*match(peaks, speed, cfg.walking, thr, total), peaks)
+
+
+def judge_window_looks(cfg: Config, intensity: Float[Array, " n"], step: Float[Array, ""],
+                       speed: Float[Array, ""]):
+    """`judge_window` as the paper's, then rule 38 where `thresholds.trend_cycles` > 0: a window
+    not judged Pedestrian whose strongest peak completes fewer than trend_cycles cycles over
+    the window (F N step < trend_cycles: a trend of I(k), such as a walker's image growing as it
+    comes nearer, that normalisation makes swamp the gait's peak) is judged again with its
+    least-squares line removed (`window_spectrum`'s "line"); where that says Pedestrian, its
+    outcome and peaks replace the first with reason matched-detrended. Every other window keeps
+    the paper's outcome exactly. Same returns as `judge_window`."""
+    first = judge_window(cfg, intensity, step, speed)
+    cycles = cfg.thresholds.trend_cycles
+    if not cycles or DETREND == "line":  # off, or every window is detrended already
+        return first
+    second = judge_window(cfg, intensity, step, speed, "line")
+    peaks = first[5]
+    span = intensity.shape[0] * step  # s, the window's length
+    trend = (first[0] != Verdict.PEDESTRIAN) & peaks.mask[0] & (peaks.freq[0] * span < cycles)
+    take = trend & (second[0] == Verdict.PEDESTRIAN)
+    out = jax.tree.map(lambda a, b: jnp.where(take, b, a), first, second)
+    return (out[0], jnp.where(take, Reason.MATCHED_DETRENDED, out[1]).astype(out[1].dtype),
+            *out[2:])
+
+
 def classify_window(
     cfg: Config,
     intensity: Float[Array, " n"],
@@ -256,7 +296,6 @@ def classify_window(
     sets the reason). `speed` (m/s), when given, is the window's speed of (12) computed by the
     caller (`windows.theil_sen_speed`, the same value by a faster median) instead of
     `window_speed`."""
-    thr = cfg.thresholds
     n = intensity.shape[0]
     known = jnp.isfinite(intensity)
     n_missing = n - jnp.sum(known)
@@ -264,17 +303,12 @@ def classify_window(
     dt_med = jnp.median(dts)
     dt_ok = jnp.all(jnp.abs(dts - dt_med) <= MAX_DT_JITTER * dt_med) & (dt_med > 0)
     signal_ok = (n_missing <= MAX_MISSING_FRACTION * n) & dt_ok
-    spec, nonconstant = window_spectrum(intensity, jnp.where(dt_ok, dt_med, 1.0), thr.m)
-    white = lambda pk: mem.Peaks(pk.freq, jnp.where(  # power x white level (module doc)
-        pk.mask & nonconstant & spec.ok, pk.power / jnp.where(dt_ok, dt_med, 1.0), 0.0),
-        pk.mask & nonconstant & spec.ok)
-    peaks = white(spec.peaks)
-    total = spectral_sum(white(mem.local_maxima(spec.psd, spec.freqs)), thr.p_thr)  # (13)
     speed = window_speed(cfg, t, xy, observed) if speed is None else speed
-    verdict, reason, pace, stride, ratio = match(peaks, speed, cfg.walking, thr, total)
+    verdict, reason, pace, stride, ratio, peaks = judge_window_looks(
+        cfg, intensity, jnp.where(dt_ok, dt_med, 1.0), speed)
     bad = usable & ~signal_ok
     unclassified = ~usable | bad
-    nan = jnp.asarray(jnp.nan, spec.psd.dtype)
+    nan = jnp.asarray(jnp.nan, pace.dtype)
     return RhythmResult(
         verdict=jnp.where(unclassified, Verdict.UNCLASSIFIED, verdict).astype(jnp.int32),
         reason=jnp.where(bad, Reason.BAD_SIGNAL, reason).astype(jnp.int32),
