@@ -127,8 +127,8 @@ RULES = {
     "trend": ("config", ("thresholds", "trend_max_cycles"), 2.0, 0.0,
               TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",),
               "nothing fitted (2 cycles a window a priori: fewer is a trend, not a rhythm); the "
-              "case seen on own 20240603, 777001, 11, 12 (study_missed_walkers: 7 of 9 walkers "
-              "judged no-model-match had their strongest peak at 0.11-0.53 Hz)"),
+              "case seen on own 20240603, 777001, 11, 12 (study_missed_walkers: 8 of 9 walkers "
+              "judged no-model-match had a window whose strongest peak is at 0.11-0.53 Hz)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
