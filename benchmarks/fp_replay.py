@@ -15,7 +15,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from rhythmjax.model.candidates import strongest
+from rhythmjax.model.candidates import strongest, trend_min_hz
 from rhythmjax.model.rhythm import (
     MAX_MISSING_FRACTION,
     classify_window_candidates_jit,
@@ -69,7 +69,8 @@ def judge(cfg, obj, k: int, candidates: bool = True,
         every = _outcome(classify_window_candidates_jit(
             cfg, jnp.asarray(np.stack(sigs), jnp.float32), tt, xy, jnp.asarray(True), obs))
         outs = [{f: v[c] for f, v in every.items()} for c in range(len(sigs))]
-    merged, best = strongest([{f: v[None] for f, v in r.items()} for r in outs])
+    merged, best = strongest([{f: v[None] for f, v in r.items()} for r in outs],
+                             min_hz=trend_min_hz(cfg))
     return {f: np.asarray(merged[f][0]) for f in FIELDS}, int(best[0]), outs
 
 

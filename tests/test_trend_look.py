@@ -103,3 +103,30 @@ def test_the_key_is_checked(value):
 def test_the_key_round_trips_and_is_off_by_default():
     assert config_to_dict(Config())["thresholds"]["trend_max_cycles"] == 0.0
     assert config_to_dict(_cfg(2.5))["thresholds"]["trend_max_cycles"] == 2.5
+
+
+def test_candidates_compare_rhythms_not_trends():
+    """Rule 38b by hand. Window 0: candidate a (not Pedestrian) has a trend as its strongest
+    peak (0.2 Hz, power 40) and a weak gait peak (2.1 Hz, 3); b holds the gait (2.0 Hz, 15). The
+    paper's comparison takes a; with trend_max_cycles 2 (peaks below 2 x 15 / 64 = 0.469 Hz
+    left out) it takes b. Window 1: only trends: window B kept. Window 2: a is Pedestrian
+    though its strongest peak is a trend: the paper's choice stands."""
+    from rhythmjax.model.candidates import strongest, strongest_power, trend_min_hz
+
+    ped, non = int(Verdict.PEDESTRIAN), int(Verdict.NON_PEDESTRIAN)
+    a = {"peak_freq": np.array([[0.2, 2.1], [0.3, 0.0], [0.2, 2.1]]),
+         "peak_power": np.array([[40.0, 3.0], [30.0, 0.0], [40.0, 12.0]]),
+         "peak_mask": np.array([[True, True], [True, False], [True, True]]),
+         "verdict": np.array([non, non, ped])}
+    b = {"peak_freq": np.array([[2.0, 4.0], [0.4, 0.0], [2.0, 4.0]]),
+         "peak_power": np.array([[15.0, 2.0], [20.0, 0.0], [15.0, 2.0]]),
+         "peak_mask": np.array([[True, True], [True, False], [True, True]]),
+         "verdict": np.array([ped, non, ped])}
+    assert trend_min_hz(_cfg(0.0)) == 0.0
+    lo = trend_min_hz(_cfg(2.0))
+    assert lo == pytest.approx(2.0 * FPS / N)
+    np.testing.assert_array_equal(strongest_power(a, lo), [3.0, 0.0, 12.0])
+    assert strongest([a, b])[1].tolist() == [0, 0, 0]  # the trends win the paper's comparison
+    merged, chosen = strongest([a, b], min_hz=lo)
+    assert chosen.tolist() == [1, 0, 0]
+    assert merged["verdict"].tolist() == [ped, non, ped]

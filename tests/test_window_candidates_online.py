@@ -431,3 +431,34 @@ def test_rhythm_verb_writes_the_candidate_columns(tmp_path, capsys):
         cols = read_table(d / "tracks.parquet", ["intensity"], list(CANDIDATE_COLUMNS))
         assert not set(CANDIDATE_COLUMNS) & set(cols), d
         np.testing.assert_array_equal(cols["intensity"], t["intensity"])
+
+
+def test_a_trend_does_not_win_the_candidates(signals):
+    """Rule 38b in `match_window`: window B noise on a steep ramp (its strongest peak a trend,
+    under 2 cycles over the window), candidate 1 a weak 1.9 Hz sinusoid, candidates 2 and 3
+    noise. The
+    paper's comparison takes window B (the trend's peak is the strongest) and the window is not
+    Pedestrian; with `thresholds.trend_max_cycles` 2 the trend is left out and candidate 1
+    decides, with `classify_window_jit`'s outcome on it."""
+    from rhythmjax.model.params import config_from_dict, config_to_dict
+
+    (main, c2, c3), _ = signals
+    n = len(main)
+    t = np.arange(n) / float(CFG.camera.fps)
+    # a weak gait (P ~ 35) against the ramp's trend (P ~ 68): the trend wins the paper's choice
+    walk = 500 + 50 * np.sin(2 * np.pi * 1.9 * t) + 40 * np.random.default_rng(5).standard_normal(n)
+    ramp = main + 60.0 * np.arange(n)  # grey levels a frame
+    d = config_to_dict(CFG)
+    d["thresholds"]["trend_max_cycles"] = 2.0
+    trend_cfg = config_from_dict(d)
+    paper = _window_object(ramp, np.stack([walk, c2, c3], axis=1))
+    match_window(CFG, paper)
+    assert paper.result["candidate"] == 0
+    assert int(paper.result["verdict"]) != Verdict.PEDESTRIAN
+    assert float(paper.result["peak_freq"][0]) * n / CFG.camera.fps < 2.0
+    on = _window_object(ramp, np.stack([walk, c2, c3], axis=1))
+    match_window(trend_cfg, on)
+    assert on.result["candidate"] == 1
+    assert int(on.result["verdict"]) == Verdict.PEDESTRIAN
+    want = _alone(on, walk)
+    assert_same_outcome(on.result["pace_hz"], want["pace_hz"], "pace_hz")

@@ -17,6 +17,12 @@ A walker crossing the view has its feet a step apart (0.6-0.9 m), more than W = 
 sees one foot's swing at a time, the wide window both. Off by default: it read the own crossing
 walkers' pace better and the dev clips' worse (docs/rules.md, rule 34).
 
+Rule 38b (`thresholds.trend_max_cycles` > 0, `trend_min_hz`): a peak that completes fewer
+than that many cycles over the window is a trend, not a periodicity. Where the paper's choice
+is a window that is not Pedestrian and whose strongest peak is such a trend (a walker's image
+growing as it comes nearer), the candidates are compared again without the trend peaks, so that
+a candidate that holds the gait can win.
+
 Measured before it was built (docs/window_b.md, "candidate windows"): walkers with a Pedestrian
 window, today -> candidates, own seeds +1, +1, 0, 0; dev clips +2; PETS09 through the tracker +1;
 one dog more on one own training seed.
@@ -28,27 +34,41 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from .params import Config
 from .status import Verdict
 
 
-def strongest_power(result: Mapping[str, np.ndarray]) -> np.ndarray:
+def trend_min_hz(cfg: Config) -> float:
+    """The lowest frequency (Hz) `strongest` compares: `thresholds.trend_cycles` cycles over a
+    window of N samples at the camera's frame rate (rule 38b); 0 (every peak) when off."""
+    t = cfg.thresholds
+    return float(t.trend_cycles) * float(cfg.camera.fps) / t.n if t.trend_cycles else 0.0
+
+
+def strongest_power(result: Mapping[str, np.ndarray], min_hz: float = 0.0) -> np.ndarray:
     """Per window (leading axis), the power of its strongest peak of (13) (`peak_power` where
-    `peak_mask`), 0 where the spectrum has no peak."""
+    `peak_mask`) at `min_hz` Hz or above, 0 where the spectrum has no such peak."""
     power = np.asarray(result["peak_power"], np.float64)
     mask = np.asarray(result["peak_mask"], bool)
+    if min_hz > 0:
+        mask = mask & (np.asarray(result["peak_freq"], np.float64) >= min_hz)
     return np.max(np.where(mask, power, 0.0), axis=-1, initial=0.0)
 
 
 def strongest(results: Sequence[Mapping[str, np.ndarray]], *,
-              pace_last: bool = False) -> tuple[dict, np.ndarray]:
+              pace_last: bool = False, min_hz: float = 0.0) -> tuple[dict, np.ndarray]:
     """The per-window results of C candidates (dicts of NumPy arrays with a leading window axis,
     the same keys and shapes; `results[0]` the paper's window B) merged into one: per window the
     result of the candidate whose strongest peak is highest (the first such on ties, so the
     paper's window B wins a tie and a window without peaks keeps it). Returns the merged dict
     and the chosen candidate per window (int64, 0 = the paper's window). `pace_last`: the last
-    result is the pace window's (module doc), not a candidate."""
+    result is the pace window's (module doc), not a candidate. `min_hz` > 0 (rule 38b,
+    `trend_min_hz`): where the chosen candidate's window is not Pedestrian and its strongest
+    peak lies below `min_hz` (a trend), the candidates are compared again with the peaks below
+    `min_hz` left out (a window with none keeps window B); every other window keeps the paper's
+    choice."""
     if pace_last:
-        merged, best = strongest(results[:-1])
+        merged, best = strongest(results[:-1], min_hz=min_hz)
         pace = results[-1]
         take = ((np.asarray(merged["verdict"]) == Verdict.PEDESTRIAN)
                 & (np.asarray(pace["verdict"]) == Verdict.PEDESTRIAN))
@@ -62,5 +82,14 @@ def strongest(results: Sequence[Mapping[str, np.ndarray]], *,
     power = np.stack([strongest_power(r) for r in results])  # (C, W)
     best = np.argmax(power, axis=0)  # the first maximum: candidate 0 on ties
     cols = np.arange(power.shape[1])
-    merged = {k: np.stack([np.asarray(r[k]) for r in results])[best, cols] for k in results[0]}
+    stacked = {k: np.stack([np.asarray(r[k]) for r in results]) for k in results[0]}
+    if min_hz > 0:  # rule 38b: a refused window chosen for a trend is chosen again without it
+        chosen = {k: v[best, cols] for k, v in stacked.items()}
+        freq = np.asarray(chosen["peak_freq"], np.float64)
+        top = np.argmax(np.where(chosen["peak_mask"], chosen["peak_power"], -np.inf), axis=-1)
+        trend = (np.any(chosen["peak_mask"], axis=-1) & (freq[cols, top] < min_hz)
+                 & (np.asarray(chosen["verdict"]) != Verdict.PEDESTRIAN))
+        again = np.argmax(np.stack([strongest_power(r, min_hz) for r in results]), axis=0)
+        best = np.where(trend, again, best)
+    merged = {k: v[best, cols] for k, v in stacked.items()}
     return merged, best.astype(np.int64)

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .candidates import strongest
+from .candidates import strongest, trend_min_hz
 from .devices import Placement
 from .params import Config
 from .rhythm import N_PEAKS
@@ -140,7 +140,7 @@ def classify_candidates(cfg: Config, segs: Segments, seg: np.ndarray, j: np.ndar
         packed = np.concatenate([packed] + [segs.gather_packed(seg, j, c)[:1]
                                             for c in range(1, segs.n_candidates)])
     return strongest(classify_windows_packed_candidates(cfg, packed, place, block),
-                     pace_last=segs.pace_window)
+                     pace_last=segs.pace_window, min_hz=trend_min_hz(cfg))
 
 
 def classify_segments(cfg: Config, segs: Segments, place: Placement | None = None,

@@ -41,7 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import ekf_fused
-from .candidates import strongest
+from .candidates import strongest, trend_min_hz
 from .ekf import Carry, empty_carry
 from .gates import PaperGates
 from .params import Config
@@ -160,7 +160,7 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
         res, chosen = strongest([
             classify_window_rows(cfg, signals[..., c], dt[rows], xy[rows], observed[rows],
                                  block=min(window_chunk, WINDOW_BLOCK))
-            for c in range(signals.shape[-1])], pace_last=pace_last)
+            for c in range(signals.shape[-1])], pace_last=pace_last, min_hz=trend_min_hz(cfg))
         if second_look is not None:
             res = second_look(res, k0 + hop * j)
         res["candidate"] = chosen

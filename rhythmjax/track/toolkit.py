@@ -26,7 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..model.candidates import strongest
+from ..model.candidates import strongest, trend_min_hz
 from ..model.ekf import empty_carry
 from ..model.flat_tree import join, split
 from ..model.params import Config
@@ -232,7 +232,8 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
             cfg, jnp.asarray(np.stack(sigs), jnp.float32), *args[2:]))
         merged, best = strongest([{f: v[c][None] for f, v in every.items()}
                                   for c in range(len(sigs))],
-                                 pace_last=getattr(obj, "pace_window", False))
+                                 pace_last=getattr(obj, "pace_window", False),
+                                 min_hz=trend_min_hz(cfg))
         out = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}
         chosen = int(best[0])
     look = getattr(obj, "second_look", None)
