@@ -137,7 +137,7 @@ def window_spectrum(intensity: Float[Array, " n"], step: Float[Array, ""], order
                          f"got {GAPS!r}")
     detrend = DETREND if detrend is None else detrend
     if detrend not in ("mean", "line"):
-        raise ValueError(f"rhythm.DETREND must be 'mean' or 'line', got {detrend!r}")
+        raise ValueError(f"detrend (or rhythm.DETREND) must be 'mean' or 'line', got {detrend!r}")
     known = jnp.isfinite(intensity)
     if GAPS in ("segments", "segments_taper"):
         x = remove_line(intensity, known) if detrend == "line" else intensity

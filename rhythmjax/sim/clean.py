@@ -64,18 +64,21 @@ def hidden_fractions(scene: Scene, *, window_m: float = WINDOW_M,
               & (v <= H - 1) & (fy >= range_m[0]) & (fy <= range_m[1]))
         foot.append((u, v, np.abs(ur - ul), ok))
     frac = np.full((n, T), np.nan)
+    mask = np.zeros((H, Wd), np.uint8)  # one actor's silhouette, redrawn per actor and frame
     for k in range(T):
         live = sorted((i for i in range(n) if paths[i][0][k]), key=lambda i: -paths[i][3][k])
         if not any(foot[i][3][k] for i in live):
             continue
         nearer = np.zeros((H, Wd), np.uint8)  # union of the silhouettes drawn after the current
-        for i in reversed(live):  # nearest first
+        for j, i in enumerate(reversed(live)):  # nearest first
             u, v, w, ok = foot[i]
             if ok[k]:
                 x0, y0, x1, y1 = window_b_rect((H, Wd), float(u[k]), float(v[k]), float(w[k]))
                 if x1 > x0 and y1 > y0:
                     frac[i, k] = float(np.mean(nearer[y0:y1, x0:x1] >= HIDDEN_LEVEL))
-            mask = np.zeros((H, Wd), np.uint8)
+            if j == len(live) - 1:  # the farthest: no one behind it to hide
+                break
+            mask[:] = 0
             act = spec.actors[i]
             draw_actor(mask, host, afs, act.kind, attrs[i], float(paths[i][1][k]),
                        float(paths[i][2][k]), float(paths[i][3][k]), act.heading_rad, fill=255)
