@@ -61,6 +61,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - trend: `thresholds.trend_max_cycles` 2 vs 0 (rule 38: a window not judged Pedestrian whose
   strongest peak completes fewer than 2 cycles over the window, a trend, judged again with its
   least-squares line removed; every classifier, tracker and count alike).
+- hop4: rhythm windows every N/4 samples (rule 39) vs N/2 (the default), each source's own N
+  (patched in this process as hop's OFF side is, and written as a number for `rhythm --boxes`).
 - count_twice: counting's `verdicts.twice_pace_heights` 0.57 vs 0 (rule 37 in the batch
   classifier that judges count's tracks, heights from the tracks' v_top).
 - twice_edge: the tracker's `size.twice_pace_edge` True vs False (rule 37b: rule 37's height
@@ -151,11 +153,24 @@ def _patch_count(changes: dict) -> None:
     cnt.count_frames = count_frames
 
 
-def _patch_hop_n() -> None:
-    """Back-to-back windows (the paper) everywhere in this process: hop = N."""
-    from rhythmjax.model.params import Thresholds
+def _patch_hop_n(divisor: int = 1) -> None:
+    """Windows every N // divisor samples everywhere in this process (1: back-to-back, the
+    paper; 4: rule 39), and `rhythm --boxes` (a subprocess) given that hop as a number."""
+    import eval_all as ea
 
-    Thresholds.hop_samples = property(lambda self: self.n)
+    from rhythmjax.model.params import Thresholds, config_from_dict
+
+    Thresholds.hop_samples = property(lambda self: max(1, self.n // divisor))
+    base = ea.apply_set
+
+    def apply_set(d, s):
+        out = base(d, s)
+        if "fps" in out.get("camera", {}):  # PETS's Tsai section and the dev clips carry it
+            out.setdefault("thresholds", {})["window_hop_samples"] = max(
+                1, config_from_dict(out).thresholds.n // divisor)
+        return out
+
+    ea.apply_set = apply_set
 
 
 def count_clip(cfg, frames, truth, kinds, offset) -> dict:
@@ -223,20 +238,9 @@ def run(rule: str, state: str, only, quick: bool, outdir: Path, seeds=None) -> P
 
             PedestrianLevel._still = lambda self, p: False
         elif kind == "hop" and state == "off":
-            _patch_hop_n()
-            # `rhythm --boxes` runs in a subprocess: give it PETS's N as a number
-            from rhythmjax.model.params import config_from_dict
-            base = ea.apply_set
-
-            def apply_set(d, s):
-                out = base(d, s)
-                cam = out.get("camera", {})
-                if "fps" in cam:  # PETS's Tsai section and the dev clips carry their fps
-                    out.setdefault("thresholds", {})["window_hop_samples"] = \
-                        config_from_dict(out).thresholds.n
-                return out
-
-            ea.apply_set = apply_set
+            _patch_hop_n(1)
+        elif kind == "hop4" and state == "on":
+            _patch_hop_n(4)
     names = only or (RULES[rule][4] if rule in RULES else ea.SOURCES)
     log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
     path = outdir / (f"{rule}-{state}.json" if not seeds else

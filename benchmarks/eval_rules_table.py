@@ -129,6 +129,10 @@ RULES = {
               "nothing fitted (2 cycles a window a priori: fewer is a trend, not a rhythm); the "
               "case seen on own 20240603, 777001, 11, 12 (study_missed_walkers: 8 of 9 walkers "
               "judged no-model-match had a window whose strongest peak is at 0.11-0.53 Hz)"),
+    "hop4": ("hop4", None, "N/4", "N/2", TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",),
+             "nothing fitted (N/4 halves again the kept N/2, a priori); found on used seeds "
+             "3110001-3140001, 3300001-3350001 (study_rescue_windows: most missed walkers' "
+             "tracks give one window)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -152,7 +156,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES,
               "twice_pace": TRACKER_SOURCES, "count_twice": COUNT_SOURCES,
               "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES,
-              "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (),
+              "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (), "hop4": (),
               "count_twice_fitted": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
