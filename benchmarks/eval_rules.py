@@ -63,6 +63,9 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   least-squares line removed; every classifier, tracker and count alike).
 - hop4: rhythm windows every N/4 samples (rule 39) vs N/2 (the default), each source's own N
   (patched in this process as hop's OFF side is, and written as a number for `rhythm --boxes`).
+- tail: a tail window (rule 40; a tracker patch, tracker sources only): a track that ends with
+  no Pedestrian window has its last N rows judged too where they start after its last judged
+  window, against today (no tail window).
 - count_twice: counting's `verdicts.twice_pace_heights` 0.57 vs 0 (rule 37 in the batch
   classifier that judges count's tracks, heights from the tracks' v_top).
 - twice_edge: the tracker's `size.twice_pace_edge` True vs False (rule 37b: rule 37's height
@@ -137,6 +140,32 @@ def _patch_tracker(changes: dict) -> None:
                      **k)
 
     tr.track_frames = track_frames
+
+
+def _patch_tail_window() -> None:
+    """Rule 40 as a tracker patch (measured before it is built): when a track ends with no
+    Pedestrian window and its last N rows start after its last judged window, those N rows
+    are judged too (at most N/4 of them missing), as `track.toolkit.match_window` judges any
+    window (`track.tracker` calls it with final=True at a track's end)."""
+    import math
+
+    import rhythmjax.track.tracker as trk
+    from rhythmjax.model.rhythm import MAX_MISSING_FRACTION
+
+    inner = trk.match_window
+
+    def match_window(cfg, obj, *, final=False, **kw):
+        n, hop = cfg.thresholds.n, cfg.thresholds.hop_samples
+        k = len(obj.rows) - n
+        if final and obj.result is not None and not obj.decided and k > obj.win_start - hop:
+            missing = sum(not math.isfinite(r.intensity) for r in obj.rows[k:])
+            if missing <= MAX_MISSING_FRACTION * n:
+                obj.win_start = k
+                inner(cfg, obj, **kw)
+            return None
+        return inner(cfg, obj, final=final, **kw)
+
+    trk.match_window = match_window
 
 
 def _patch_count(changes: dict) -> None:
@@ -241,6 +270,8 @@ def run(rule: str, state: str, only, quick: bool, outdir: Path, seeds=None) -> P
             _patch_hop_n(1)
         elif kind == "hop4" and state == "on":
             _patch_hop_n(4)
+        elif kind == "tail" and state == "on":
+            _patch_tail_window()
     names = only or (RULES[rule][4] if rule in RULES else ea.SOURCES)
     log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
     path = outdir / (f"{rule}-{state}.json" if not seeds else
