@@ -1,0 +1,142 @@
+"""Where window B should sit on a walker: the tracker's rhythm windows judged again with window
+B at other placements (issue 16 item 2, forty-second round; a study, nothing chosen).
+
+Behind truth boxes the classifier judges more own walkers Pedestrian than the tracker does
+(`study_tracker_gap.py`). Part of the difference is tracking (fragments, close passes); this
+measures the rest: window B's placement in the very rows and frames the tracker judged. Per own
+scene of `eval_synthetic.scene_specs` (radial), tracked as `study_rescue_windows.py` tracks and
+caches it (``-d DIR``), each classifiable walker's (`sim.clean`) longest assigned track of N
+rows or more is replayed (`fp_replay.replay`, every window, the candidates) with I(k) and the
+candidate windows' I(k) recomputed from the tracker's difference images
+(`eval_window_b.differences`) at each placement, W the walker width at the placement's foot
+point (`vision.window_b.walker_width_px`):
+- `tracker`: the tracker's measured foot point (u, v) (a self-check: I(k) there against the
+  tracker's own, which used W at its filtered ground point, so close, not equal);
+- `box`: the truth box's bottom centre, as `rhythm --boxes` takes it (`eval_count.truth_boxes`:
+  the body's ground point's column, the silhouette's lowest row);
+- `tracker column, box row` and `box column, tracker row`: one coordinate from each;
+- `filter column, tracker row`: the column of the EKF's ground estimate (x_est, y_est)
+  projected by (3), the row measured.
+Printed per placement: walkers with a window judged Pedestrian, and the median over walkers of
+the best window's strongest-peak P. Rows the tracker left unsampled (NaN) stay unsampled.
+
+    python benchmarks/study_window_placement.py 3380001,3390001,3400001,3410001 [-d /tmp/rescue]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+
+sys.path.insert(0, os.path.dirname(__file__))
+
+PLACEMENTS = ("tracker", "box", "tracker column, box row", "box column, tracker row",
+              "filter column, tracker row")
+
+
+def strongest_power(out: dict) -> float:
+    """The power of an outcome's strongest peak (0: none)."""
+    p, m = np.asarray(out["peak_power"]), np.asarray(out["peak_mask"])
+    return float(np.max(np.where(m, p, 0.0), initial=0.0))
+
+
+def box_feet(mot: dict, actor_id: int) -> dict[int, tuple[float, float]]:
+    """{frame: (u, v) px} of one object's truth boxes as `track.boxes.foot_points` reads a box:
+    its bottom centre."""
+    out = {}
+    for f, i, left, top, w, h in zip(mot["frame"], mot["id"], mot["bb_left"], mot["bb_top"],
+                                     mot["bb_width"], mot["bb_height"]):
+        if int(i) == actor_id:
+            out[int(f)] = (float(left) + float(w) / 2 - 0.5, float(top) + float(h) - 1.0)
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("seeds")
+    p.add_argument("--scenes", type=int, default=10)
+    p.add_argument("-d", "--cache", default="/tmp/study_rescue")
+    a = p.parse_args(argv)
+
+    import eval_count as ec
+    import eval_synthetic as es
+    from eval_window_b import differences
+    from fp_replay import replay
+    from study_rescue_windows import walker_tracks
+
+    from rhythmjax.io.files import WINDOW_CANDIDATES
+    from rhythmjax.model.camera_np import camera_tuple, project_3d
+    from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.clean import classifiable
+    from rhythmjax.sim.presets import synthetic_options
+    from rhythmjax.sim.scene import render_scene
+    from rhythmjax.vision.window_b import walker_width_px, window_b_candidates, window_b_intensity
+
+    cfg, opt = config_from_dict(es.RECOMMENDED), synthetic_options()
+    n, camera = int(cfg.thresholds.n), camera_tuple(cfg.camera)
+    offsets = tuple(off for _, off in WINDOW_CANDIDATES)
+    none = (math.nan,) * len(offsets)
+    best = {k: [] for k in PLACEMENTS}
+    judged = dict.fromkeys(PLACEMENTS, 0)
+    check = []
+    for seed in (int(s) for s in a.seeds.split(",") if s):
+        specs = es.scene_specs(seed, a.scenes, camera=cfg.camera)
+        by_scene: dict[int, list] = {}
+        for idx, truth, obj in walker_tracks(cfg, seed, a.scenes, False, Path(a.cache)):
+            by_scene.setdefault(idx, []).append((truth, obj))
+        for idx, walkers in sorted(by_scene.items()):
+            scene = render_scene(*specs[idx])
+            D = differences(scene.frames, opt)
+            mot, _ = ec.truth_boxes(scene)
+            clean = classifiable(scene, n=n)
+            names = [t.track_id for t in scene.truth]
+            for truth, obj in walkers:
+                if not clean[truth.track_id][1]:
+                    continue
+                feet = box_feet(mot, names.index(truth.track_id) + 1)
+                for place in PLACEMENTS:
+                    rows, cands = [], []
+                    for r in obj.rows:
+                        bu, bv = feet.get(int(r.frame), (math.nan, math.nan))
+                        fu = float(project_3d(camera, r.x_est, r.y_est, 0.0)[0])
+                        u, v = {"tracker": (r.u, r.v), "box": (bu, bv),
+                                "tracker column, box row": (r.u, bv),
+                                "box column, tracker row": (bu, r.v),
+                                "filter column, tracker row": (fu, r.v)}[place]
+                        Dk = D[int(r.frame)]
+                        if (Dk is None or not math.isfinite(r.intensity)
+                                or not (math.isfinite(u) and math.isfinite(v))):
+                            rows.append(r._replace(intensity=math.nan))
+                            cands.append(none)
+                            continue
+                        W = walker_width_px(cfg.camera, cfg.width, u, v)
+                        intensity = window_b_intensity(Dk, u, v, W)
+                        if place == "tracker":
+                            check.append(abs(intensity - r.intensity) / max(1.0, r.intensity))
+                        rows.append(r._replace(intensity=intensity))
+                        cands.append(window_b_candidates(Dk, u, v, W, offsets))
+                    moved = SimpleNamespace(track_id=obj.track_id, rows=rows,
+                                            candidate_rows=cands, result=None, vel=obj.vel)
+                    windows = replay(cfg, moved, stop=False)
+                    best[place].append(max((strongest_power(w["out"]) for w in windows),
+                                           default=0.0))
+                    judged[place] += any(w["ped"] for w in windows)
+    print(f"classifiable walkers with a track of N rows or more: {len(best['tracker'])}; "
+          f"I(k) at the tracker's point against its own: median relative difference "
+          f"{np.median(check):.3f}, 90th percentile {np.quantile(check, 0.9):.3f}")
+    print("| window B at | walkers with a Pedestrian window | median best P |")
+    print("|---|---|---|")
+    for place in PLACEMENTS:
+        print(f"| {place} | {judged[place]} | {np.median(best[place]):.1f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
