@@ -16,7 +16,10 @@ point (`vision.window_b.walker_width_px`):
   the body's ground point's column, the silhouette's lowest row);
 - `tracker column, box row` and `box column, tracker row`: one coordinate from each;
 - `filter column, tracker row`: the column of the EKF's ground estimate (x_est, y_est)
-  projected by (3), the row measured.
+  projected by (3), the row measured;
+- `tracker, column moved half a frame's motion`: the measured point with u moved by half the
+  filter's column change since the previous row (the motion image's extent is the union of
+  the object's two positions, so u_p lags the object by du/2: `vision.detect`'s doc).
 Printed per placement: walkers with a window judged Pedestrian, and the median over walkers of
 the best window's strongest-peak P. Rows the tracker left unsampled (NaN) stay unsampled.
 
@@ -38,7 +41,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 
 PLACEMENTS = ("tracker", "box", "tracker column, box row", "box column, tracker row",
-              "filter column, tracker row")
+              "filter column, tracker row", "tracker, column moved half a frame's motion")
 
 
 def strongest_power(out: dict) -> float:
@@ -103,13 +106,18 @@ def main(argv=None) -> int:
                 feet = box_feet(mot, names.index(truth.track_id) + 1)
                 for place in PLACEMENTS:
                     rows, cands = [], []
+                    prev_fu = math.nan
                     for r in obj.rows:
                         bu, bv = feet.get(int(r.frame), (math.nan, math.nan))
                         fu = float(project_3d(camera, r.x_est, r.y_est, 0.0)[0])
+                        half = 0.5 * (fu - prev_fu) if math.isfinite(prev_fu) else 0.0
+                        prev_fu = fu
                         u, v = {"tracker": (r.u, r.v), "box": (bu, bv),
                                 "tracker column, box row": (r.u, bv),
                                 "box column, tracker row": (bu, r.v),
-                                "filter column, tracker row": (fu, r.v)}[place]
+                                "filter column, tracker row": (fu, r.v),
+                                "tracker, column moved half a frame's motion":
+                                    (r.u + half, r.v)}[place]
                         Dk = D[int(r.frame)]
                         if (Dk is None or not math.isfinite(r.intensity)
                                 or not (math.isfinite(u) and math.isfinite(v))):
