@@ -66,6 +66,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - tail: a tail window (rule 40; a tracker patch, tracker sources only): a track that ends with
   no Pedestrian window has its last N rows judged too where they start after its last judged
   window, against today (no tail window).
+- lean: the tracker's `body.lean_column` True vs False (rule 41: window B's column moved by the
+  lean of an upright body at half its height, `track.lean`).
 - count_twice: counting's `verdicts.twice_pace_heights` 0.57 vs 0 (rule 37 in the batch
   classifier that judges count's tracks, heights from the tracks' v_top).
 - twice_edge: the tracker's `size.twice_pace_edge` True vs False (rule 37b: rule 37's height

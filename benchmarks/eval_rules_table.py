@@ -136,6 +136,9 @@ RULES = {
     "tail": ("tail", None, "tail window", "none", TRACKER_SOURCES,
              "nothing fitted (the paper's N rows, no constant); found on used seeds "
              "2930001-2960001, 3110001-3140001, 3300001-3330001, 3380001-3410001 (replay)"),
+    "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
+             "nothing fitted (half the config's walker height, a priori); found on used seeds "
+             "3300001-3330001, 3380001-3410001 (study_window_placement)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -159,8 +162,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "pace_window": (), "window_per_pixel": (), "top_inside": TRACKER_SOURCES,
               "twice_pace": TRACKER_SOURCES, "count_twice": COUNT_SOURCES,
               "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES,
-              "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (), "hop4": (), "tail": (),
-              "count_twice_fitted": ()}
+              "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (), "hop4": (),
+              "tail": (), "lean": (), "count_twice_fitted": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -19,7 +19,11 @@ point (`vision.window_b.walker_width_px`):
   projected by (3), the row measured;
 - `tracker, column moved half a frame's motion`: the measured point with u moved by half the
   filter's column change since the previous row (the motion image's extent is the union of
-  the object's two positions, so u_p lags the object by du/2: `vision.detect`'s doc).
+  the object's two positions, so u_p lags the object by du/2: `vision.detect`'s doc);
+- `tracker, column less the half-height lean`: the measured point with u moved by u(0) -
+  u(H/2), the column of the ground point under (u, v) less that of the point half a walker's
+  height H above it, both through (3) (an upright body seen off the image's centre leans
+  outwards; the motion's horizontal extent spans its upper parts too).
 Printed per placement: walkers with a window judged Pedestrian, and the median over walkers of
 the best window's strongest-peak P. Rows the tracker left unsampled (NaN) stay unsampled.
 
@@ -41,7 +45,8 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 
 PLACEMENTS = ("tracker", "box", "tracker column, box row", "box column, tracker row",
-              "filter column, tracker row", "tracker, column moved half a frame's motion")
+              "filter column, tracker row", "tracker, column moved half a frame's motion",
+              "tracker, column less the half-height lean")
 
 
 def strongest_power(out: dict) -> float:
@@ -75,7 +80,7 @@ def main(argv=None) -> int:
     from study_rescue_windows import walker_tracks
 
     from rhythmjax.io.files import WINDOW_CANDIDATES
-    from rhythmjax.model.camera_np import camera_tuple, project_3d
+    from rhythmjax.model.camera_np import camera_tuple, ground_of_pixels, project_3d
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.sim.clean import classifiable
     from rhythmjax.sim.presets import synthetic_options
@@ -84,6 +89,7 @@ def main(argv=None) -> int:
 
     cfg, opt = config_from_dict(es.RECOMMENDED), synthetic_options()
     n, camera = int(cfg.thresholds.n), camera_tuple(cfg.camera)
+    walker_m = float(cfg.width.height)
     offsets = tuple(off for _, off in WINDOW_CANDIDATES)
     none = (math.nan,) * len(offsets)
     best = {k: [] for k in PLACEMENTS}
@@ -112,12 +118,18 @@ def main(argv=None) -> int:
                         fu = float(project_3d(camera, r.x_est, r.y_est, 0.0)[0])
                         half = 0.5 * (fu - prev_fu) if math.isfinite(prev_fu) else 0.0
                         prev_fu = fu
+                        gx, gy, on_ground = ground_of_pixels(camera, r.u, r.v)
+                        lean = (float(project_3d(camera, gx, gy, 0.5 * walker_m)[0])
+                                - float(project_3d(camera, gx, gy, 0.0)[0])
+                                if on_ground else math.nan)
                         u, v = {"tracker": (r.u, r.v), "box": (bu, bv),
                                 "tracker column, box row": (r.u, bv),
                                 "box column, tracker row": (bu, r.v),
                                 "filter column, tracker row": (fu, r.v),
                                 "tracker, column moved half a frame's motion":
-                                    (r.u + half, r.v)}[place]
+                                    (r.u + half, r.v),
+                                "tracker, column less the half-height lean":
+                                    (r.u - lean, r.v)}[place]
                         Dk = D[int(r.frame)]
                         if (Dk is None or not math.isfinite(r.intensity)
                                 or not (math.isfinite(u) and math.isfinite(v))):

@@ -36,6 +36,7 @@ TRACKER_DEFAULTS = [
     ("sample_estimate", "body.sample_estimate", False),
     ("high_foot_widths", "body.high_foot_widths", 0.0),
     ("(new: issue 16, rule 16)", "body.side_anchor", False),  # a side-cut detection, off
+    ("(new: issue 16, rule 41)", "body.lean_column", False),  # window B under the body, off
     ("high_foot_frames", "body.high_foot_frames", 3),
     ("(new: issue 16 item 2)", "body.window_candidates", True),
     ("(new: issue 16, rule 34)", "body.pace_window_widths", 0.0),

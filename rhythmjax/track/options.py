@@ -106,6 +106,11 @@ class BodyOptions:
     # on sources it was not chosen on it cost walkers (PETS09 13 -> 11 of 19, UCSD 36 -> 34
     # tracks, own seed 999001 30 -> 28 of 35) and judged a non-walker more Pedestrian on own
     # seeds 777001 and 888001; it gained one dev walker (docs/rules.md)
+    lean_column: bool = False  # rule 41: window B's column (and the candidates') on a measured
+    # frame moved by u(0) - u(H/2) at the ground point of the foot point, H the config's walker
+    # height: an upright body off the image's centre leans outwards, and the motion's extent
+    # (u_p its centre) spans it from the feet to the head (track/lean.py). Off: the paper's u_p
+    # (docs/rules.md, rule 41)
     side_anchor: bool = False  # a detection whose box reaches the image's left or right side
     # and is narrower than W has its foot column placed W/2 from its inner edge (track/sides.py):
     # a walker entering or leaving is measured at its own centre, not at its visible part's.

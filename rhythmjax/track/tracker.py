@@ -35,6 +35,7 @@ from ..vision import detect, stabilise
 from ..vision.window_b import window_b_extras
 from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
+from .lean import lean_px
 from .options import TrackerOptions
 from .recheck import earlier_switch_row, keep_rows, switch_row
 from .rows import NAN_VELOCITY, TrackRow, Velocity
@@ -103,6 +104,7 @@ class OnlineTracker:
         self.relinked = 0  # tracks continued by `_relink`
         self.switches = 0  # tracks split by `_split_at_switch` (rule 29)
         self._camera = camera_tuple(cfg.camera)
+        self._walker_m = host_float(cfg.width.height)  # rule 41's body height (m)
         self._look = second_look(cfg, self._camera, self.opt.size)  # rule 37
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
@@ -319,6 +321,8 @@ class OnlineTracker:
         fu, fv = (z if measured and not self.opt.body.sample_estimate else est_uv)
         if measured and not self.opt.body.sample_estimate:
             fu = fu + sample_du  # a side-cut detection: window B on its visible feet
+            if self.opt.body.lean_column:  # rule 41: under the body, not its leaning extent
+                fu = fu - lean_px(self._camera, float(z[0]), float(z[1]), self._walker_m)
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         per_pixel = self.opt.body.window_per_pixel  # rule 35
         intensity = (math.nan if no_sample or D is None
@@ -404,7 +408,7 @@ class OnlineTracker:
             for o in list(self._finished):
                 self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
-        walker_m = host_float(self.cfg.width.height)
+        walker_m = self._walker_m
         for o in objs:  # rule 26: a Pedestrian too low for a walker (off by default)
             if o.result is not None:
                 o.result = refuse_low(o.result, self._camera, o.rows, walker_m, self.opt.size)
