@@ -23,7 +23,12 @@ point (`vision.window_b.walker_width_px`):
 - `tracker, column less the half-height lean`: the measured point with u moved by u(0) -
   u(H/2), the column of the ground point under (u, v) less that of the point half a walker's
   height H above it, both through (3) (an upright body seen off the image's centre leans
-  outwards; the motion's horizontal extent spans its upper parts too).
+  outwards; the motion's horizontal extent spans its upper parts too);
+- `tracker, column of the motion's lower half`: the measured row, u the centre of the slice
+  extent (`body.slice_fraction` of the maximum) of the motion image's vertical projection over
+  the lower half of the measured box (rows from halfway between its top row v_top and v down
+  to v; columns u -+ width/2, 2 px more each side): the legs' columns, where the lean is small
+  and the arms do not reach.
 Printed per placement: walkers with a window judged Pedestrian, and the median over walkers of
 the best window's strongest-peak P. Rows the tracker left unsampled (NaN) stay unsampled.
 
@@ -46,7 +51,8 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 PLACEMENTS = ("tracker", "box", "tracker column, box row", "box column, tracker row",
               "filter column, tracker row", "tracker, column moved half a frame's motion",
-              "tracker, column less the half-height lean")
+              "tracker, column less the half-height lean",
+              "tracker, column of the motion's lower half")
 
 
 def strongest_power(out: dict) -> float:
@@ -64,6 +70,25 @@ def box_feet(mot: dict, actor_id: int) -> dict[int, tuple[float, float]]:
         if int(i) == actor_id:
             out[int(f)] = (float(left) + float(w) / 2 - 0.5, float(top) + float(h) - 1.0)
     return out
+
+
+def lower_half_column(M: np.ndarray, u: float, v: float, width: float, v_top: float,
+                      fraction: float) -> float:
+    """The centre (px) of the columns whose motion over the lower half of the box (rows
+    round((v + v_top) / 2) .. round(v), columns u -+ (width / 2 + 2)) reaches `fraction` of the
+    largest column's; u itself where the box or its motion is empty or v_top is not finite."""
+    if not all(math.isfinite(q) for q in (u, v, width, v_top)):
+        return u
+    r0, r1 = max(int(round(0.5 * (v + v_top))), 0), min(int(round(v)), M.shape[0] - 1)
+    c0 = max(int(math.floor(u - width / 2 - 2)), 0)
+    c1 = min(int(math.ceil(u + width / 2 + 2)), M.shape[1] - 1)
+    if r1 < r0 or c1 < c0:
+        return u
+    cols = M[r0:r1 + 1, c0:c1 + 1].sum(axis=0, dtype=np.int64)
+    if cols.max() <= 0:
+        return u
+    idx = np.flatnonzero(cols >= fraction * cols.max())
+    return c0 + 0.5 * (idx[0] + idx[-1])
 
 
 def main(argv=None) -> int:
@@ -85,6 +110,7 @@ def main(argv=None) -> int:
     from rhythmjax.sim.clean import classifiable
     from rhythmjax.sim.presets import synthetic_options
     from rhythmjax.sim.scene import render_scene
+    from rhythmjax.vision.detect import motion_from_diff
     from rhythmjax.vision.window_b import walker_width_px, window_b_candidates, window_b_intensity
 
     cfg, opt = config_from_dict(es.RECOMMENDED), synthetic_options()
@@ -103,6 +129,8 @@ def main(argv=None) -> int:
         for idx, walkers in sorted(by_scene.items()):
             scene = render_scene(*specs[idx])
             D = differences(scene.frames, opt)
+            M = [None if d is None else motion_from_diff(
+                d, diff_threshold=opt.motion.diff_threshold) for d in D]
             mot, _ = ec.truth_boxes(scene)
             clean = classifiable(scene, n=n)
             names = [t.track_id for t in scene.truth]
@@ -129,7 +157,11 @@ def main(argv=None) -> int:
                                 "tracker, column moved half a frame's motion":
                                     (r.u + half, r.v),
                                 "tracker, column less the half-height lean":
-                                    (r.u - lean, r.v)}[place]
+                                    (r.u - lean, r.v),
+                                "tracker, column of the motion's lower half":
+                                    (r.u if M[int(r.frame)] is None else lower_half_column(
+                                        M[int(r.frame)], r.u, r.v, r.width_px, r.v_top,
+                                        opt.body.slice_fraction), r.v)}[place]
                         Dk = D[int(r.frame)]
                         if (Dk is None or not math.isfinite(r.intensity)
                                 or not (math.isfinite(u) and math.isfinite(v))):
