@@ -35,7 +35,7 @@ from ..vision import detect, stabilise
 from ..vision.window_b import window_b_extras
 from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
-from .lean import lean_px
+from .lean import window_b_foot
 from .options import TrackerOptions
 from .recheck import earlier_switch_row, keep_rows, switch_row
 from .rows import NAN_VELOCITY, TrackRow, Velocity
@@ -318,11 +318,8 @@ class OnlineTracker:
             obj.state = TrackState.PREDICT
             obj.predict_time += 0.0 if held else dt
         measured = bool(np.all(np.isfinite(z)))
-        fu, fv = (z if measured and not self.opt.body.sample_estimate else est_uv)
-        if measured and not self.opt.body.sample_estimate:
-            fu = fu + sample_du  # a side-cut detection: window B on its visible feet
-            if self.opt.body.lean_column:  # rule 41: under the body, not its leaning extent
-                fu = fu - lean_px(self._camera, float(z[0]), float(z[1]), self._walker_m)
+        fu, fv = window_b_foot(z, est_uv, measured, sample_du, self.opt.body, self._camera,
+                               self._walker_m)  # rules 16 and 41 on a measured frame
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         per_pixel = self.opt.body.window_per_pixel  # rule 35
         intensity = (math.nan if no_sample or D is None
@@ -408,10 +405,9 @@ class OnlineTracker:
             for o in list(self._finished):
                 self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
-        walker_m = self._walker_m
         for o in objs:  # rule 26: a Pedestrian too low for a walker (off by default)
             if o.result is not None:
-                o.result = refuse_low(o.result, self._camera, o.rows, walker_m, self.opt.size)
+                o.result = refuse_low(o.result, self._camera, o.rows, self._walker_m, self.opt.size)
         return (tracks_columns(objs, candidates=self._offsets is not None,
                                pace=self._pace_scale > 0),
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
