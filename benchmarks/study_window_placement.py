@@ -22,8 +22,9 @@ point (`vision.window_b.walker_width_px`):
   the object's two positions, so u_p lags the object by du/2: `vision.detect`'s doc);
 - `tracker, column less the half-height lean`: the measured point with u moved by u(0) -
   u(H/2), the column of the ground point under (u, v) less that of the point half a walker's
-  height H above it, both through (3) (an upright body seen off the image's centre leans
-  outwards; the motion's horizontal extent spans its upper parts too);
+  height H above it, both through (3) (rule 41's `track.lean.lean_px`: an upright body seen
+  off the image's centre leans outwards; the motion's horizontal extent spans its upper parts
+  too);
 - `tracker, column of the motion's lower half`: the measured row, u the centre of the slice
   extent (`body.slice_fraction` of the maximum) of the motion image's vertical projection over
   the lower half of the measured box (rows from halfway between its top row v_top and v down
@@ -105,11 +106,12 @@ def main(argv=None) -> int:
     from study_rescue_windows import walker_tracks
 
     from rhythmjax.io.files import WINDOW_CANDIDATES
-    from rhythmjax.model.camera_np import camera_tuple, ground_of_pixels, project_3d
+    from rhythmjax.model.camera_np import camera_tuple, project_3d
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.sim.clean import classifiable
     from rhythmjax.sim.presets import synthetic_options
     from rhythmjax.sim.scene import render_scene
+    from rhythmjax.track.lean import lean_px
     from rhythmjax.vision.detect import motion_from_diff
     from rhythmjax.vision.window_b import walker_width_px, window_b_candidates, window_b_intensity
 
@@ -146,10 +148,7 @@ def main(argv=None) -> int:
                         fu = float(project_3d(camera, r.x_est, r.y_est, 0.0)[0])
                         half = 0.5 * (fu - prev_fu) if math.isfinite(prev_fu) else 0.0
                         prev_fu = fu
-                        gx, gy, on_ground = ground_of_pixels(camera, r.u, r.v)
-                        lean = (float(project_3d(camera, gx, gy, 0.5 * walker_m)[0])
-                                - float(project_3d(camera, gx, gy, 0.0)[0])
-                                if on_ground else math.nan)
+                        lean = lean_px(camera, r.u, r.v, walker_m)  # rule 41's
                         u, v = {"tracker": (r.u, r.v), "box": (bu, bv),
                                 "tracker column, box row": (r.u, bv),
                                 "box column, tracker row": (bu, r.v),
