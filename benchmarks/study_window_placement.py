@@ -56,21 +56,16 @@ PLACEMENTS = ("tracker", "box", "tracker column, box row", "box column, tracker 
               "tracker, column of the motion's lower half")
 
 
-def strongest_power(out: dict) -> float:
-    """The power of an outcome's strongest peak (0: none)."""
-    p, m = np.asarray(out["peak_power"]), np.asarray(out["peak_mask"])
-    return float(np.max(np.where(m, p, 0.0), initial=0.0))
-
-
 def box_feet(mot: dict, actor_id: int) -> dict[int, tuple[float, float]]:
-    """{frame: (u, v) px} of one object's truth boxes as `track.boxes.foot_points` reads a box:
-    its bottom centre."""
-    out = {}
-    for f, i, left, top, w, h in zip(mot["frame"], mot["id"], mot["bb_left"], mot["bb_top"],
-                                     mot["bb_width"], mot["bb_height"]):
-        if int(i) == actor_id:
-            out[int(f)] = (float(left) + float(w) / 2 - 0.5, float(top) + float(h) - 1.0)
-    return out
+    """{frame: (u, v) px} of one object's truth boxes, each read as `rhythm --boxes` reads a
+    box (`track.boxes.foot_points`: its bottom centre)."""
+    from rhythmjax.track.boxes import foot_points
+
+    mine = np.asarray(mot["id"]).astype(int) == actor_id
+    u, v = foot_points(*(np.asarray(mot[k])[mine]
+                         for k in ("bb_left", "bb_top", "bb_width", "bb_height")))
+    return {int(f): (float(a), float(b))
+            for f, a, b in zip(np.asarray(mot["frame"])[mine], u, v)}
 
 
 def lower_half_column(M: np.ndarray, u: float, v: float, width: float, v_top: float,
@@ -107,6 +102,7 @@ def main(argv=None) -> int:
 
     from rhythmjax.io.files import WINDOW_CANDIDATES
     from rhythmjax.model.camera_np import camera_tuple, project_3d
+    from rhythmjax.model.candidates import strongest_power
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.sim.clean import classifiable
     from rhythmjax.sim.presets import synthetic_options
@@ -176,8 +172,8 @@ def main(argv=None) -> int:
                     moved = SimpleNamespace(track_id=obj.track_id, rows=rows,
                                             candidate_rows=cands, result=None, vel=obj.vel)
                     windows = replay(cfg, moved, stop=False)
-                    best[place].append(max((strongest_power(w["out"]) for w in windows),
-                                           default=0.0))
+                    best[place].append(max((float(strongest_power(w["out"]))
+                                            for w in windows), default=0.0))
                     judged[place] += any(w["ped"] for w in windows)
     print(f"classifiable walkers with a track of N rows or more: {len(best['tracker'])}; "
           f"I(k) at the tracker's point against its own: median relative difference "
