@@ -139,6 +139,12 @@ RULES = {
     "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
              "nothing fitted (half the config's walker height, a priori); found on used seeds "
              "3300001-3330001, 3380001-3410001 (study_window_placement)"),
+    "halves": ("tracker", "recheck.halves", True, False, TRACKER_SOURCES,
+               "nothing fitted (N/2 and (14)'s fastest walk, a priori); found on used seeds "
+               "3920001-3950001 (study_half_speed, rule 42)"),
+    "pixel_halves": ("tracker", "recheck.halves", True, False, TRACKER_SOURCES,
+                     "rule 35 with rule 42 against both off (ON also sets "
+                     "body.window_per_pixel); found on used seeds 3920001-3950001"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -148,7 +154,8 @@ RULES = {
 # tracker keys a rule's ON side sets besides its own (its OFF side is the defaults)
 TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "min_height_track": {"size.min_height_scope": "track"},
-                "recheck_all": {"recheck.earlier": "any"}}
+                "recheck_all": {"recheck.earlier": "any"},
+                "pixel_halves": {"body.window_per_pixel": True}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -163,7 +170,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "twice_pace": TRACKER_SOURCES, "count_twice": COUNT_SOURCES,
               "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES,
               "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (), "hop4": (),
-              "tail": (), "lean": (), "count_twice_fitted": ()}
+              "tail": (), "lean": (), "count_twice_fitted": (), "halves": (),
+              "pixel_halves": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

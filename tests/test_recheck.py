@@ -4,7 +4,8 @@ its fastest pace. Rules 30a (`recheck.tail`) and 30, 30b (`recheck.earlier`): th
 the window of the track's last N rows and on the windows before the deciding one. The window
 test's cases, the cut rows on hand-made tracks (a walker, then a bicycle; a bicycle, then a
 walker; a fast pace, then a walk; a walker throughout), the rows kept, and the tracker with the
-rules on a lone walker."""
+rules on a lone walker. Rule 42 (`recheck.halves`): a window one of whose halves moves faster
+than any walk (a walker and a bicycle in one window)."""
 
 import math
 from types import SimpleNamespace
@@ -17,7 +18,15 @@ from rhythmjax.model.params import Config, walking_pace_band, walking_top_pace, 
 from rhythmjax.model.status import Reason, TrackState, Verdict
 from rhythmjax.sim import scene as synth
 from rhythmjax.track.options import TrackerOptions, with_changes
-from rhythmjax.track.recheck import earlier_switch_row, keep_rows, not_a_walk, switch_row
+from rhythmjax.track.recheck import (
+    earlier_switch_row,
+    fast_half,
+    keep_rows,
+    mixed_window_row,
+    not_a_walk,
+    split_at_switches,
+    switch_row,
+)
 from rhythmjax.track.rows import TrackRow
 from rhythmjax.track.toolkit import match_window
 from rhythmjax.track.tracker import OnlineTracker
@@ -156,7 +165,59 @@ def test_keep_rows_shifts_the_deciding_window():
         keep_rows(obj, slice(None, 50))
 
 
-@pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}])
+def test_fast_half_reads_each_half_against_the_fastest_walk():
+    """Rule 42 on 64 rows: the half at 4 m/s is found (its first row, 0 or 32); a walk is not;
+    a half at 2.5 m/s lies under the fastest walk (2.573 m/s), one at 2.65 over it (the
+    Theil-Sen speed of a constant speed is that speed)."""
+    top = walking_top_speed(CFG)
+    assert fast_half(CFG, _track([1.3] * 32 + [4.0] * 32).rows, top) == 32
+    assert fast_half(CFG, _track([4.0] * 32 + [1.3] * 32).rows, top) == 0
+    assert fast_half(CFG, _track([1.3] * 64).rows, top) is None
+    assert fast_half(CFG, _track([1.3] * 32 + [2.5] * 32).rows, top) is None
+    assert fast_half(CFG, _track([1.3] * 32 + [2.65] * 32).rows, top) == 32
+
+
+def test_a_walker_and_a_bicycle_in_the_deciding_window():
+    """40 rows of a walk at 1.3 m/s then 24 at 4 m/s: the one window (0..64) says Pedestrian at
+    the Theil-Sen speed of about 1.95 m/s (the median slope is the walker's), and rule 29 has no
+    later window; its second half (8 rows of walk, 24 at 4 m/s) is no walk, so rule 42 finds
+    row 32. The bicycle first (24 rows, then 40 of walk): row 0. A walk: none."""
+    obj = _judged(_track([1.3] * 40 + [4.0] * 24))
+    assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN and obj.result["window"] == (0, 64)
+    assert float(obj.result["speed_mps"]) < walking_top_speed(CFG)
+    assert switch_row(CFG, obj, tail=True) is None and mixed_window_row(CFG, obj) == 32
+    assert mixed_window_row(CFG, _judged(_track([4.0] * 24 + [1.3] * 40))) == 0
+    assert mixed_window_row(CFG, _judged(_track([1.3] * 64))) is None
+
+
+def test_a_later_window_cut_at_its_fast_half():
+    """104 rows of walk then 24 at 4 m/s (judged in 0..64): the later window 64..128 moves at
+    about 1.95 m/s, so rule 29 keeps the track whole; with halves its second half (96..128)
+    is no walk and the cut is at row 96."""
+    obj = _judged(_track([1.3] * 104 + [4.0] * 24))
+    assert obj.result["window"] == (0, 64)
+    assert switch_row(CFG, obj) is None and switch_row(CFG, obj, halves=True) == 96
+
+
+def test_split_at_switches_judges_both_sides_of_a_mixed_window_afresh():
+    """Rule 42 on the walker-then-bicycle window above: rows ..31 and 32.. judged afresh and the
+    track goes (True); with halves off the rules 29 and 30a leave it whole (False, nothing
+    judged afresh); on the later-window case, the rows 96.. go to a new track and the track
+    keeps rows ..95."""
+    calls = []
+    judge = lambda obj, rows: calls.append((rows.start, rows.stop))  # noqa: E731
+    mixed = _judged(_track([1.3] * 40 + [4.0] * 24))
+    on, off = (with_changes(TrackerOptions(), {"recheck.halves": h}).recheck for h in (True, False))
+    assert split_at_switches(CFG, mixed, off, judge) is False and calls == []
+    assert split_at_switches(CFG, mixed, on, judge) is True and calls == [(None, 32), (32, None)]
+    calls.clear()
+    later = _judged(_track([1.3] * 104 + [4.0] * 24))
+    later.vel = [None] * 128
+    assert split_at_switches(CFG, later, on, judge) is False and calls == [(96, None)]
+    assert len(later.rows) == 96 and later.result["window"] == (0, 64)
+
+
+@pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}, {"recheck.halves": True}])
 def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone(changes):
     """One rendered walker going away from 8 m, 180 frames: its track (156 rows, judged
     Pedestrian in rows 0..64) has a later window (rows 64..128), and

@@ -258,6 +258,11 @@ class RecheckOptions:
     # before the walker's, become a new track judged afresh): "any", by rule 29's speed or pace
     # (rule 30: failed on PETS09 at 7 fps, where walkers' windows peak at 2.8-3.3 Hz); "speed",
     # by its speed alone (rule 30b); "off" (docs/rules.md, rules 30, 30b)
+    halves: bool = False  # rule 42 (with `enabled`): a window is also no walker's where one of
+    # its halves (N/2 rows) moves faster than any walk (12), (14): a deciding window holding a
+    # walker and then a bicycle loses its verdict, the rows before and from that half judged
+    # afresh as two tracks; a later or tail window so refused cuts at that half (off;
+    # `recheck.mixed_window_row`, docs/rules.md, rule 42)
 
     def __post_init__(self):
         if self.earlier not in EARLIER_TESTS:

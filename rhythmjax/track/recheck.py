@@ -14,6 +14,13 @@ Both limits are the paper's own model at +k_sigma3; nothing is fitted. The track
 that window's first row (`switch_row`); the rows before keep the verdict, the tracker judges
 the rows from it afresh as a new track.
 
+Rule 42 (`RecheckOptions.halves`, off) reads the halves of a window too: a half of N/2 rows
+whose speed (12) exceeds the fastest walk makes the window no walker's (`fast_half`). A later
+or tail window so refused cuts the track at that half's first row (or the deciding window's
+end, if later); a deciding window so refused (`mixed_window_row`: a walker and a bicycle in one
+window, its Theil-Sen speed the walker's) loses its verdict, and the tracker judges the rows
+before that half and the rows from it afresh as two tracks.
+
 Rule 30a (`RecheckOptions.tail`, on) judges with the same test the window of the track's last N
 rows where the windows above leave rows unjudged (a switch less than N rows before the end), cut
 at its first row or the deciding window's end, whichever is later. Rule 30's other half
@@ -27,13 +34,17 @@ from __future__ import annotations
 import copy
 import math
 
+import jax.numpy as jnp
+import numpy as np
+
 from ..model.params import Config, walking_top_pace, walking_top_speed
-from ..model.status import Reason, Verdict
+from ..model.rhythm import window_speed
+from ..model.status import Reason, TrackState, Verdict
 from .toolkit import RhythmWindows, match_window
 
 
-__all__ = ["earlier_switch_row", "earlier_windows", "keep_rows", "later_windows", "not_a_walk",
-           "switch_row"]
+__all__ = ["earlier_switch_row", "earlier_windows", "fast_half", "keep_rows", "later_windows",
+           "mixed_window_row", "not_a_walk", "split_at_switches", "switch_row"]
 
 
 def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
@@ -45,6 +56,36 @@ def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
         return True
     peak = int(result["reason"]) != Reason.NO_PEAK
     return peak and math.isfinite(pace) and pace > top_pace
+
+
+def fast_half(cfg: Config, rows, top_speed: float) -> int | None:
+    """Rule 42: the index (0 or len(rows) // 2) of the first half of `rows` (a window's
+    `TrackRow`s) whose speed (12), m/s (`rhythm.window_speed`: its OBSERVE rows' foot points
+    taken to the ground when they are at least half of it, else the filter's ground positions),
+    exceeds `top_speed`; None where neither does."""
+    h = len(rows) // 2
+    for start, part in ((0, rows[:h]), (h, rows[h:])):
+        if len(part) < 2:
+            continue
+        t = np.asarray([r.t for r in part], np.float64)
+        xy = np.asarray([(r.x_est, r.y_est) for r in part], np.float64)
+        seen = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE else (math.nan, math.nan)
+                           for r in part], np.float64)
+        speed = float(window_speed(cfg, jnp.asarray(t - t[0], jnp.float32),
+                                   jnp.asarray(xy, jnp.float32), jnp.asarray(seen, jnp.float32)))
+        if math.isfinite(speed) and speed > top_speed:
+            return start
+    return None
+
+
+def mixed_window_row(cfg: Config, obj: RhythmWindows) -> int | None:
+    """Rule 42: the first row of the half of `obj`'s deciding window that moves faster than any
+    walk (`fast_half`), where `obj` is judged Pedestrian; else None."""
+    if not _pedestrian(obj):
+        return None
+    k0, k1 = (int(k) for k in obj.result["window"])
+    half = fast_half(cfg, obj.rows[k0:k1], walking_top_speed(cfg))
+    return None if half is None else k0 + half
 
 
 def _judged(cfg: Config, obj: RhythmWindows, start: int) -> tuple[dict | None, int]:
@@ -103,17 +144,24 @@ def _pedestrian(obj: RhythmWindows) -> bool:
             and int(obj.result["verdict"]) == Verdict.PEDESTRIAN)
 
 
-def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False) -> int | None:
+def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False,
+               halves: bool = False) -> int | None:
     """The first row of the first of `later_windows` that `not_a_walk` refuses (the deciding
     window's end where that window starts inside it: `tail`); None where the track is not
-    judged Pedestrian or no later window is refused."""
+    judged Pedestrian or no later window is refused. halves (rule 42): a window one of whose
+    halves is faster than any walk (`fast_half`) is refused too, cut at that half's first row
+    (the deciding window's end where that is later)."""
     if not _pedestrian(obj):
         return None
     top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg)
     decided_end = int(obj.result["window"][1])
     for result in later_windows(cfg, obj, tail=tail):
+        a, b = (int(k) for k in result["window"])
         if not_a_walk(result, top_speed, top_pace):
-            return max(int(result["window"][0]), decided_end)
+            return max(a, decided_end)
+        half = fast_half(cfg, obj.rows[a:b], top_speed) if halves else None
+        if half is not None:
+            return max(a + half, decided_end)
     return None
 
 
@@ -144,3 +192,29 @@ def keep_rows(obj, rows: slice) -> None:
             raise ValueError(f"track {getattr(obj, 'track_id', '?')}: its deciding window "
                              f"{(a, b)} is not inside the rows kept {rows}")
         obj.result = dict(obj.result, window=(a - first, b - first))
+
+
+def split_at_switches(cfg: Config, obj: RhythmWindows, opt, judge_afresh) -> bool:
+    """The end of a track (`opt`: `options.RecheckOptions`; `judge_afresh(obj, rows)` makes a
+    new track of `obj`'s `rows`, a slice, judged as online). Rule 42 (`opt.halves`): where the
+    deciding window of a Pedestrian track has a half no walker's (`mixed_window_row`, row k),
+    rows ..k-1 and k.. are judged afresh and True is returned: `obj` goes. Rules 30, 30b
+    (`opt.earlier`): where a window before the deciding one is no walker's, rows ..k-1 (k: the
+    deciding window's first row) become a new track. Rules 29, 30a, 42 (`switch_row`): where a
+    later window is no walker's, rows k.. (its first row) become a new track. False: `obj`
+    stays, with the rows it keeps."""
+    k = mixed_window_row(cfg, obj) if opt.halves else None
+    if k is not None:
+        judge_afresh(obj, slice(None, k))
+        judge_afresh(obj, slice(k, None))
+        return True
+    if opt.earlier != "off":
+        k = earlier_switch_row(cfg, obj, pace=opt.earlier == "any")
+        if k is not None:
+            judge_afresh(obj, slice(None, k))
+            keep_rows(obj, slice(k, None))
+    k = switch_row(cfg, obj, tail=opt.tail, halves=opt.halves)
+    if k is not None:
+        judge_afresh(obj, slice(k, None))
+        keep_rows(obj, slice(None, k))
+    return False

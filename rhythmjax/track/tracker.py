@@ -37,7 +37,7 @@ from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .lean import window_b_foot
 from .options import TrackerOptions
-from .recheck import earlier_switch_row, keep_rows, switch_row
+from .recheck import split_at_switches
 from .rows import NAN_VELOCITY, TrackRow, Velocity
 from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
@@ -413,21 +413,10 @@ class OnlineTracker:
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 
     def _split_at_switch(self, obj: _Object) -> None:
-        """Rule 29 (`recheck.py`): a Pedestrian track one of whose later windows is no walker's
-        keeps rows ..k-1 (k: that window's first row) and its verdict; rows k.. become a new
-        track judged afresh (`recheck.tail`, rule 30a: the last N rows' window read too). Rules
-        30, 30b (`recheck.earlier`, off): where a window before the deciding one is no walker's,
-        rows ..k-1 (k: the deciding window's first row) become the new track."""
-        opt = self.opt.recheck
-        k = (None if opt.earlier == "off"
-             else earlier_switch_row(self.cfg, obj, pace=opt.earlier == "any"))
-        if k is not None:
-            self._judge_afresh(obj, slice(None, k))
-            keep_rows(obj, slice(k, None))
-        k = switch_row(self.cfg, obj, tail=opt.tail)
-        if k is not None:
-            self._judge_afresh(obj, slice(k, None))
-            keep_rows(obj, slice(None, k))
+        """Rules 29, 30a (on), 30, 30b and 42 (off): where a window is no walker's, the rows on
+        its side become a new track judged afresh (`recheck.split_at_switches`)."""
+        if split_at_switches(self.cfg, obj, self.opt.recheck, self._judge_afresh):
+            self._finished.remove(obj)  # rule 42: both sides of a mixed deciding window afresh
 
     def _judge_afresh(self, obj: _Object, rows: slice) -> None:
         """A new track (new id) of `obj`'s `rows`, judged as online, then as at its end."""
