@@ -199,22 +199,39 @@ def test_a_later_window_cut_at_its_fast_half():
     assert switch_row(CFG, obj) is None and switch_row(CFG, obj, halves=True) == 96
 
 
-def test_split_at_switches_judges_both_sides_of_a_mixed_window_afresh():
-    """Rule 42 on the walker-then-bicycle window above: rows ..31 and 32.. judged afresh and the
-    track goes (True); with halves off the rules 29 and 30a leave it whole (False, nothing
-    judged afresh); on the later-window case, the rows 96.. go to a new track and the track
-    keeps rows ..95."""
+def test_split_at_switches_cuts_a_mixed_window_at_its_middle():
+    """Rule 42 on the walker-then-bicycle window above: the track is cut at row 32, the rows
+    32.. (the fast half's side) judged afresh, the track keeping rows ..31 and its verdict with
+    the slow half (0..32) as its deciding window; the bicycle first: rows ..31 afresh, the track
+    keeps rows 32.. (the first kept row is the old row 32) and the window (0..32); with halves
+    off nothing is cut (rules 29 and 30a find no later window); on the later-window case the
+    rows 96.. go to a new track and the track keeps rows ..95."""
     calls = []
     judge = lambda obj, rows: calls.append((rows.start, rows.stop))  # noqa: E731
-    mixed = _judged(_track([1.3] * 40 + [4.0] * 24))
-    on, off = (with_changes(TrackerOptions(), {"recheck.halves": h}).recheck for h in (True, False))
-    assert split_at_switches(CFG, mixed, off, judge) is False and calls == []
-    assert split_at_switches(CFG, mixed, on, judge) is True and calls == [(None, 32), (32, None)]
+    on, off = (with_changes(TrackerOptions(), {"recheck.halves": h}).recheck
+               for h in (True, False))
+
+    def judged(speeds):
+        obj = _judged(_track(speeds))
+        obj.vel = list(range(len(obj.rows)))
+        return obj
+
+    mixed = judged([1.3] * 40 + [4.0] * 24)
+    split_at_switches(CFG, mixed, off, judge)
+    assert calls == [] and len(mixed.rows) == 64 and mixed.result["window"] == (0, 64)
+    split_at_switches(CFG, mixed, on, judge)
+    assert calls == [(32, None)] and mixed.vel == list(range(32))
+    assert mixed.result["window"] == (0, 32)
+    assert int(mixed.result["verdict"]) == Verdict.PEDESTRIAN
     calls.clear()
-    later = _judged(_track([1.3] * 104 + [4.0] * 24))
-    later.vel = [None] * 128
-    assert split_at_switches(CFG, later, on, judge) is False and calls == [(96, None)]
-    assert len(later.rows) == 96 and later.result["window"] == (0, 64)
+    first = judged([4.0] * 24 + [1.3] * 40)
+    split_at_switches(CFG, first, on, judge)
+    assert calls == [(None, 32)] and first.vel == list(range(32, 64))
+    assert first.result["window"] == (0, 32)
+    calls.clear()
+    later = judged([1.3] * 104 + [4.0] * 24)
+    split_at_switches(CFG, later, on, judge)
+    assert calls == [(96, None)] and len(later.rows) == 96 and later.result["window"] == (0, 64)
 
 
 @pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}, {"recheck.halves": True}])

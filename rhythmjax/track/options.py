@@ -260,9 +260,10 @@ class RecheckOptions:
     # by its speed alone (rule 30b); "off" (docs/rules.md, rules 30, 30b)
     halves: bool = False  # rule 42 (with `enabled`): a window is also no walker's where one of
     # its halves (N/2 rows) moves faster than any walk (12), (14): a deciding window holding a
-    # walker and then a bicycle loses its verdict, the rows before and from that half judged
-    # afresh as two tracks; a later or tail window so refused cuts at that half (off;
-    # `recheck.mixed_window_row`, docs/rules.md, rule 42)
+    # walker and then a bicycle is cut at its middle, the verdict kept by the slow half's side,
+    # the other side judged afresh; a later or tail window so refused cuts at that half (off:
+    # fresh own seeds lost walkers, issue 16's forty-third round; `recheck.mixed_window_row`,
+    # docs/rules.md, rule 42)
 
     def __post_init__(self):
         if self.earlier not in EARLIER_TESTS:

@@ -18,8 +18,8 @@ Rule 42 (`RecheckOptions.halves`, off) reads the halves of a window too: a half 
 whose speed (12) exceeds the fastest walk makes the window no walker's (`fast_half`). A later
 or tail window so refused cuts the track at that half's first row (or the deciding window's
 end, if later); a deciding window so refused (`mixed_window_row`: a walker and a bicycle in one
-window, its Theil-Sen speed the walker's) loses its verdict, and the tracker judges the rows
-before that half and the rows from it afresh as two tracks.
+window, its Theil-Sen speed the walker's) cuts the track at its middle row, the verdict staying
+with the slow half's side and the fast half's side judged afresh (`split_at_switches`).
 
 Rule 30a (`RecheckOptions.tail`, on) judges with the same test the window of the track's last N
 rows where the windows above leave rows unjudged (a switch less than N rows before the end), cut
@@ -194,20 +194,24 @@ def keep_rows(obj, rows: slice) -> None:
         obj.result = dict(obj.result, window=(a - first, b - first))
 
 
-def split_at_switches(cfg: Config, obj: RhythmWindows, opt, judge_afresh) -> bool:
+def split_at_switches(cfg: Config, obj: RhythmWindows, opt, judge_afresh) -> None:
     """The end of a track (`opt`: `options.RecheckOptions`; `judge_afresh(obj, rows)` makes a
     new track of `obj`'s `rows`, a slice, judged as online). Rule 42 (`opt.halves`): where the
-    deciding window of a Pedestrian track has a half no walker's (`mixed_window_row`, row k),
-    rows ..k-1 and k.. are judged afresh and True is returned: `obj` goes. Rules 30, 30b
-    (`opt.earlier`): where a window before the deciding one is no walker's, rows ..k-1 (k: the
-    deciding window's first row) become a new track. Rules 29, 30a, 42 (`switch_row`): where a
-    later window is no walker's, rows k.. (its first row) become a new track. False: `obj`
-    stays, with the rows it keeps."""
+    deciding window of a Pedestrian track has a half no walker's (`mixed_window_row`), the track
+    is cut at the window's middle row: the fast half's side (the rows before the middle, or
+    from it) is judged afresh, and the verdict stays with the other side, its deciding window
+    the slow half. Rules 30, 30b (`opt.earlier`): where a window before the deciding one is no
+    walker's, rows ..k-1 (k: the deciding window's first row) become a new track. Rules 29,
+    30a, 42 (`switch_row`): where a later window is no walker's, rows k.. (its first row)
+    become a new track. `obj` keeps the rest."""
     k = mixed_window_row(cfg, obj) if opt.halves else None
     if k is not None:
-        judge_afresh(obj, slice(None, k))
-        judge_afresh(obj, slice(k, None))
-        return True
+        a, b = (int(r) for r in obj.result["window"])
+        mid = a + (b - a) // 2
+        fast_first = k == a
+        obj.result = dict(obj.result, window=(mid, b) if fast_first else (a, mid))
+        judge_afresh(obj, slice(None, mid) if fast_first else slice(mid, None))
+        keep_rows(obj, slice(mid, None) if fast_first else slice(None, mid))
     if opt.earlier != "off":
         k = earlier_switch_row(cfg, obj, pace=opt.earlier == "any")
         if k is not None:
@@ -217,4 +221,3 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt, judge_afresh) -> boo
     if k is not None:
         judge_afresh(obj, slice(k, None))
         keep_rows(obj, slice(None, k))
-    return False
