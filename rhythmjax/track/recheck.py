@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Callable
 
 import jax.numpy as jnp
 import numpy as np
@@ -40,6 +41,7 @@ import numpy as np
 from ..model.params import Config, walking_top_pace, walking_top_speed
 from ..model.rhythm import window_speed
 from ..model.status import Reason, TrackState, Verdict
+from .options import RecheckOptions
 from .toolkit import RhythmWindows, match_window
 
 
@@ -194,7 +196,8 @@ def keep_rows(obj, rows: slice) -> None:
         obj.result = dict(obj.result, window=(a - first, b - first))
 
 
-def split_at_switches(cfg: Config, obj: RhythmWindows, opt, judge_afresh) -> None:
+def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
+                      judge_afresh: Callable[[RhythmWindows, slice], None]) -> None:
     """The end of a track (`opt`: `options.RecheckOptions`; `judge_afresh(obj, rows)` makes a
     new track of `obj`'s `rows`, a slice, judged as online). Rule 42 (`opt.halves`): where the
     deciding window of a Pedestrian track has a half no walker's (`mixed_window_row`), the track
