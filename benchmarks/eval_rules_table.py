@@ -145,6 +145,9 @@ RULES = {
     "pixel_halves": ("tracker", "recheck.halves", True, False, TRACKER_SOURCES,
                      "rule 35 with rule 42 against both off (ON also sets "
                      "body.window_per_pixel); found on used seeds 3920001-3950001"),
+    "recheck_resolved": ("tracker", "recheck.earlier", "resolved", "off", TRACKER_SOURCES,
+                         "nothing fitted (rule 30's bounds; the frame rate against twice the "
+                         "fastest pace, a priori); found on used seeds 4040001-4070001 (rule 30c)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -171,7 +174,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES,
               "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (), "hop4": (),
               "tail": (), "lean": (), "count_twice_fitted": (), "halves": (),
-              "pixel_halves": ()}
+              "recheck_resolved": (), "pixel_halves": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

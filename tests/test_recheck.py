@@ -14,7 +14,13 @@ import numpy as np
 import pytest
 
 from rhythmjax.model.camera_np import project_3d
-from rhythmjax.model.params import Config, walking_pace_band, walking_top_pace, walking_top_speed
+from rhythmjax.model.params import (
+    Camera,
+    Config,
+    walking_pace_band,
+    walking_top_pace,
+    walking_top_speed,
+)
 from rhythmjax.model.status import Reason, TrackState, Verdict
 from rhythmjax.sim import scene as synth
 from rhythmjax.track.options import TrackerOptions, with_changes
@@ -24,6 +30,7 @@ from rhythmjax.track.recheck import (
     keep_rows,
     mixed_window_row,
     not_a_walk,
+    pace_resolved,
     split_at_switches,
     switch_row,
 )
@@ -144,6 +151,36 @@ def test_the_speed_alone_leaves_a_fast_pace_before_the_verdict():
     assert earlier_switch_row(CFG, obj, pace=False) is None
     bicycle = _judged(_track([4.0] * 64 + [1.3] * 96))
     assert earlier_switch_row(CFG, bicycle, pace=False) == 64
+
+
+def test_the_pace_test_needs_a_frame_rate_that_resolves_a_walkers_second_harmonic():
+    """Rule 30c by hand: the fastest pace is 2.05 + 3 x 0.183 = 2.599 Hz, its second harmonic
+    5.198 Hz, so Nyquist must exceed it: fps > 10.396. PETS09's 7 fps and 10 fps do not, 10.4
+    and 15 fps do."""
+    for fps, ok in ((7.0, False), (10.0, False), (10.39, False), (10.4, True), (15.0, True)):
+        assert pace_resolved(Config(camera=Camera(fps=fps))) is ok
+
+
+def test_resolved_cuts_a_fast_pace_before_the_verdict_only_at_a_resolving_frame_rate():
+    """Rule 30c through `split_at_switches`: the 3.2 Hz window before a 2 Hz walk (above) is cut
+    off where the config's frame rate resolves the pace (15 fps: rule 30's test), and not at
+    7 fps (rule 30b's speed test alone); the bicycle before the walker is cut either way."""
+    opt = with_changes(TrackerOptions(), {"recheck.earlier": "resolved"}).recheck
+    slow = Config(camera=Camera(fps=7.0))
+    calls = []
+    judge = lambda o, rows: calls.append((rows.start, rows.stop))  # noqa: E731
+    for cfg, cut in ((CFG, True), (slow, False)):
+        calls.clear()
+        obj = _judged(_track([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96))
+        obj.vel = list(range(160))
+        first = int(obj.result["window"][0])
+        split_at_switches(cfg, obj, opt, judge)
+        assert calls == ([(None, first)] if cut else [])
+    calls.clear()
+    bicycle = _judged(_track([4.0] * 64 + [1.3] * 96))
+    bicycle.vel = list(range(160))
+    split_at_switches(slow, bicycle, opt, judge)
+    assert calls == [(None, 64)]
 
 
 def test_a_bad_earlier_test_names_the_option():

@@ -237,7 +237,7 @@ class SizeOptions:
                              f"got {self.min_height_scope!r}")
 
 
-EARLIER_TESTS = ("off", "speed", "any")  # `recheck.earlier`
+EARLIER_TESTS = ("off", "speed", "any", "resolved")  # `recheck.earlier`
 
 
 @dataclass(frozen=True)
@@ -257,7 +257,9 @@ class RecheckOptions:
     # the track at the deciding window's first row (the rows before, a bicycle's or a dog's
     # before the walker's, become a new track judged afresh): "any", by rule 29's speed or pace
     # (rule 30: failed on PETS09 at 7 fps, where walkers' windows peak at 2.8-3.3 Hz); "speed",
-    # by its speed alone (rule 30b); "off" (docs/rules.md, rules 30, 30b)
+    # by its speed alone (rule 30b); "resolved", rule 30's test where the frame rate resolves a
+    # walker's second harmonic at the fastest pace, else 30b's (rule 30c, `recheck.
+    # pace_resolved`); "off" (docs/rules.md, rules 30, 30b, 30c)
     halves: bool = False  # rule 42 (with `enabled`): a window is also no walker's where one of
     # its halves (N/2 rows) moves faster than any walk (12), (14): a deciding window holding a
     # walker and then a bicycle is cut at its middle, the verdict kept by the slow half's side,

@@ -27,7 +27,8 @@ at its first row or the deciding window's end, whichever is later. Rule 30's oth
 (`RecheckOptions.earlier` "any", off: it cut walkers' tracks on PETS09 at 7 fps, docs/rules.md)
 judges the windows before the deciding one (a bicycle's or a dog's rows before the walker's,
 `earlier_switch_row`), cut at the deciding window's first row; rule 30b ("speed") the same by
-the speed test alone."""
+the speed test alone; rule 30c ("resolved") rule 30's test where the frame rate resolves a
+walker's second harmonic at the fastest pace (`pace_resolved`), else 30b's."""
 
 from __future__ import annotations
 
@@ -46,7 +47,8 @@ from .toolkit import RhythmWindows, match_window
 
 
 __all__ = ["earlier_switch_row", "earlier_windows", "fast_half", "keep_rows", "later_windows",
-           "mixed_window_row", "not_a_walk", "split_at_switches", "switch_row"]
+           "mixed_window_row", "not_a_walk", "pace_resolved", "split_at_switches",
+           "switch_row"]
 
 
 def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
@@ -88,6 +90,14 @@ def mixed_window_row(cfg: Config, obj: RhythmWindows) -> int | None:
     k0, k1 = (int(k) for k in obj.result["window"])
     half = fast_half(cfg, obj.rows[k0:k1], walking_top_speed(cfg))
     return None if half is None else k0 + half
+
+
+def pace_resolved(cfg: Config) -> bool:
+    """Rule 30c: whether the frame rate resolves a walker's second harmonic at the fastest pace
+    the walking model accepts (Nyquist fps / 2 above 2 x `walking_top_pace`, 5.2 Hz with Table
+    1): 15 fps does, 7 or 10 fps does not (a walker's 2F aliases below Nyquist and its window
+    can peak above the fastest pace)."""
+    return float(cfg.camera.fps) / 2 > 2 * walking_top_pace(cfg)
 
 
 def _judged(cfg: Config, obj: RhythmWindows, start: int) -> tuple[dict | None, int]:
@@ -203,7 +213,7 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
     deciding window of a Pedestrian track has a half no walker's (`mixed_window_row`), the track
     is cut at the window's middle row: the fast half's side (the rows before the middle, or
     from it) is judged afresh, and the verdict stays with the other side, its deciding window
-    the slow half. Rules 30, 30b (`opt.earlier`): where a window before the deciding one is no
+    the slow half. Rules 30, 30b, 30c (`opt.earlier`): where a window before the deciding one is no
     walker's, rows ..k-1 (k: the deciding window's first row) become a new track. Rules 29,
     30a, 42 (`switch_row`): where a later window is no walker's, rows k.. (its first row)
     become a new track. `obj` keeps the rest."""
@@ -216,7 +226,8 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
         judge_afresh(obj, slice(None, mid) if fast_first else slice(mid, None))
         keep_rows(obj, slice(mid, None) if fast_first else slice(None, mid))
     if opt.earlier != "off":
-        k = earlier_switch_row(cfg, obj, pace=opt.earlier == "any")
+        pace = opt.earlier == "any" or (opt.earlier == "resolved" and pace_resolved(cfg))
+        k = earlier_switch_row(cfg, obj, pace=pace)
         if k is not None:
             judge_afresh(obj, slice(None, k))
             keep_rows(obj, slice(k, None))
