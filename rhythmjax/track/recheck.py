@@ -213,9 +213,9 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
     deciding window of a Pedestrian track has a half no walker's (`mixed_window_row`), the track
     is cut at the window's middle row: the fast half's side (the rows before the middle, or
     from it) is judged afresh, and the verdict stays with the other side, its deciding window
-    the slow half. Rules 30, 30b, 30c (`opt.earlier`): where a window before the deciding one is no
-    walker's, rows ..k-1 (k: the deciding window's first row) become a new track. Rules 29,
-    30a, 42 (`switch_row`): where a later window is no walker's, rows k.. (its first row)
+    the slow half. Rules 30, 30b, 30c (`opt.earlier`): where a window before the deciding one
+    is no walker's, rows ..k-1 (k: the deciding window's first row) become a new track. Rules
+    29, 30a, 42 (`switch_row`): where a later window is no walker's, rows k.. (its first row)
     become a new track. `obj` keeps the rest."""
     k = mixed_window_row(cfg, obj) if opt.halves else None
     if k is not None:
