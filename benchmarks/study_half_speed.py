@@ -4,11 +4,11 @@ scenes, by the object the window followed (issue 16; a study: nothing is chosen 
 A track that followed a walker and then a bicycle passing it can be judged Pedestrian by a window
 that holds both: the Theil-Sen speed (12) over the whole window is the walker's (the median
 slope), while the bicycle's rows move at 3 m/s. This prints, per Pedestrian track, the speed (12)
-(`model.rhythm.window_speed`: the measured foot points taken to the ground, else the filter's
-ground positions) of the window's first and last N/2 rows against the fastest walk (14) accepts
-(`model.params.walking_top_speed`, 2.57 m/s with Table 1), with the object the window followed
-(`sim.evaluate.window_objects`) and the object each row's foot point lies nearest
-(`study_tracks.nearest_per_row`). Tracked as `eval_synthetic.py` tracks (cached under -d).
+(`track.recheck.half_speeds`, rule 42's: the measured foot points taken to the ground, else the
+filter's ground positions) of the window's first and last N/2 rows against the fastest walk
+(14) accepts (`model.params.walking_top_speed`, 2.57 m/s with Table 1), with the object the
+window followed (`sim.evaluate.window_objects`) and the object each row's foot point lies
+nearest (`study_tracks.nearest_per_row`). Tracked as `eval_synthetic.py` tracks (cached under -d).
 
     python benchmarks/study_half_speed.py SEED[,SEED...] [--scenes 10] [--set KEY=JSON] -d DIR
 """
@@ -20,34 +20,11 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
-
 
 sys.path.insert(0, str(Path(__file__).parent))
 
 from eval_synthetic import RECOMMENDED, scene_specs  # noqa: E402
 from study_tracks import nearest_per_row, track_scene  # noqa: E402
-
-
-def half_speeds(cfg, obj) -> tuple[float, float]:
-    """Speed (12), m/s, of the first and the last N/2 rows of `obj`'s deciding window."""
-    import jax.numpy as jnp
-
-    from rhythmjax.model.rhythm import window_speed
-    from rhythmjax.model.status import TrackState
-
-    k0, k1 = (int(k) for k in obj.result["window"])
-    h = (k1 - k0) // 2
-    out = []
-    for rows in (obj.rows[k0:k0 + h], obj.rows[k0 + h:k1]):
-        t = np.asarray([r.t for r in rows], np.float64)
-        xy = np.asarray([(r.x_est, r.y_est) for r in rows], np.float64)
-        seen = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE else (np.nan, np.nan)
-                           for r in rows], np.float64)
-        out.append(float(window_speed(cfg, jnp.asarray(t - t[0], jnp.float32),
-                                      jnp.asarray(xy, jnp.float32),
-                                      jnp.asarray(seen, jnp.float32))))
-    return out[0], out[1]
 
 
 def main(argv=None) -> int:
@@ -56,6 +33,7 @@ def main(argv=None) -> int:
     from rhythmjax.sim.evaluate import deciding_windows, match_tracks, window_objects
     from rhythmjax.sim.presets import synthetic_options
     from rhythmjax.track.options import with_changes
+    from rhythmjax.track.recheck import half_speeds
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("seeds")
@@ -79,8 +57,8 @@ def main(argv=None) -> int:
                 if (o.result is None or "window" not in o.result
                         or int(o.result["verdict"]) != Verdict.PEDESTRIAN):
                     continue
-                first, last = half_speeds(cfg, o)
                 k0, k1 = (int(k) for k in o.result["window"])
+                first, last = half_speeds(cfg, o.rows[k0:k1])
                 kind = getattr(followed.get(o.track_id), "kind", "none")
                 track_kind = getattr(owner.get(o.track_id), "kind", "none")
                 flag = " FAST" if max(first, last) > top else ""

@@ -27,6 +27,7 @@ from rhythmjax.track.options import TrackerOptions, with_changes
 from rhythmjax.track.recheck import (
     earlier_switch_row,
     fast_half,
+    half_speeds,
     keep_rows,
     mixed_window_row,
     not_a_walk,
@@ -200,6 +201,15 @@ def test_keep_rows_shifts_the_deciding_window():
     assert obj.result["window"] == (0, 64) and int(obj.result["verdict"]) == verdict
     with pytest.raises(ValueError, match="track 7"):
         keep_rows(obj, slice(None, 50))
+
+
+def test_half_speeds_are_each_halfs_own_speed():
+    """A constant speed per half comes back as that speed (the foot points taken to the ground
+    through (3) and back, float32: within 2 mm/s); a half of one row has no speed."""
+    first, last = half_speeds(CFG, _track([1.3] * 32 + [4.0] * 32).rows)
+    assert first == pytest.approx(1.3, abs=2e-3) and last == pytest.approx(4.0, abs=2e-3)
+    first, last = half_speeds(CFG, _track([1.3] * 3).rows)
+    assert math.isnan(first) and last == pytest.approx(1.3, abs=2e-3)
 
 
 def test_fast_half_reads_each_half_against_the_fastest_walk():

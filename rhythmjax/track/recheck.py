@@ -46,7 +46,8 @@ from .options import RecheckOptions
 from .toolkit import RhythmWindows, match_window
 
 
-__all__ = ["earlier_switch_row", "earlier_windows", "fast_half", "keep_rows", "later_windows",
+__all__ = ["earlier_switch_row", "earlier_windows", "fast_half", "half_speeds", "keep_rows",
+           "later_windows",
            "mixed_window_row", "not_a_walk", "pace_resolved", "split_at_switches",
            "switch_row"]
 
@@ -62,21 +63,32 @@ def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
     return peak and math.isfinite(pace) and pace > top_pace
 
 
-def fast_half(cfg: Config, rows, top_speed: float) -> int | None:
-    """Rule 42: the index (0 or len(rows) // 2) of the first half of `rows` (a window's
-    `TrackRow`s) whose speed (12), m/s (`rhythm.window_speed`: its OBSERVE rows' foot points
-    taken to the ground when they are at least half of it, else the filter's ground positions),
-    exceeds `top_speed`; None where neither does."""
+def half_speeds(cfg: Config, rows) -> tuple[float, float]:
+    """Speed (12), m/s, of the first and the last len(rows) // 2 of `rows` (a window's
+    `TrackRow`s; NaN for a half of fewer than 2 rows): `rhythm.window_speed` of its OBSERVE
+    rows' foot points taken to the ground when they are at least half of it, else of the
+    filter's ground positions."""
     h = len(rows) // 2
-    for start, part in ((0, rows[:h]), (h, rows[h:])):
+    out = []
+    for part in (rows[:h], rows[h:]):
         if len(part) < 2:
+            out.append(math.nan)
             continue
         t = np.asarray([r.t for r in part], np.float64)
         xy = np.asarray([(r.x_est, r.y_est) for r in part], np.float64)
         seen = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE else (math.nan, math.nan)
                            for r in part], np.float64)
-        speed = float(window_speed(cfg, jnp.asarray(t - t[0], jnp.float32),
-                                   jnp.asarray(xy, jnp.float32), jnp.asarray(seen, jnp.float32)))
+        out.append(float(window_speed(cfg, jnp.asarray(t - t[0], jnp.float32),
+                                      jnp.asarray(xy, jnp.float32),
+                                      jnp.asarray(seen, jnp.float32))))
+    return out[0], out[1]
+
+
+def fast_half(cfg: Config, rows, top_speed: float) -> int | None:
+    """Rule 42: the index (0 or len(rows) // 2) of the first half of `rows` (a window's
+    `TrackRow`s) whose speed (12) (`half_speeds`) exceeds `top_speed` (m/s); None where
+    neither does."""
+    for start, speed in zip((0, len(rows) // 2), half_speeds(cfg, rows)):
         if math.isfinite(speed) and speed > top_speed:
             return start
     return None
