@@ -5,7 +5,8 @@ the window of the track's last N rows and on the windows before the deciding one
 test's cases, the cut rows on hand-made tracks (a walker, then a bicycle; a bicycle, then a
 walker; a fast pace, then a walk; a walker throughout), the rows kept, and the tracker with the
 rules on a lone walker. Rule 42 (`recheck.halves`): a window one of whose halves moves faster
-than any walk (a walker and a bicycle in one window)."""
+than any walk (a walker and a bicycle in one window). Rule 43 (`recheck.low`): rule 26's height
+test on the windows the recheck reads (a dog's rows before or after its walker's)."""
 
 import math
 from types import SimpleNamespace
@@ -13,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rhythmjax.model.camera_np import project_3d
+from rhythmjax.model.camera_np import project_3d, upright_size
 from rhythmjax.model.params import (
     Camera,
     Config,
@@ -23,12 +24,13 @@ from rhythmjax.model.params import (
 )
 from rhythmjax.model.status import Reason, TrackState, Verdict
 from rhythmjax.sim import scene as synth
-from rhythmjax.track.options import TrackerOptions, with_changes
+from rhythmjax.track.options import RecheckOptions, SizeOptions, TrackerOptions, with_changes
 from rhythmjax.track.recheck import (
     earlier_switch_row,
     fast_half,
     half_speeds,
     keep_rows,
+    low_window,
     mixed_window_row,
     not_a_walk,
     pace_resolved,
@@ -36,6 +38,7 @@ from rhythmjax.track.recheck import (
     switch_row,
 )
 from rhythmjax.track.rows import TrackRow
+from rhythmjax.track.size import rows_height
 from rhythmjax.track.toolkit import match_window
 from rhythmjax.track.tracker import OnlineTracker
 
@@ -281,7 +284,97 @@ def test_split_at_switches_cuts_a_mixed_window_at_its_middle():
     assert calls == [(96, None)] and len(later.rows) == 96 and later.result["window"] == (0, 64)
 
 
-@pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}, {"recheck.halves": True}])
+def _tall(obj, rows: slice, height_m: float):
+    """`obj` with the top row v_top of its `rows` that of an upright object `height_m` m tall on
+    each foot point (`camera_np.upright_size`); NaN where that top would leave the image (a
+    walker's head above the view: its row is not read)."""
+    for k in range(len(obj.rows))[rows]:
+        r = obj.rows[k]
+        _, h_px, _ = upright_size(CFG.camera, r.u, r.v, 1.0, height_m)
+        top = r.v - float(h_px)
+        obj.rows[k] = r._replace(v_top=top if top >= 0 else math.nan)
+    return obj
+
+
+SIZE = SizeOptions()  # rule 26: 0.5 walker heights (0.85 m of 1.7 m) over >= 10 rows
+
+
+def test_low_window_is_rule_26s_test_on_the_rows_by_hand():
+    """Rule 43's window test is rule 26's: rows of an object 0.80 m tall read below 0.5 x 1.7 =
+    0.85 m and are refused, 0.90 m not; 9 readable rows (fewer than 10) are never refused; no
+    size options, or rule 26 off (0), never refuse. The heights are read back to 1e-3 m."""
+    obj = _tall(_track([1.3] * 64), slice(None), 0.80)
+    assert low_window(CFG, obj.rows, SIZE)
+    assert not low_window(CFG, _tall(_track([1.3] * 64), slice(None), 0.90).rows, SIZE)
+    assert not low_window(CFG, obj.rows[:9], SIZE) and low_window(CFG, obj.rows[:10], SIZE)
+    assert not low_window(CFG, obj.rows, None)
+    assert not low_window(CFG, obj.rows, SizeOptions(min_height_heights=0.0))
+    height, n = rows_height(CFG.camera, obj.rows, 1.7, SIZE.top_inside_heights)
+    assert height == pytest.approx(0.80, abs=1e-3) and n == 64
+
+
+def test_a_dogs_rows_before_the_walkers_verdict_are_cut_by_their_height():
+    """64 rows of an object 0.6 m tall whose I(k) beats at 3.2 Hz (a trotting dog), then 96 of
+    a 2 Hz walk whose head leaves the view (its rows unread): the deciding window is 32..96
+    (half of it the walk's), after the dog's window 0..64. Rule 43 alone (`earlier` off: neither
+    speed nor pace read) cuts at 32 by the first window's height; the same rows 1.2 m tall are
+    not cut; rule 30b's speed test alone does not cut the dog (1.3 m/s), rule 30's pace test
+    does (3.2 Hz), and neither reads with `speed` False."""
+    paces = [3.2] * 64 + [2.0] * 96
+    dog = _tall(_track([1.3] * 160, paces_hz=paces), slice(0, 64), 0.6)
+    dog = _judged(dog)
+    assert int(dog.result["verdict"]) == Verdict.PEDESTRIAN
+    assert dog.result["window"] == (32, 96)
+    assert earlier_switch_row(CFG, dog, speed=False, pace=False, low=SIZE) == 32
+    assert earlier_switch_row(CFG, dog, speed=False, pace=False) is None
+    assert earlier_switch_row(CFG, dog, pace=False) is None
+    assert earlier_switch_row(CFG, dog, speed=False) is None  # speed False: the pace unread too
+    assert earlier_switch_row(CFG, dog) == 32  # rule 30 refuses its 3.2 Hz
+    tall = _judged(_tall(_track([1.3] * 160, paces_hz=paces), slice(0, 64), 1.2))
+    assert earlier_switch_row(CFG, tall, speed=False, pace=False, low=SIZE) is None
+
+
+def test_a_dog_after_the_verdict_at_a_walkers_pace_is_cut_by_its_height():
+    """64 rows of a walk (judged Pedestrian in 0..64), then 96 rows of an object 0.6 m tall at
+    the same 1.3 m/s and 2 Hz (a dog read at its aliased leg cycle): rule 29 finds no later
+    window that is no walk; rule 43 cuts at 64; the tail window of a shorter track (64 + 40
+    rows, 40 of them the dog's) is refused by height as well."""
+    obj = _judged(_tall(_track([1.3] * 160), slice(64, None), 0.6))
+    assert obj.result["window"] == (0, 64)
+    assert switch_row(CFG, obj) is None
+    assert switch_row(CFG, obj, low=SIZE) == 64
+    short = _judged(_tall(_track([1.3] * 104), slice(64, None), 0.6))
+    assert switch_row(CFG, short, tail=True) is None
+    assert switch_row(CFG, short, tail=True, low=SIZE) == 64
+
+
+def test_split_at_switches_reads_heights_only_with_the_rule_on():
+    """`split_at_switches` with `RecheckOptions(low=True)` and rule 26's options makes a new
+    track of the rows before the deciding window (0..32, the dog's), the track keeping 32..160
+    with its window shifted to 0..64; with the rule off, or without size options, nothing is cut."""
+    def fresh():
+        paces = [3.2] * 64 + [2.0] * 96
+        return _judged(_tall(_track([1.3] * 160, paces_hz=paces), slice(0, 64), 0.6))
+
+    calls = []
+
+    def judge(o, rows):
+        calls.append((rows.start, rows.stop))
+
+    for opt, size in ((RecheckOptions(), SIZE), (RecheckOptions(low=True), None)):
+        obj = fresh()
+        obj.vel = list(range(len(obj.rows)))
+        split_at_switches(CFG, obj, opt, judge, size)
+        assert calls == [] and len(obj.rows) == 160
+    obj = fresh()
+    obj.vel = list(range(len(obj.rows)))
+    split_at_switches(CFG, obj, RecheckOptions(low=True), judge, SIZE)
+    assert calls == [(None, 32)] and obj.vel == list(range(32, 160))
+    assert obj.result["window"] == (0, 64)
+
+
+@pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}, {"recheck.halves": True},
+                                     {"recheck.low": True}])
 def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone(changes):
     """One rendered walker going away from 8 m, 180 frames: its track (156 rows, judged
     Pedestrian in rows 0..64) has a later window (rows 64..128), and

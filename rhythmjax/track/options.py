@@ -266,6 +266,10 @@ class RecheckOptions:
     # the other side judged afresh; a later or tail window so refused cuts at that half (off:
     # fresh own seeds lost walkers, issue 16's forty-third round; `recheck.mixed_window_row`,
     # docs/rules.md, rule 42)
+    low: bool = False  # rule 43 (with `enabled`): rule 26's height test (`size`'s options:
+    # 0.5 walker heights over 10 rows) refuses a later or tail window too, and reads the windows
+    # before the verdict (with `earlier`'s test where that is on): a dog's rows before or after
+    # its walker's deciding window cut off (`recheck.low_window`; docs/rules.md, rule 43)
 
     def __post_init__(self):
         if self.earlier not in EARLIER_TESTS:

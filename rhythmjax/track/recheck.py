@@ -28,7 +28,13 @@ at its first row or the deciding window's end, whichever is later. Rule 30's oth
 judges the windows before the deciding one (a bicycle's or a dog's rows before the walker's,
 `earlier_switch_row`), cut at the deciding window's first row; rule 30b ("speed") the same by
 the speed test alone; rule 30c ("resolved") rule 30's test where the frame rate resolves a
-walker's second harmonic at the fastest pace (`pace_resolved`), else 30b's."""
+walker's second harmonic at the fastest pace (`pace_resolved`), else 30b's.
+
+Rule 43 (`RecheckOptions.low`, off) gives every window the recheck reads rule 26's height test
+as well (`low_window`: its rows' median height below `size.min_height_heights` walker heights,
+`track.size.too_low`): a later or tail window so refused cuts as rule 29's; the windows before
+the verdict are read by this test (with `earlier`'s where that is on), a refused one cutting at
+the deciding window's first row (a dog's rows before its walker's)."""
 
 from __future__ import annotations
 
@@ -39,15 +45,17 @@ from collections.abc import Callable
 import jax.numpy as jnp
 import numpy as np
 
-from ..model.params import Config, walking_top_pace, walking_top_speed
+from ..model.camera_np import camera_tuple
+from ..model.params import Config, host_float, walking_top_pace, walking_top_speed
 from ..model.rhythm import window_speed
 from ..model.status import Reason, TrackState, Verdict
-from .options import RecheckOptions
+from .options import RecheckOptions, SizeOptions
+from .size import rows_height, too_low
 from .toolkit import RhythmWindows, match_window
 
 
 __all__ = ["earlier_switch_row", "earlier_windows", "fast_half", "half_speeds", "keep_rows",
-           "later_windows",
+           "later_windows", "low_window",
            "mixed_window_row", "not_a_walk", "pace_resolved", "split_at_switches",
            "switch_row"]
 
@@ -61,6 +69,18 @@ def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
         return True
     peak = int(result["reason"]) != Reason.NO_PEAK
     return peak and math.isfinite(pace) and pace > top_pace
+
+
+def low_window(cfg: Config, rows, size: SizeOptions | None) -> bool:
+    """Rule 43: True where rule 26 (`size.too_low`, its `size` options; None or
+    `min_height_heights` 0: never) would refuse a Pedestrian window on `rows` (`TrackRow`s): the
+    median height (`size.rows_height`, rule 36's rows) of its readable rows below
+    `size.min_height_heights` x `width.height_m` over at least `size.min_height_rows` rows."""
+    if size is None or size.min_height_heights <= 0:
+        return False
+    walker_m = host_float(cfg.width.height)
+    height, n = rows_height(camera_tuple(cfg.camera), rows, walker_m, size.top_inside_heights)
+    return too_low(Verdict.PEDESTRIAN, height, n, walker_m, size)
 
 
 def half_speeds(cfg: Config, rows) -> tuple[float, float]:
@@ -169,19 +189,20 @@ def _pedestrian(obj: RhythmWindows) -> bool:
 
 
 def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False,
-               halves: bool = False) -> int | None:
+               halves: bool = False, low: SizeOptions | None = None) -> int | None:
     """The first row of the first of `later_windows` that `not_a_walk` refuses (the deciding
     window's end where that window starts inside it: `tail`); None where the track is not
     judged Pedestrian or no later window is refused. halves (rule 42): a window one of whose
     halves is faster than any walk (`fast_half`) is refused too, cut at that half's first row
-    (the deciding window's end where that is later)."""
+    (the deciding window's end where that is later). low (rule 43): a window `low_window`
+    refuses with these size options is refused too."""
     if not _pedestrian(obj):
         return None
     top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg)
     decided_end = int(obj.result["window"][1])
     for result in later_windows(cfg, obj, tail=tail):
         a, b = (int(k) for k in result["window"])
-        if not_a_walk(result, top_speed, top_pace):
+        if not_a_walk(result, top_speed, top_pace) or low_window(cfg, obj.rows[a:b], low):
             return max(a, decided_end)
         half = fast_half(cfg, obj.rows[a:b], top_speed) if halves else None
         if half is not None:
@@ -189,16 +210,21 @@ def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False,
     return None
 
 
-def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True) -> int | None:
+def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
+                       speed: bool = True, low: SizeOptions | None = None) -> int | None:
     """Rule 30: the deciding window's first row where one of `earlier_windows` is refused by
     `not_a_walk` (the rows before it followed something else; pace False, rule 30b: by its
-    speed alone); None where the track is not judged Pedestrian, its deciding window starts at
-    row 0, or no earlier window is refused."""
+    speed alone; speed and pace False: by neither) or, with `low` (rule 43), by `low_window`;
+    None where the track is not judged Pedestrian, its deciding window starts at row 0, or no
+    earlier window is refused."""
     if not _pedestrian(obj):
         return None
-    top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg) if pace else math.inf
-    if any(not_a_walk(r, top_speed, top_pace) for r in earlier_windows(cfg, obj)):
-        return int(obj.result["window"][0])
+    top_speed = walking_top_speed(cfg) if speed else math.inf
+    top_pace = walking_top_pace(cfg) if pace and speed else math.inf
+    for r in earlier_windows(cfg, obj):
+        a, b = (int(k) for k in r["window"])
+        if not_a_walk(r, top_speed, top_pace) or low_window(cfg, obj.rows[a:b], low):
+            return int(obj.result["window"][0])
     return None
 
 
@@ -219,16 +245,18 @@ def keep_rows(obj, rows: slice) -> None:
 
 
 def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
-                      judge_afresh: Callable[[RhythmWindows, slice], None]) -> None:
+                      judge_afresh: Callable[[RhythmWindows, slice], None],
+                      size: SizeOptions | None = None) -> None:
     """The end of a track (`opt`: `options.RecheckOptions`; `judge_afresh(obj, rows)` makes a
     new track of `obj`'s `rows`, a slice, judged as online). Rule 42 (`opt.halves`): where the
     deciding window of a Pedestrian track has a half no walker's (`mixed_window_row`), the track
     is cut at the window's middle row: the fast half's side (the rows before the middle, or
     from it) is judged afresh, and the verdict stays with the other side, its deciding window
-    the slow half. Rules 30, 30b, 30c (`opt.earlier`): where a window before the deciding one
-    is no walker's, rows ..k-1 (k: the deciding window's first row) become a new track. Rules
-    29, 30a, 42 (`switch_row`): where a later window is no walker's, rows k.. (its first row)
-    become a new track. `obj` keeps the rest."""
+    the slow half. Rules 30, 30b, 30c (`opt.earlier`) and 43 (`opt.low`, with `size`, rule 26's
+    options): where a window before the deciding one is no walker's, rows ..k-1 (k: the
+    deciding window's first row) become a new track. Rules 29, 30a, 42, 43 (`switch_row`):
+    where a later window is no walker's, rows k.. (its first row) become a new track. `obj`
+    keeps the rest."""
     k = mixed_window_row(cfg, obj) if opt.halves else None
     if k is not None:
         a, b = (int(r) for r in obj.result["window"])
@@ -237,13 +265,14 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
         obj.result = dict(obj.result, window=(mid, b) if fast_first else (a, mid))
         judge_afresh(obj, slice(None, mid) if fast_first else slice(mid, None))
         keep_rows(obj, slice(mid, None) if fast_first else slice(None, mid))
-    if opt.earlier != "off":
+    low = size if opt.low else None
+    if opt.earlier != "off" or low is not None:
         pace = opt.earlier == "any" or (opt.earlier == "resolved" and pace_resolved(cfg))
-        k = earlier_switch_row(cfg, obj, pace=pace)
+        k = earlier_switch_row(cfg, obj, pace=pace, speed=opt.earlier != "off", low=low)
         if k is not None:
             judge_afresh(obj, slice(None, k))
             keep_rows(obj, slice(k, None))
-    k = switch_row(cfg, obj, tail=opt.tail, halves=opt.halves)
+    k = switch_row(cfg, obj, tail=opt.tail, halves=opt.halves, low=low)
     if k is not None:
         judge_afresh(obj, slice(k, None))
         keep_rows(obj, slice(None, k))

@@ -415,7 +415,7 @@ class OnlineTracker:
     def _split_at_switch(self, obj: _Object) -> None:
         """Rules 29, 30a (on), 30, 30b and 42 (off): where a window is no walker's, the rows on
         its side become a new track judged afresh (`recheck.split_at_switches`)."""
-        split_at_switches(self.cfg, obj, self.opt.recheck, self._judge_afresh)
+        split_at_switches(self.cfg, obj, self.opt.recheck, self._judge_afresh, self.opt.size)
 
     def _judge_afresh(self, obj: _Object, rows: slice) -> None:
         """A new track (new id) of `obj`'s `rows`, judged as online, then as at its end."""
