@@ -151,6 +151,10 @@ RULES = {
     "recheck_low": ("tracker", "recheck.low", True, False, TRACKER_SOURCES,
                     "nothing fitted (rule 26's 0.5 walker heights over 10 rows on the windows "
                     "the recheck reads); found on used seeds 4040001-4070001 (rule 43)"),
+    "recheck_speed_low": ("tracker", "recheck.earlier", "speed-low", "off", TRACKER_SOURCES,
+                          "nothing fitted (rule 29's speed and rule 26's height on the windows "
+                          "before the verdict); found on used seeds 4040001-4070001, "
+                          "4160001-4230001 (rule 30d)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -177,7 +181,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "count_edge": COUNT_SOURCES, "twice_edge": TRACKER_SOURCES,
               "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (), "hop4": (),
               "tail": (), "lean": (), "count_twice_fitted": (), "halves": (),
-              "recheck_resolved": (), "pixel_halves": (), "recheck_low": ()}
+              "recheck_resolved": (), "pixel_halves": (), "recheck_low": (),
+              "recheck_speed_low": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -62,7 +62,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 37b)", "size.twice_pace_edge", True),  # ... heads above the view
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
     ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
-    ("(new: issue 16, rule 30)", "recheck.earlier", "off"),  # windows before the verdict
+    ("(new: issue 16, rule 30d)", "recheck.earlier", "speed-low"),  # windows before the verdict
     ("(new: issue 16, rule 42)", "recheck.halves", False),  # a window's halves read, off
     ("(new: issue 16, rule 43)", "recheck.low", False),  # rule 26 in the rechecked windows, off
 ]

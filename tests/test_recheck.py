@@ -349,9 +349,10 @@ def test_a_dog_after_the_verdict_at_a_walkers_pace_is_cut_by_its_height():
 
 
 def test_split_at_switches_reads_heights_only_with_the_rule_on():
-    """`split_at_switches` with `RecheckOptions(low=True)` and rule 26's options makes a new
-    track of the rows before the deciding window (0..32, the dog's), the track keeping 32..160
-    with its window shifted to 0..64; with the rule off, or without size options, nothing is cut."""
+    """`split_at_switches` with rule 43 alone (`low`, `earlier` off) and rule 26's options makes
+    a new track of the rows before the deciding window (0..32, the dog's), the track keeping
+    32..160 with its window shifted to 0..64; with the rules off, or without size options,
+    nothing is cut."""
     def fresh():
         paces = [3.2] * 64 + [2.0] * 96
         return _judged(_tall(_track([1.3] * 160, paces_hz=paces), slice(0, 64), 0.6))
@@ -361,16 +362,46 @@ def test_split_at_switches_reads_heights_only_with_the_rule_on():
     def judge(o, rows):
         calls.append((rows.start, rows.stop))
 
-    for opt, size in ((RecheckOptions(), SIZE), (RecheckOptions(low=True), None)):
+    off = RecheckOptions(earlier="off")  # rule 30d (the default "speed-low") reads heights too
+    for opt, size in ((off, SIZE), (RecheckOptions(earlier="off", low=True), None)):
         obj = fresh()
         obj.vel = list(range(len(obj.rows)))
         split_at_switches(CFG, obj, opt, judge, size)
         assert calls == [] and len(obj.rows) == 160
     obj = fresh()
     obj.vel = list(range(len(obj.rows)))
-    split_at_switches(CFG, obj, RecheckOptions(low=True), judge, SIZE)
+    split_at_switches(CFG, obj, RecheckOptions(earlier="off", low=True), judge, SIZE)
     assert calls == [(None, 32)] and obj.vel == list(range(32, 160))
     assert obj.result["window"] == (0, 64)
+
+
+def test_speed_low_reads_speed_and_height_before_the_verdict_only():
+    """Rule 30d (`earlier` "speed-low"): the dog's rows before the walker's verdict (0.6 m,
+    3.2 Hz, 1.3 m/s) are cut by their height (at 32), a bicycle's before it (4 m/s) by their
+    speed (at 64); a dog after the verdict (0.6 m at a walker's pace and speed) is left on the
+    track, the later windows being rule 29's alone; without size options the dog before is
+    left too (its pace is not read)."""
+    calls = []
+
+    def judge(o, rows):
+        calls.append((rows.start, rows.stop))
+
+    opt = RecheckOptions(earlier="speed-low")
+    cases = (
+        (lambda: _tall(_track([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96), slice(0, 64), 0.6),
+         SIZE, [(None, 32)]),
+        (lambda: _track([4.0] * 64 + [1.3] * 96), SIZE, [(None, 64)]),
+        (lambda: _tall(_track([1.3] * 160), slice(64, None), 0.6), SIZE, []),
+        (lambda: _tall(_track([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96), slice(0, 64), 0.6),
+         None, []),
+    )
+    for make, size, cut in cases:
+        obj = _judged(make())
+        assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN
+        obj.vel = list(range(len(obj.rows)))
+        calls.clear()
+        split_at_switches(CFG, obj, opt, judge, size)
+        assert calls == cut
 
 
 @pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}, {"recheck.halves": True},

@@ -237,7 +237,7 @@ class SizeOptions:
                              f"got {self.min_height_scope!r}")
 
 
-EARLIER_TESTS = ("off", "speed", "any", "resolved")  # `recheck.earlier`
+EARLIER_TESTS = ("off", "speed", "any", "resolved", "speed-low")  # `recheck.earlier`
 
 
 @dataclass(frozen=True)
@@ -253,13 +253,16 @@ class RecheckOptions:
     # leave the track's last rows unjudged, the window of its last N rows is judged too (a
     # switch less than N rows before the end); cut at its first row or the deciding window's
     # end, whichever is later (on since issue 16's thirty-first round, docs/rules.md, rule 30a)
-    earlier: str = "off"  # the windows before the deciding one judged too, one refused cutting
-    # the track at the deciding window's first row (the rows before, a bicycle's or a dog's
-    # before the walker's, become a new track judged afresh): "any", by rule 29's speed or pace
-    # (rule 30: failed on PETS09 at 7 fps, where walkers' windows peak at 2.8-3.3 Hz); "speed",
-    # by its speed alone (rule 30b); "resolved", rule 30's test where the frame rate resolves a
-    # walker's second harmonic at the fastest pace, else 30b's (rule 30c, `recheck.
-    # pace_resolved`); "off" (docs/rules.md, rules 30, 30b, 30c)
+    earlier: str = "speed-low"  # the windows before the deciding one judged too, one refused
+    # cutting the track at the deciding window's first row (the rows before, a bicycle's or a
+    # dog's before the walker's, become a new track judged afresh): "speed-low", by rule 29's
+    # speed or by rule 26's height test (`size`'s options; rule 30d, `recheck.low_window`; on
+    # since issue 16's forty-fourth round: fresh own radial 4400001-4470001 non-walkers 4 -> 2
+    # of 120, walkers 240 -> 241 of 280); "any", by rule 29's speed or pace (rule 30: failed on
+    # PETS09 at 7 fps, where walkers' windows peak at 2.8-3.3 Hz); "speed", by its speed alone
+    # (rule 30b); "resolved", rule 30's test where the frame rate resolves a walker's second
+    # harmonic at the fastest pace, else 30b's (rule 30c, `recheck.pace_resolved`); "off"
+    # (docs/rules.md, rules 30, 30b, 30c, 30d)
     halves: bool = False  # rule 42 (with `enabled`): a window is also no walker's where one of
     # its halves (N/2 rows) moves faster than any walk (12), (14): a deciding window holding a
     # walker and then a bicycle is cut at its middle, the verdict kept by the slow half's side,

@@ -27,7 +27,8 @@ at its first row or the deciding window's end, whichever is later. Rule 30's oth
 (`RecheckOptions.earlier` "any", off: it cut walkers' tracks on PETS09 at 7 fps, docs/rules.md)
 judges the windows before the deciding one (a bicycle's or a dog's rows before the walker's,
 `earlier_switch_row`), cut at the deciding window's first row; rule 30b ("speed") the same by
-the speed test alone; rule 30c ("resolved") rule 30's test where the frame rate resolves a
+the speed test alone; rule 30d ("speed-low") by the speed test or rule 26's height test
+(`low_window`, rule 43's); rule 30c ("resolved") rule 30's test where the frame rate resolves a
 walker's second harmonic at the fastest pace (`pace_resolved`), else 30b's.
 
 Rule 43 (`RecheckOptions.low`, off) gives every window the recheck reads rule 26's height test
@@ -252,11 +253,11 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
     deciding window of a Pedestrian track has a half no walker's (`mixed_window_row`), the track
     is cut at the window's middle row: the fast half's side (the rows before the middle, or
     from it) is judged afresh, and the verdict stays with the other side, its deciding window
-    the slow half. Rules 30, 30b, 30c (`opt.earlier`) and 43 (`opt.low`, with `size`, rule 26's
-    options): where a window before the deciding one is no walker's, rows ..k-1 (k: the
-    deciding window's first row) become a new track. Rules 29, 30a, 42, 43 (`switch_row`):
-    where a later window is no walker's, rows k.. (its first row) become a new track. `obj`
-    keeps the rest."""
+    the slow half. Rules 30, 30b, 30c, 30d (`opt.earlier`) and 43 (`opt.low`; 30d and 43 with
+    `size`, rule 26's options): where a window before the deciding one is no walker's, rows
+    ..k-1 (k: the deciding window's first row) become a new track. Rules 29, 30a, 42, 43
+    (`switch_row`): where a later window is no walker's, rows k.. (its first row) become a new
+    track. `obj` keeps the rest."""
     k = mixed_window_row(cfg, obj) if opt.halves else None
     if k is not None:
         a, b = (int(r) for r in obj.result["window"])
@@ -266,9 +267,10 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
         judge_afresh(obj, slice(None, mid) if fast_first else slice(mid, None))
         keep_rows(obj, slice(mid, None) if fast_first else slice(None, mid))
     low = size if opt.low else None
-    if opt.earlier != "off" or low is not None:
+    low_before = size if opt.low or opt.earlier == "speed-low" else None  # rules 43, 30d
+    if opt.earlier != "off" or low_before is not None:
         pace = opt.earlier == "any" or (opt.earlier == "resolved" and pace_resolved(cfg))
-        k = earlier_switch_row(cfg, obj, pace=pace, speed=opt.earlier != "off", low=low)
+        k = earlier_switch_row(cfg, obj, pace=pace, speed=opt.earlier != "off", low=low_before)
         if k is not None:
             judge_afresh(obj, slice(None, k))
             keep_rows(obj, slice(k, None))
