@@ -1,5 +1,5 @@
-"""Where a track judged Pedestrian went on with something else (rules 29 and 30a, issue 16;
-`options.RecheckOptions`, on by default).
+"""Where a track judged Pedestrian went on with something else (rules 29, 30a and 30d, issue
+16; `options.RecheckOptions`, on by default).
 
 Once a rhythm window has said Pedestrian the tracker stops judging windows (Sec. 4.2), so a
 track that then follows a bicycle or a dog passing its walker (after a PREDICT stretch, a
@@ -27,9 +27,10 @@ at its first row or the deciding window's end, whichever is later. Rule 30's oth
 (`RecheckOptions.earlier` "any", off: it cut walkers' tracks on PETS09 at 7 fps, docs/rules.md)
 judges the windows before the deciding one (a bicycle's or a dog's rows before the walker's,
 `earlier_switch_row`), cut at the deciding window's first row; rule 30b ("speed") the same by
-the speed test alone; rule 30d ("speed-low") by the speed test or rule 26's height test
-(`low_window`, rule 43's); rule 30c ("resolved") rule 30's test where the frame rate resolves a
-walker's second harmonic at the fastest pace (`pace_resolved`), else 30b's.
+the speed test alone; rule 30c ("resolved") rule 30's test where the frame rate resolves a
+walker's second harmonic at the fastest pace (`pace_resolved`), else 30b's; rule 30d
+("speed-low", the default since issue 16's forty-fourth round) by the speed test or rule 26's
+height test (`low_window`, rule 43's): a bicycle's or a dog's rows, never the pace.
 
 Rule 43 (`RecheckOptions.low`, off) gives every window the recheck reads rule 26's height test
 as well (`low_window`: its rows' median height below `size.min_height_heights` walker heights,

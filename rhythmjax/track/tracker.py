@@ -401,7 +401,7 @@ class OnlineTracker:
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._end(s)
-        if self.opt.recheck.enabled:  # rules 29, 30a: a switch after the verdict cut off (on)
+        if self.opt.recheck.enabled:  # rules 29, 30a, 30d: a switch cut off (on)
             for o in list(self._finished):
                 self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
@@ -413,8 +413,9 @@ class OnlineTracker:
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 
     def _split_at_switch(self, obj: _Object) -> None:
-        """Rules 29, 30a (on), 30, 30b and 42 (off): where a window is no walker's, the rows on
-        its side become a new track judged afresh (`recheck.split_at_switches`)."""
+        """Rules 29, 30a, 30d (on), 30, 30b, 30c, 42 and 43 (off): where a window is no
+        walker's, the rows on its side become a new track judged afresh
+        (`recheck.split_at_switches`; rules 30d and 43 read rule 26's `size` options)."""
         split_at_switches(self.cfg, obj, self.opt.recheck, self._judge_afresh, self.opt.size)
 
     def _judge_afresh(self, obj: _Object, rows: slice) -> None:
