@@ -6,7 +6,9 @@ test's cases, the cut rows on hand-made tracks (a walker, then a bicycle; a bicy
 walker; a fast pace, then a walk; a walker throughout), the rows kept, and the tracker with the
 rules on a lone walker. Rule 42 (`recheck.halves`): a window one of whose halves moves faster
 than any walk (a walker and a bicycle in one window). Rule 43 (`recheck.low`): rule 26's height
-test on the windows the recheck reads (a dog's rows before or after its walker's)."""
+test on the windows the recheck reads (a dog's rows before or after its walker's); rule 30d
+(`recheck.earlier` "speed-low", the default): the windows before the verdict by speed or
+height."""
 
 import math
 from types import SimpleNamespace
