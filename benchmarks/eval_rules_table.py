@@ -151,6 +151,8 @@ RULES = {
     "recheck_low": ("tracker", "recheck.low", True, False, TRACKER_SOURCES,
                     "nothing fitted (rule 26's 0.5 walker heights over 10 rows on the windows "
                     "the recheck reads); found on used seeds 4040001-4070001 (rule 43)"),
+    # the rules on `recheck.earlier` (recheck_all, recheck_speed, recheck_resolved, this one)
+    # read OFF as "off": since rule 30d that is not the default ("speed-low") but no test at all
     "recheck_speed_low": ("tracker", "recheck.earlier", "speed-low", "off", TRACKER_SOURCES,
                           "nothing fitted (rule 29's speed and rule 26's height on the windows "
                           "before the verdict); found on used seeds 4040001-4070001, "
