@@ -27,7 +27,9 @@ from rhythmjax.sim.presets import synthetic_options  # noqa: E402
 def slim(o) -> SimpleNamespace:
     return SimpleNamespace(track_id=o.track_id, rows=list(o.rows), result=o.result,
                            candidate_rows=None if o.candidate_rows is None
-                           else list(o.candidate_rows), vel=list(o.vel))
+                           else list(o.candidate_rows), vel=list(o.vel),
+                           mean_rows=None if getattr(o, "mean_rows", None) is None
+                           else list(o.mean_rows))
 
 
 def track_scene(cfg, seed: int, spec, cache: Path, options=None):

@@ -141,6 +141,12 @@ class BodyOptions:
     # with W^2 as a walker comes nearer: a trend over a rhythm window of one walking towards or
     # away from the camera; the mean has none. Chosen on own scenes with knees (docs/rules.md,
     # rule 35)
+    window_mean_refused: bool = False  # rule 35b (issue 16): where a rhythm window judged on the
+    # sum I(k) (candidates and rule 37 included) is not Pedestrian, it is judged again on the
+    # same windows' mean of D per pixel (rule 35's I(k)), whose Pedestrian outcome then decides;
+    # every window the sum judges Pedestrian keeps the sum's outcome (toolkit.match_window).
+    # Ignored with window_per_pixel. Found on used radial seeds 4520001-4590001 (rule 35 moved 11
+    # walkers to Pedestrian there and none back; docs/rules.md)
     pace_window_widths: float = 0.0  # rule 34 (issue 16): I(k) summed also in window B scaled
     # by this (2: 2 W wide, 2 W/5 high, bottom row at the foot row), written as the tracks'
     # `intensity_wide` column; it never decides a verdict, but where a rhythm window says

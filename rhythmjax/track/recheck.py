@@ -232,12 +232,14 @@ def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
 
 def keep_rows(obj, rows: slice) -> None:
     """Keep only `rows` (a slice with a step of 1) of `obj`'s per-row lists (`rows`, `vel`,
-    `candidate_rows` where not None) and shift its deciding window (result["window"]) by the
-    rows dropped before them: the window must lie inside `rows`."""
+    `candidate_rows` and `mean_rows` where not None) and shift its deciding window
+    (result["window"]) by the rows dropped before them: the window must lie inside `rows`."""
     first = rows.start or 0
     obj.rows, obj.vel = obj.rows[rows], obj.vel[rows]
     if getattr(obj, "candidate_rows", None) is not None:
         obj.candidate_rows = obj.candidate_rows[rows]
+    if getattr(obj, "mean_rows", None) is not None:
+        obj.mean_rows = obj.mean_rows[rows]
     if obj.result is not None and "window" in obj.result:
         a, b = obj.result["window"]
         if not (first <= a and b - first <= len(obj.rows)):

@@ -176,6 +176,26 @@ def _outcome(res) -> dict:
     return {name: np.asarray(getattr(res, name)) for name in RESULT_FIELDS}
 
 
+def _judged(cfg: Config, obj, window, sigs, rest: tuple, candidates: bool
+            ) -> tuple[dict, int | None]:
+    """(outcome, chosen candidate or None) of one rhythm window of `obj` on its I(k) channels
+    `sigs` (window B's, then each candidate's and the pace window's; `rest` the times, ground
+    track, valid flag and foot points of `classify_window_jit`), then `obj`'s second look."""
+    if not candidates:
+        out, chosen = _outcome(classify_window_jit(cfg, jnp.asarray(sigs[0], jnp.float32),
+                                                   *rest)), None
+    else:  # every channel judged in one call, the strongest kept
+        every = _outcome(classify_window_candidates_jit(
+            cfg, jnp.asarray(np.stack(sigs), jnp.float32), *rest))
+        merged, best = strongest([{f: v[c][None] for f, v in every.items()}
+                                  for c in range(len(sigs))],
+                                 pace_last=getattr(obj, "pace_window", False),
+                                 min_hz=trend_min_hz(cfg))
+        out, chosen = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}, int(best[0])
+    look = getattr(obj, "second_look", None)
+    return (out if look is None else look(out, window)), chosen
+
+
 def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
                  skip_missing: bool = True, measured_speed: bool = True) -> None:
     """(13)-(15) on the next completed window of N rows of `obj` (one starts every
@@ -195,7 +215,10 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
     is). The pace window (`obj.pace_window`, rule 34) is judged in the same call and gives a
     Pedestrian window's pace and stride where it says Pedestrian too (`strongest`'s
     pace_last). The object's `second_look(outcome, rows)`, where it has one, may change a
-    window's outcome from its rows before it decides (`track.twice`, rule 37)."""
+    window's outcome from its rows before it decides (`track.twice`, rule 37). Rule 35b (the
+    object's `mean_rows`, where not None: per row, window B's and its candidate_rows' windows'
+    I(k) per pixel): a window so judged not Pedestrian is judged again, the same way, on those,
+    and their outcome decides where it is Pedestrian."""
     n = cfg.thresholds.n
     rows = obj.rows
     k = obj.win_start
@@ -215,30 +238,21 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
         obj.win_start = k + int(missing[-1]) + 1
         return
     obj.win_start = k + cfg.thresholds.hop_samples
-    args = (cfg, jnp.asarray(intensity, jnp.float32), jnp.asarray(t - t[0], jnp.float32),
-            jnp.asarray(xy, jnp.float32), jnp.asarray(True))
+    rest = (jnp.asarray(t - t[0], jnp.float32), jnp.asarray(xy, jnp.float32), jnp.asarray(True))
     if measured_speed:
         observed = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE
                                else (math.nan, math.nan) for r in window], np.float64)
-        args += (jnp.asarray(observed, jnp.float32),)
+        rest += (jnp.asarray(observed, jnp.float32),)
     cands = getattr(obj, "candidate_rows", None)
-    chosen = None
-    if cands is None:
-        out = _outcome(classify_window_jit(*args))
-    else:  # window B, then one I(k) per candidate (a row's tuple), judged in one call
-        sigs = [intensity] + [window_signal(obj, k, k + n, c)
-                              for c in range(1, len(cands[k]) + 1)]
-        every = _outcome(classify_window_candidates_jit(
-            cfg, jnp.asarray(np.stack(sigs), jnp.float32), *args[2:]))
-        merged, best = strongest([{f: v[c][None] for f, v in every.items()}
-                                  for c in range(len(sigs))],
-                                 pace_last=getattr(obj, "pace_window", False),
-                                 min_hz=trend_min_hz(cfg))
-        out = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}
-        chosen = int(best[0])
-    look = getattr(obj, "second_look", None)
-    if look is not None:
-        out = look(out, window)
+    sigs = [intensity] + ([] if cands is None else
+                          [window_signal(obj, k, k + n, c) for c in range(1, len(cands[k]) + 1)])
+    out, chosen = _judged(cfg, obj, window, sigs, rest, cands is not None)
+    means = getattr(obj, "mean_rows", None)
+    if means is not None and int(out["verdict"]) != Verdict.PEDESTRIAN:  # rule 35b
+        per_pixel = np.asarray(means[k:k + n], np.float64).T  # (channels, n)
+        again, which = _judged(cfg, obj, window, list(per_pixel), rest, cands is not None)
+        if int(again["verdict"]) == Verdict.PEDESTRIAN:
+            out, chosen = again, which
     obj.windows_done += 1
     pedestrian = int(out["verdict"]) == Verdict.PEDESTRIAN
     if obj.result is None or pedestrian:

@@ -32,7 +32,7 @@ from ..model.camera_np import camera_tuple, upright_size
 from ..model.params import Config, host_float
 from ..model.status import VERDICT_LABELS, TrackState
 from ..vision import detect, stabilise
-from ..vision.window_b import window_b_extras
+from ..vision.window_b import window_b_extras, window_b_means
 from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .lean import window_b_foot
@@ -67,6 +67,8 @@ class _Object:
     # B (`WINDOW_CANDIDATES` order), then the pace window's (rule 34); NaN where `intensity` is
     pace_window: bool = False  # the last entry of each candidate_rows tuple is the pace window
     second_look: Callable | None = None  # `match_window`'s look at a refused window (rule 37)
+    mean_rows: list[tuple[float, ...]] | None = None  # rule 35b: per row, window B's and the
+    # candidate_rows' windows' I(k) per pixel (`vision.window_b.window_b_means`)
 
 
 class _Lost(NamedTuple):
@@ -112,6 +114,7 @@ class OnlineTracker:
                          if self.opt.body.window_candidates else None)  # in W, + = down
         self._pace_scale = float(self.opt.body.pace_window_widths)  # rule 34; 0: off
         self._extra = len(self._offsets or ()) + (self._pace_scale > 0)  # entries a row
+        self._second_mean = self.opt.body.window_mean_refused and not self.opt.body.window_per_pixel
 
     def update(self, index: int, t: float, frame: np.ndarray | None) -> None:
         """Process one frame (None: undecodable, every object predicts)."""
@@ -207,7 +210,8 @@ class OnlineTracker:
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top,
                                          candidate_rows=[] if self._extra else None,
                                          pace_window=self._pace_scale > 0,
-                                         second_look=self._look)
+                                         second_look=self._look,
+                                         mean_rows=[] if self._second_mean else None)
                 present[s], reset[s] = True, True
                 if opt.body.side_anchor:
                     cut, det = det, sides.anchor_at_side(det, self._walker_px(det.u, det.v),
@@ -328,6 +332,9 @@ class OnlineTracker:
             obj.candidate_rows.append((math.nan,) * self._extra if math.isnan(intensity) else
                                       window_b_extras(D, fu, fv, W, self._offsets or (),
                                                       self._pace_scale, mean=per_pixel))
+        if obj.mean_rows is not None:  # rule 35b, NaN exactly where `intensity` is
+            obj.mean_rows.append(window_b_means(D, fu, fv, W, self._offsets or (),
+                                                self._pace_scale, math.isfinite(intensity)))
         top, obj.top = (obj.top if measured else math.nan), math.nan  # this frame's only
         edge, obj.top_at_edge = measured and obj.top_at_edge, False
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
@@ -391,6 +398,8 @@ class OnlineTracker:
         obj.vel = vel + [NAN_VELOCITY] * len(gap)
         if old.candidate_rows is not None:
             obj.candidate_rows = old.candidate_rows[:kept] + [(math.nan,) * self._extra] * len(gap)
+        if old.mean_rows is not None:
+            obj.mean_rows = old.mean_rows[:kept] + [(math.nan,) * (self._extra + 1)] * len(gap)
         obj.track_id = old.track_id
         self.relinked += 1
         return True
@@ -420,10 +429,11 @@ class OnlineTracker:
 
     def _judge_afresh(self, obj: _Object, rows: slice) -> None:
         """A new track (new id) of `obj`'s `rows`, judged as online, then as at its end."""
-        cands = obj.candidate_rows
+        cands, means = obj.candidate_rows, obj.mean_rows
         part = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[rows],
                        vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows],
-                       pace_window=obj.pace_window, second_look=obj.second_look)
+                       pace_window=obj.pace_window, second_look=obj.second_look,
+                       mean_rows=None if means is None else means[rows])
         self._next_id += 1
         while not part.decided and len(part.rows) >= part.win_start + self.cfg.thresholds.n:
             match_window(self.cfg, part)

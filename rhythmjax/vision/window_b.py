@@ -80,6 +80,20 @@ def window_b_extras(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
     return moved + (window_b_intensity(absdiff, u_p, v_p, pace_scale * W, mean=mean),)
 
 
+def window_b_means(absdiff: np.ndarray | None, u_p: Number, v_p: Number, W: Number,
+                   offsets: Sequence[float], pace_scale: float, sampled: bool = True
+                   ) -> tuple[float, ...]:
+    """Rule 35b's per-pixel samples of a tracked row (grey levels per pixel): window B's I(k)
+    (`window_b_intensity(..., mean=True)`), then its extras' (`window_b_extras(..., mean=True)`:
+    the candidate windows at `offsets`, the pace window where `pace_scale` > 0). Every value NaN
+    where not `sampled` (the row's I(k) is NaN) or `absdiff` is None, so that each is NaN exactly
+    where I(k) is; else the NaN rules of `window_b_intensity`."""
+    if absdiff is None or not sampled:
+        return (math.nan,) * (1 + len(offsets) + (pace_scale > 0))
+    return ((window_b_intensity(absdiff, u_p, v_p, W, mean=True),)
+            + window_b_extras(absdiff, u_p, v_p, W, offsets, pace_scale, mean=True))
+
+
 @jax.jit
 def _walker_width(camera: Camera, width_m, u, v):
     _, y, ok = ground_from_image(camera, u, v)
