@@ -10,6 +10,7 @@ sample equal to 1e-9 relative: the same float sums divided by the same whole are
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from types import SimpleNamespace
 
@@ -25,6 +26,7 @@ from rhythmjax.track.options import BodyOptions, TrackerOptions
 from rhythmjax.track.recheck import keep_rows
 from rhythmjax.track.rows import TrackRow
 from rhythmjax.track.toolkit import RESULT_FIELDS, match_window
+from rhythmjax.track.tracker import OnlineTracker
 from rhythmjax.vision.window_b import window_b_means
 
 
@@ -187,3 +189,22 @@ def test_mean_rows_are_nan_exactly_where_intensity_is():
     unsampled = np.isnan(tracks["intensity"])
     assert unsampled.sum() >= 5 and (~unsampled).sum() > 100
     np.testing.assert_array_equal(np.isnan(means), np.repeat(unsampled[:, None], 5, axis=1))
+
+
+def test_a_relinked_track_keeps_its_mean_rows():
+    """A walker crossing at 12 m hidden for frames 40..61 (`test_window_candidates_online`'s
+    scene): its track times out and is relinked, and the relink's gap rows (no sample) get NaN
+    per-pixel rows, one a row, as the sums do."""
+    act = synth.walker(-3.4, 12.0, 0.0, pace_hz=1.9, step_length_m=0.62)
+    spec = synth.SceneSpec(n_frames=110, actors=(act,), camera=CFG.camera)
+    walk = synth.render_scene(3, spec).frames
+    empty = synth.render_scene(3, dataclasses.replace(spec, actors=())).frames
+    tracker = OnlineTracker(CFG, TrackerOptions(body=BodyOptions(window_mean_refused=True)))
+    for k in range(110):
+        tracker.update(k, k / FPS, empty[k] if 40 <= k < 62 else walk[k])
+    tracks, _, objs = tracker.finish()
+    assert tracker.relinked == 1
+    means = np.asarray([m for o in objs for m in o.mean_rows], np.float64)
+    unsampled = np.isnan(tracks["intensity"])
+    assert means.shape == (len(unsampled), 4) and (tracks["state"] == "none").sum() >= 3
+    np.testing.assert_array_equal(np.isnan(means), np.repeat(unsampled[:, None], 4, axis=1))
