@@ -56,6 +56,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   mean of D over window B, grey levels per pixel, instead of its sum).
 - mean_refused: the tracker's `body.window_mean_refused` True vs False (rule 35b: rule 35's
   mean read only where the sum refuses a window).
+- halves_around: the tracker's `recheck.halves_around` True vs False (rule 44: rule 42's half
+  test on the windows before and after the deciding one only).
 - top_inside: the tracker's `size.top_inside_heights` 0.1 vs 0 (rule 36: the size rule also
   reads rows where a walker's head would leave the image but the measured top lies inside it).
 - twice_pace: the tracker's `size.twice_pace_heights` 0.57 (fitted) vs 0 (rule 37: a window

@@ -160,6 +160,9 @@ RULES = {
     "mean_refused": ("tracker", "body.window_mean_refused", True, False, TRACKER_SOURCES,
                      "nothing fitted (rule 35's mean, read only where the sum refuses a window); "
                      "found on used radial seeds 4520001-4590001 (rule 35b)"),
+    "halves_around": ("tracker", "recheck.halves_around", True, False, TRACKER_SOURCES,
+                      "nothing fitted (rule 42's half test and (14)'s 2.57 m/s, before and after "
+                      "the deciding window only); found on used seeds 4650001, 4680001 (rule 44)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -187,7 +190,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "count_low": COUNT_SOURCES, "twice_fitted": (), "trend": (), "hop4": (),
               "tail": (), "lean": (), "count_twice_fitted": (), "halves": (),
               "recheck_resolved": (), "pixel_halves": (), "recheck_low": (),
-              "recheck_speed_low": TRACKER_SOURCES, "mean_refused": ()}
+              "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
+              "halves_around": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -42,6 +42,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 34)", "body.pace_window_widths", 0.0),
     ("(new: issue 16, rule 35)", "body.window_per_pixel", False),  # I(k) per pixel of B
     ("(new: issue 16, rule 35b)", "body.window_mean_refused", False),  # per pixel, refused
+    ("(new: issue 16, rule 44)", "recheck.halves_around", False),  # halves around the verdict
     ("min_area", "new.min_area", 40),
     ("outside_margin_px", "new.outside_margin_px", 8),
     ("near_widths", "new.near_widths", 1.0),

@@ -275,6 +275,11 @@ class RecheckOptions:
     # the other side judged afresh; a later or tail window so refused cuts at that half (off:
     # fresh own seeds lost walkers, issue 16's forty-third round; `recheck.mixed_window_row`,
     # docs/rules.md, rule 42)
+    halves_around: bool = False  # rule 44 (with `enabled`): rule 42's half test on the windows
+    # before and after the deciding one, never on the deciding one: a window before it with a half
+    # faster than any walk cuts the track at the deciding window's first row, one after it at that
+    # half (`recheck.earlier_switch_row`, `switch_row`); a walker's track that followed a bicycle
+    # for less than a window before or after its verdict (docs/rules.md, rule 44)
     low: bool = False  # rule 43 (with `enabled`): rule 26's height test (`size`'s options:
     # 0.5 walker heights over 10 rows) refuses a later or tail window too, and reads the windows
     # before the verdict (with `earlier`'s test where that is on): a dog's rows before or after

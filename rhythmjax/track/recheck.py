@@ -32,6 +32,13 @@ walker's second harmonic at the fastest pace (`pace_resolved`), else 30b's; rule
 ("speed-low", the default since issue 16's forty-fourth round) by the speed test or rule 26's
 height test (`low_window`, rule 43's): a bicycle's or a dog's rows, never the pace.
 
+Rule 44 (`RecheckOptions.halves_around`, off) reads rule 42's halves in the windows before and
+after the deciding one, never in the deciding one: a window before it with a half faster than
+any walk cuts the track at the deciding window's first row (`earlier_switch_row`), a later or
+tail window as rule 42's does (`switch_row`). A walker's track that followed a bicycle for less
+than a window before or after its verdict: the whole window's Theil-Sen speed stays under the
+bound, its bicycle half does not.
+
 Rule 43 (`RecheckOptions.low`, off) gives every window the recheck reads rule 26's height test
 as well (`low_window`: its rows' median height below `size.min_height_heights` walker heights,
 `track.size.too_low`): a later or tail window so refused cuts as rule 29's; the windows before
@@ -213,19 +220,21 @@ def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False,
 
 
 def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
-                       speed: bool = True, low: SizeOptions | None = None) -> int | None:
+                       speed: bool = True, low: SizeOptions | None = None,
+                       halves: bool = False) -> int | None:
     """Rule 30: the deciding window's first row where one of `earlier_windows` is refused by
     `not_a_walk` (the rows before it followed something else; pace False, rule 30b: by its
-    speed alone; speed and pace False: by neither) or, with `low` (rule 43), by `low_window`;
-    None where the track is not judged Pedestrian, its deciding window starts at row 0, or no
-    earlier window is refused."""
+    speed alone; speed and pace False: by neither), with `low` (rule 43) by `low_window`, or with
+    `halves` (rule 44) by `fast_half`; None where the track is not judged Pedestrian, its
+    deciding window starts at row 0, or no earlier window is refused."""
     if not _pedestrian(obj):
         return None
     top_speed = walking_top_speed(cfg) if speed else math.inf
     top_pace = walking_top_pace(cfg) if pace and speed else math.inf
     for r in earlier_windows(cfg, obj):
         a, b = (int(k) for k in r["window"])
-        if not_a_walk(r, top_speed, top_pace) or low_window(cfg, obj.rows[a:b], low):
+        if (not_a_walk(r, top_speed, top_pace) or low_window(cfg, obj.rows[a:b], low)
+                or (halves and fast_half(cfg, obj.rows[a:b], walking_top_speed(cfg)) is not None)):
             return int(obj.result["window"][0])
     return None
 
@@ -258,7 +267,8 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
     from it) is judged afresh, and the verdict stays with the other side, its deciding window
     the slow half. Rules 30, 30b, 30c, 30d (`opt.earlier`) and 43 (`opt.low`; 30d and 43 with
     `size`, rule 26's options): where a window before the deciding one is no walker's, rows
-    ..k-1 (k: the deciding window's first row) become a new track. Rules 29, 30a, 42, 43
+    ..k-1 (k: the deciding window's first row) become a new track; rule 44
+    (`opt.halves_around`) reads the halves there too. Rules 29, 30a, 42, 43, 44
     (`switch_row`): where a later window is no walker's, rows k.. (its first row) become a new
     track. `obj` keeps the rest."""
     k = mixed_window_row(cfg, obj) if opt.halves else None
@@ -271,13 +281,14 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
         keep_rows(obj, slice(mid, None) if fast_first else slice(None, mid))
     low = size if opt.low else None
     low_before = size if opt.low or opt.earlier == "speed-low" else None  # rules 43, 30d
-    if opt.earlier != "off" or low_before is not None:
+    if opt.earlier != "off" or low_before is not None or opt.halves_around:
         pace = opt.earlier == "any" or (opt.earlier == "resolved" and pace_resolved(cfg))
-        k = earlier_switch_row(cfg, obj, pace=pace, speed=opt.earlier != "off", low=low_before)
+        k = earlier_switch_row(cfg, obj, pace=pace, speed=opt.earlier != "off", low=low_before,
+                               halves=opt.halves_around)
         if k is not None:
             judge_afresh(obj, slice(None, k))
             keep_rows(obj, slice(k, None))
-    k = switch_row(cfg, obj, tail=opt.tail, halves=opt.halves, low=low)
+    k = switch_row(cfg, obj, tail=opt.tail, halves=opt.halves or opt.halves_around, low=low)
     if k is not None:
         judge_afresh(obj, slice(k, None))
         keep_rows(obj, slice(None, k))
