@@ -428,3 +428,42 @@ def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone(changes):
     assert np.sum(tracks_off["track_id"] == first) >= 64 + CFG.thresholds.n  # a later window
     assert list(on["verdict"]) == list(off["verdict"])
     np.testing.assert_array_equal(tracks_on["track_id"], tracks_off["track_id"])
+
+
+def test_rule_44_reads_halves_around_the_deciding_window_only():
+    """Rule 44 (`recheck.halves_around`). Before: 36 rows at 3.1 m/s (a pace of 1.0 Hz) then a
+    walk; the deciding window is rows 32..96 and the one before it (0..64) measures 2.41 m/s
+    whole (under 2.573: rule 30d keeps it), its first half 3.10: cut at row 32. After: 100 rows
+    of a walk then 30 at 3.1 m/s; the later window 64..128 is under the bound whole, its second
+    half (96..128) is not: cut at row 96. The deciding window itself is never read by halves: 40
+    rows of a walk then 24 at 3.1 m/s (one window, its second half fast) keeps its rows, which
+    rule 42 cuts at the middle."""
+    cuts = []
+
+    def judge(o, rows):
+        cuts.append((rows.start, rows.stop))
+
+    def run(speeds, paces, opt):
+        obj = _judged(_track(speeds, paces_hz=paces))
+        obj.vel = list(range(len(obj.rows)))
+        cuts.clear()
+        split_at_switches(CFG, obj, opt, judge)
+        return obj, list(cuts)
+
+    on, off = RecheckOptions(halves_around=True), RecheckOptions()
+    before = ([3.1] * 36 + [1.3] * 120, [1.0] * 36 + [2.0] * 120)
+    obj, _ = run(*before, off)
+    assert obj.result["window"] == (32, 96) and earlier_switch_row(CFG, obj, pace=False) is None
+    assert run(*before, off)[1] == []
+    obj, got = run(*before, on)
+    assert got == [(None, 32)] and len(obj.rows) == 124 and obj.result["window"] == (0, 64)
+    alone = RecheckOptions(halves_around=True, earlier="off")  # without rule 30d's tests too
+    assert run(*before, alone)[1] == [(None, 32)]
+    after = ([1.3] * 100 + [3.1] * 30, None)
+    assert run(*after, off)[1] == []
+    obj, got = run(*after, on)
+    assert got == [(96, None)] and len(obj.rows) == 96
+    inside = ([1.3] * 40 + [3.1] * 24, None)
+    obj, got = run(*inside, on)
+    assert got == [] and len(obj.rows) == 64 and obj.result["window"] == (0, 64)
+    assert run(*inside, RecheckOptions(halves=True))[1] == [(32, None)]
