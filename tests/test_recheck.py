@@ -8,7 +8,8 @@ rules on a lone walker. Rule 42 (`recheck.halves`): a window one of whose halves
 than any walk (a walker and a bicycle in one window). Rule 43 (`recheck.low`): rule 26's height
 test on the windows the recheck reads (a dog's rows before or after its walker's); rule 30d
 (`recheck.earlier` "speed-low", the default): the windows before the verdict by speed or
-height."""
+height. Rule 44 (`recheck.halves_around`): rule 42's halves in the windows before and after the
+deciding one only."""
 
 import math
 from types import SimpleNamespace
