@@ -229,12 +229,13 @@ def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
     deciding window starts at row 0, or no earlier window is refused."""
     if not _pedestrian(obj):
         return None
-    top_speed = walking_top_speed(cfg) if speed else math.inf
+    fastest_walk = walking_top_speed(cfg)
+    top_speed = fastest_walk if speed else math.inf
     top_pace = walking_top_pace(cfg) if pace and speed else math.inf
     for r in earlier_windows(cfg, obj):
         a, b = (int(k) for k in r["window"])
         if (not_a_walk(r, top_speed, top_pace) or low_window(cfg, obj.rows[a:b], low)
-                or (halves and fast_half(cfg, obj.rows[a:b], walking_top_speed(cfg)) is not None)):
+                or (halves and fast_half(cfg, obj.rows[a:b], fastest_walk) is not None)):
             return int(obj.result["window"][0])
     return None
 
