@@ -160,6 +160,10 @@ RULES = {
     "mean_refused": ("tracker", "body.window_mean_refused", True, False, TRACKER_SOURCES,
                      "nothing fitted (rule 35's mean, read only where the sum refuses a window); "
                      "found on used radial seeds 4520001-4590001 (rule 35b)"),
+    "mean_trend": ("tracker", "body.mean_refused_gate", True, False, TRACKER_SOURCES,
+                   "nothing fitted (half Table 1's slowest pace, (14)'s fastest walk); rule 35b "
+                   "behind a trend and halves gate (ON also sets body.window_mean_refused); "
+                   "found on used 4640001-4710001, 777001, UCSD Test010 (rule 35c)"),
     "halves_around": ("tracker", "recheck.halves_around", True, False, TRACKER_SOURCES,
                       "nothing fitted (rule 42's half test and (14)'s 2.57 m/s, before and after "
                       "the deciding window only); found on used seeds 4650001, 4680001 (rule 44)"),
@@ -173,7 +177,8 @@ RULES = {
 TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "min_height_track": {"size.min_height_scope": "track"},
                 "recheck_all": {"recheck.earlier": "any"},
-                "pixel_halves": {"body.window_per_pixel": True}}
+                "pixel_halves": {"body.window_per_pixel": True},
+                "mean_trend": {"body.window_mean_refused": True}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -191,7 +196,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "tail": (), "lean": (), "count_twice_fitted": (), "halves": (),
               "recheck_resolved": (), "pixel_halves": (), "recheck_low": (),
               "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
-              "halves_around": ()}
+              "halves_around": (), "mean_trend": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

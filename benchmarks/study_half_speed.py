@@ -4,7 +4,7 @@ scenes, by the object the window followed (issue 16; a study: nothing is chosen 
 A track that followed a walker and then a bicycle passing it can be judged Pedestrian by a window
 that holds both: the Theil-Sen speed (12) over the whole window is the walker's (the median
 slope), while the bicycle's rows move at 3 m/s. This prints, per Pedestrian track, the speed (12)
-(`track.recheck.half_speeds`, rule 42's: the measured foot points taken to the ground, else the
+(`track.toolkit.half_speeds`, rule 42's: the measured foot points taken to the ground, else the
 filter's ground positions) of the window's first and last N/2 rows against the fastest walk
 (14) accepts (`model.params.walking_top_speed`, 2.57 m/s with Table 1), with the object the
 window followed (`sim.evaluate.window_objects`) and the object each row's foot point lies
@@ -33,7 +33,7 @@ def main(argv=None) -> int:
     from rhythmjax.sim.evaluate import deciding_windows, match_tracks, window_objects
     from rhythmjax.sim.presets import synthetic_options
     from rhythmjax.track.options import with_changes
-    from rhythmjax.track.recheck import half_speeds
+    from rhythmjax.track.toolkit import half_speeds
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("seeds")

@@ -6,7 +6,7 @@ sum I(k) of Sec. 4.1 does not say Pedestrian. This tracks with the rule on and, 
 Pedestrian whose deciding window the sum alone would not have judged so (`sum_outcome`: the same
 window judged again with the per-pixel rows left out, rule 37's second look included), prints the
 sum's reason and strongest peaks (Hz, power), the mean's, the speed (12) of the window and of its
-halves (`track.recheck.half_speeds`, m/s), and what the window followed: on the own scenes the
+halves (`track.toolkit.half_speeds`, m/s), and what the window followed: on the own scenes the
 truth object (`sim.evaluate.window_objects`), on a UCSD Ped2 clip the fraction of the track's rows
 inside the anomaly boxes (`eval_real_video.rows_in_boxes`).
 
@@ -52,7 +52,7 @@ def sum_outcome(cfg, obj, look=None) -> dict | None:
 def describe(cfg, obj, summed: dict) -> str:
     """One line: the sum's reason and peaks, the mean's (the track's result), the speeds."""
     from rhythmjax.model.status import Reason
-    from rhythmjax.track.recheck import half_speeds
+    from rhythmjax.track.toolkit import half_speeds
 
     def peaks(res) -> str:
         f = np.asarray(res["peak_freq"], float).ravel()

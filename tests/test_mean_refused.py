@@ -3,6 +3,10 @@ Sec. 4.1 does not judge Pedestrian is judged again on the same windows' mean of 
 (rule 35's I(k)), whose Pedestrian outcome then decides; a window the sum judges Pedestrian keeps
 the sum's outcome.
 
+Rule 35c (`body.mean_refused_gate`, with rule 35b): the mean read only where the sum's strongest
+peak lies below half the slowest walking pace (a trend), and its Pedestrian outcome kept only where
+neither half of the window moves faster than any walk.
+
 References: the rows' samples counted by hand (`window_b_means`); `match_window` on hand-made rows
 whose sum and mean channels are chosen apart (a sine at a walker's pace, noise, a dog's pace);
 on a drawn scene, the tracker's per-pixel channels against a second run with rule 35 on (every
@@ -18,14 +22,14 @@ import numpy as np
 import pytest
 
 from rhythmjax.model.camera_np import project_3d
-from rhythmjax.model.params import Config
+from rhythmjax.model.params import Config, WalkingModel
 from rhythmjax.model.status import TrackState, Verdict
 from rhythmjax.sim import scene as synth
 from rhythmjax.track import track_frames
 from rhythmjax.track.options import BodyOptions, TrackerOptions
 from rhythmjax.track.recheck import keep_rows
 from rhythmjax.track.rows import TrackRow
-from rhythmjax.track.toolkit import RESULT_FIELDS, match_window
+from rhythmjax.track.toolkit import RESULT_FIELDS, match_window, refused_for_trend
 from rhythmjax.track.tracker import OnlineTracker
 from rhythmjax.vision.window_b import window_b_means
 
@@ -208,3 +212,94 @@ def test_a_relinked_track_keeps_its_mean_rows():
     unsampled = np.isnan(tracks["intensity"])
     assert means.shape == (len(unsampled), 4) and (tracks["state"] == "none").sum() >= 3
     np.testing.assert_array_equal(np.isnan(means), np.repeat(unsampled[:, None], 4, axis=1))
+
+
+# ----------------------------------------------------------------------------------------------
+# rule 35c: the gate
+
+
+def test_refused_for_trend_by_hand():
+    """Table 1: paces 2.05 -+ 3 x 0.183 = 1.501-2.599 Hz, so the bound is 0.7505 Hz; only the
+    strongest peak (slot 0) counts, and only where it is a peak (mask)."""
+    def outcome(freq, mask=True):
+        return {"peak_freq": np.asarray([freq, 0.1]), "peak_mask": np.asarray([mask, True])}
+
+    assert refused_for_trend(CFG, outcome(0.74)) and refused_for_trend(CFG, outcome(0.2))
+    assert not refused_for_trend(CFG, outcome(0.76)) and not refused_for_trend(CFG, outcome(2.0))
+    assert not refused_for_trend(CFG, outcome(0.2, mask=False))
+    slow = Config(walking=WalkingModel(pace_mean=1.8))  # 1.8 - 0.549 = 1.251 Hz: bound 0.6255
+    assert refused_for_trend(slow, outcome(0.62)) and not refused_for_trend(slow, outcome(0.63))
+
+
+def _ramp(seed=1):
+    """A walker's I(k) summed while it comes nearer: a ramp of 30 grey levels over the window
+    and a weak rhythm at 2.0 Hz (the strongest peak at 0.20 Hz: refused for no model match)."""
+    t = np.arange(N) / FPS
+    return 10.0 + 30.0 * t / t[-1] + 0.5 * np.sin(2 * np.pi * 2.0 * t) \
+        + np.random.default_rng(seed).normal(0, 0.1, N)
+
+
+def _gated(rows, mean_signal, gate):
+    obj = SimpleNamespace(rows=rows, win_start=0, windows_done=0, result=None, decided=False,
+                          mean_rows=[(x,) for x in mean_signal], mean_gate=gate)
+    match_window(CFG, obj)
+    return obj
+
+
+def test_rule_35c_reads_the_mean_only_behind_a_trend():
+    """The sum a ramp (a trend): the mean at 2.0 Hz decides, gate or not. The sum a sine at
+    1.0 Hz (refused by (14): not a trend, under the walking paces): without the gate the mean
+    decides, with it the outcome is the sum's, field by field."""
+    ramp = _ramp()
+    assert refused_for_trend(CFG, _judged(ramp).result)
+    for gate in (False, True):
+        on = _gated(_rows(ramp), _sine(2.0, 2), gate)
+        assert int(on.result["verdict"]) == Verdict.PEDESTRIAN
+        assert float(on.result["pace_hz"]) == pytest.approx(2.0, abs=0.05)
+    slow = _sine(1.0, 3)
+    sum_only = _judged(slow)
+    assert int(sum_only.result["verdict"]) != Verdict.PEDESTRIAN
+    assert not refused_for_trend(CFG, sum_only.result)
+    assert int(_gated(_rows(slow), _sine(2.0, 2), False).result["verdict"]) == Verdict.PEDESTRIAN
+    gated = _gated(_rows(slow), _sine(2.0, 2), True)
+    assert not gated.decided
+    for name in RESULT_FIELDS:
+        np.testing.assert_array_equal(gated.result[name], sum_only.result[name])
+
+
+def _rows_halves(sum_signal, first_mps, last_mps):
+    """`_rows` walking away at `first_mps` for the first N/2 rows and `last_mps` after."""
+    t = np.arange(N) / FPS
+    speed = np.where(np.arange(N) < N // 2, first_mps, last_mps)
+    y = 8.0 + np.concatenate([[0.0], np.cumsum(speed[1:] / FPS)])
+    u, v = project_3d(CFG.camera, 0.5 + 0 * y, y, 0 * y)
+    return [TrackRow(k, float(t[k]), float(u[k]), float(v[k]), 20.0, float(sum_signal[k]), 0.5,
+                     float(y[k]), int(TrackState.OBSERVE)) for k in range(N)]
+
+
+@pytest.mark.parametrize("halves", [(1.0, 2.7), (2.7, 1.0)])
+def test_rule_35c_keeps_the_mean_only_where_both_halves_walk(halves):
+    """A window whose halves move at 1.0 and 2.7 m/s (either order; the whole window's speed
+    (12) 1.88 m/s, a walk): the sum a trend, the mean at 2.2 Hz. Rule 35b alone judges it
+    Pedestrian; with the gate one half is faster than any walk (2.57 m/s), so the sum's outcome
+    stands. At 1.0 and 2.5 m/s both halves walk and the gate keeps the mean's outcome."""
+    ramp, walk = _ramp(), _sine(2.2, 2)
+    assert int(_gated(_rows_halves(ramp, *halves), walk, False).result["verdict"]) \
+        == Verdict.PEDESTRIAN
+    gated = _gated(_rows_halves(ramp, *halves), walk, True)
+    assert int(gated.result["verdict"]) != Verdict.PEDESTRIAN and not gated.decided
+    assert float(gated.result["pace_hz"]) == pytest.approx(0.2, abs=0.05)  # the sum's trend
+    both_walk = _gated(_rows_halves(ramp, 1.0, 2.5), walk, True)
+    assert int(both_walk.result["verdict"]) == Verdict.PEDESTRIAN
+
+
+def test_the_tracker_carries_the_gate(walker_scene, monkeypatch):
+    """Every object of a run with rule 35c, and both sides of a forced cut (the track judged
+    afresh), carry the gate to `match_window`; without it none does."""
+    import rhythmjax.track.recheck as recheck
+
+    monkeypatch.setattr(recheck, "switch_row", lambda *a, **k: 70)
+    _, _, objs, tracker = _track(walker_scene, window_mean_refused=True, mean_refused_gate=True)
+    assert tracker.switches == 1 and len(objs) == 2 and all(o.mean_gate for o in objs)
+    _, _, objs, _ = _track(walker_scene, window_mean_refused=True)
+    assert objs and not any(o.mean_gate for o in objs)

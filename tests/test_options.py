@@ -43,6 +43,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 35)", "body.window_per_pixel", False),  # I(k) per pixel of B
     ("(new: issue 16, rule 35b)", "body.window_mean_refused", False),  # per pixel, refused
     ("(new: issue 16, rule 44)", "recheck.halves_around", False),  # halves around the verdict
+    ("(new: issue 16, rule 35c)", "body.mean_refused_gate", False),  # rule 35b's gate
     ("min_area", "new.min_area", 40),
     ("outside_margin_px", "new.outside_margin_px", 8),
     ("near_widths", "new.near_widths", 1.0),

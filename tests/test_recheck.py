@@ -30,8 +30,6 @@ from rhythmjax.sim import scene as synth
 from rhythmjax.track.options import RecheckOptions, SizeOptions, TrackerOptions, with_changes
 from rhythmjax.track.recheck import (
     earlier_switch_row,
-    fast_half,
-    half_speeds,
     keep_rows,
     low_window,
     mixed_window_row,
@@ -42,7 +40,7 @@ from rhythmjax.track.recheck import (
 )
 from rhythmjax.track.rows import TrackRow
 from rhythmjax.track.size import rows_height
-from rhythmjax.track.toolkit import match_window
+from rhythmjax.track.toolkit import fast_half, half_speeds, match_window
 from rhythmjax.track.tracker import OnlineTracker
 
 

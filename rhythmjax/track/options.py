@@ -147,6 +147,11 @@ class BodyOptions:
     # every window the sum judges Pedestrian keeps the sum's outcome (toolkit.match_window).
     # Ignored with window_per_pixel. Found on used radial seeds 4520001-4590001 (rule 35 moved 11
     # walkers to Pedestrian there and none back; docs/rules.md)
+    mean_refused_gate: bool = False  # rule 35c (issue 16, with window_mean_refused): the mean is
+    # read only where the sum's strongest peak lies below half the slowest walking pace (a trend,
+    # toolkit.refused_for_trend), and its Pedestrian outcome stands only where neither half of
+    # the window moves faster than any walk (toolkit.fast_half). Nothing fitted (Table 1 at
+    # k_sigma3); found on used radial 4640001-4710001, 777001 and UCSD Test010 (docs/rules.md)
     pace_window_widths: float = 0.0  # rule 34 (issue 16): I(k) summed also in window B scaled
     # by this (2: 2 W wide, 2 W/5 high, bottom row at the foot row), written as the tracks'
     # `intensity_wide` column; it never decides a verdict, but where a rhythm window says

@@ -15,8 +15,8 @@ that window's first row (`switch_row`); the rows before keep the verdict, the tr
 the rows from it afresh as a new track.
 
 Rule 42 (`RecheckOptions.halves`, off) reads the halves of a window too: a half of N/2 rows
-whose speed (12) exceeds the fastest walk makes the window no walker's (`fast_half`). A later
-or tail window so refused cuts the track at that half's first row (or the deciding window's
+whose speed (12) exceeds the fastest walk makes the window no walker's (`toolkit.fast_half`). A
+later or tail window so refused cuts the track at that half's first row (or the deciding window's
 end, if later); a deciding window so refused (`mixed_window_row`: a walker and a bicycle in one
 window, its Theil-Sen speed the walker's) cuts the track at its middle row, the verdict staying
 with the slow half's side and the fast half's side judged afresh (`split_at_switches`).
@@ -51,20 +51,15 @@ import copy
 import math
 from collections.abc import Callable
 
-import jax.numpy as jnp
-import numpy as np
-
 from ..model.camera_np import camera_tuple
 from ..model.params import Config, host_float, walking_top_pace, walking_top_speed
-from ..model.rhythm import window_speed
-from ..model.status import Reason, TrackState, Verdict
+from ..model.status import Reason, Verdict
 from .options import RecheckOptions, SizeOptions
 from .size import rows_height, too_low
-from .toolkit import RhythmWindows, match_window
+from .toolkit import RhythmWindows, fast_half, match_window
 
 
-__all__ = ["earlier_switch_row", "earlier_windows", "fast_half", "half_speeds", "keep_rows",
-           "later_windows", "low_window",
+__all__ = ["earlier_switch_row", "earlier_windows", "keep_rows", "later_windows", "low_window",
            "mixed_window_row", "not_a_walk", "pace_resolved", "split_at_switches",
            "switch_row"]
 
@@ -90,37 +85,6 @@ def low_window(cfg: Config, rows, size: SizeOptions | None) -> bool:
     walker_m = host_float(cfg.width.height)
     height, n = rows_height(camera_tuple(cfg.camera), rows, walker_m, size.top_inside_heights)
     return too_low(Verdict.PEDESTRIAN, height, n, walker_m, size)
-
-
-def half_speeds(cfg: Config, rows) -> tuple[float, float]:
-    """Speed (12), m/s, of the first and the last len(rows) // 2 of `rows` (a window's
-    `TrackRow`s; NaN for a half of fewer than 2 rows): `rhythm.window_speed` of its OBSERVE
-    rows' foot points taken to the ground when they are at least half of it, else of the
-    filter's ground positions."""
-    h = len(rows) // 2
-    out = []
-    for part in (rows[:h], rows[h:]):
-        if len(part) < 2:
-            out.append(math.nan)
-            continue
-        t = np.asarray([r.t for r in part], np.float64)
-        xy = np.asarray([(r.x_est, r.y_est) for r in part], np.float64)
-        seen = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE else (math.nan, math.nan)
-                           for r in part], np.float64)
-        out.append(float(window_speed(cfg, jnp.asarray(t - t[0], jnp.float32),
-                                      jnp.asarray(xy, jnp.float32),
-                                      jnp.asarray(seen, jnp.float32))))
-    return out[0], out[1]
-
-
-def fast_half(cfg: Config, rows, top_speed: float) -> int | None:
-    """Rule 42: the index (0 or len(rows) // 2) of the first half of `rows` (a window's
-    `TrackRow`s) whose speed (12) (`half_speeds`) exceeds `top_speed` (m/s); None where
-    neither does."""
-    for start, speed in zip((0, len(rows) // 2), half_speeds(cfg, rows)):
-        if math.isfinite(speed) and speed > top_speed:
-            return start
-    return None
 
 
 def mixed_window_row(cfg: Config, obj: RhythmWindows) -> int | None:

@@ -8,6 +8,7 @@ paper's `count.pedestrian_level.PedestrianLevel`; `count` imports `track`, never
   computes while the host prepares the next frame (XLA dispatch is asynchronous);
 - `velocity_jump`: the filter's ground velocity changed faster than a walker or a cyclist can
   (its measurements slid onto another object): the rows to drop before the track ends;
+- `half_speeds`, `fast_half`: the speed (12) of a window's two halves (rules 42, 44, 35c);
 - `match_window`: (13)-(15) of the rhythm paper (Sec. 4.2) on the next completed window of N
   rows of a track (`model.rhythm.classify_window_jit`), one every `thresholds.hop_samples`,
   until one says Pedestrian; where the object carries candidate windows B, once per candidate
@@ -29,11 +30,12 @@ import numpy as np
 from ..model.candidates import strongest, trend_min_hz
 from ..model.ekf import empty_carry
 from ..model.flat_tree import join, split
-from ..model.params import Config
+from ..model.params import Config, walking_pace_band, walking_top_speed
 from ..model.rhythm import (
     MAX_MISSING_FRACTION,
     classify_window_candidates_jit,
     classify_window_jit,
+    window_speed,
 )
 from ..model.status import TrackState, Verdict
 from .rows import Layout, TrackRow
@@ -146,6 +148,47 @@ def image_velocity_jump(velocities: Sequence, width_px: float, k: int, max_dv_w:
     return k if math.hypot(a.du - b.du, a.dv - b.dv) > max_dv_w * width_px else 0
 
 
+def half_speeds(cfg: Config, rows) -> tuple[float, float]:
+    """Speed (12), m/s, of the first and the last len(rows) // 2 of `rows` (a window's
+    `TrackRow`s; NaN for a half of fewer than 2 rows): `rhythm.window_speed` of its OBSERVE
+    rows' foot points taken to the ground when they are at least half of it, else of the
+    filter's ground positions."""
+    h = len(rows) // 2
+    out = []
+    for part in (rows[:h], rows[h:]):
+        if len(part) < 2:
+            out.append(math.nan)
+            continue
+        t = np.asarray([r.t for r in part], np.float64)
+        xy = np.asarray([(r.x_est, r.y_est) for r in part], np.float64)
+        seen = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE else (math.nan, math.nan)
+                           for r in part], np.float64)
+        out.append(float(window_speed(cfg, jnp.asarray(t - t[0], jnp.float32),
+                                      jnp.asarray(xy, jnp.float32),
+                                      jnp.asarray(seen, jnp.float32))))
+    return out[0], out[1]
+
+
+def fast_half(cfg: Config, rows, top_speed: float) -> int | None:
+    """Rule 42: the index (0 or len(rows) // 2) of the first half of `rows` (a window's
+    `TrackRow`s) whose speed (12) (`half_speeds`) exceeds `top_speed` (m/s); None where
+    neither does."""
+    for start, speed in zip((0, len(rows) // 2), half_speeds(cfg, rows)):
+        if math.isfinite(speed) and speed > top_speed:
+            return start
+    return None
+
+
+def refused_for_trend(cfg: Config, outcome: dict) -> bool:
+    """Rule 35c: True where a window's outcome (`RESULT_FIELDS`) has its strongest spectral
+    peak (a local maximum, `peak_freq[0]`) below half the slowest pace the walking model accepts
+    (`params.walking_pace_band`: 0.75 Hz with Table 1). Neither a walker's pace nor its stride
+    frequency lies there: the window's variance is held by a trend (a walker's image growing or
+    shrinking as it walks radially, under two cycles over a window of 64 samples at 15 fps)."""
+    mask, freq = np.asarray(outcome["peak_mask"]), np.asarray(outcome["peak_freq"], np.float64)
+    return bool(mask[0]) and float(freq[0]) < walking_pace_band(cfg)[0] / 2
+
+
 @runtime_checkable
 class RhythmWindows(Protocol):
     """What `match_window` reads and updates on a tracked object."""
@@ -218,7 +261,10 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
     window's outcome from its rows before it decides (`track.twice`, rule 37). Rule 35b (the
     object's `mean_rows`, where not None: per row, window B's and its candidate_rows' windows'
     I(k) per pixel): a window so judged not Pedestrian is judged again, the same way, on those,
-    and their outcome decides where it is Pedestrian."""
+    and their outcome decides where it is Pedestrian. Rule 35c (the object's `mean_gate` True,
+    with rule 35b): only where the sum's strongest peak is a trend (`refused_for_trend`), and
+    the mean's Pedestrian outcome only where neither half of the window moves faster than any
+    walk (`fast_half`, `params.walking_top_speed`)."""
     n = cfg.thresholds.n
     rows = obj.rows
     k = obj.win_start
@@ -247,11 +293,13 @@ def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,
     sigs = [intensity] + ([] if cands is None else
                           [window_signal(obj, k, k + n, c) for c in range(1, len(cands[k]) + 1)])
     out, chosen = _judged(cfg, obj, window, sigs, rest, cands is not None)
-    means = getattr(obj, "mean_rows", None)
-    if means is not None and int(out["verdict"]) != Verdict.PEDESTRIAN:  # rule 35b
+    means, gate = getattr(obj, "mean_rows", None), getattr(obj, "mean_gate", False)
+    if (means is not None and int(out["verdict"]) != Verdict.PEDESTRIAN  # rule 35b
+            and (not gate or refused_for_trend(cfg, out))):  # rule 35c
         per_pixel = np.asarray(means[k:k + n], np.float64).T  # (channels, n)
         again, which = _judged(cfg, obj, window, list(per_pixel), rest, cands is not None)
-        if int(again["verdict"]) == Verdict.PEDESTRIAN:
+        if int(again["verdict"]) == Verdict.PEDESTRIAN and not (
+                gate and fast_half(cfg, window, walking_top_speed(cfg)) is not None):
             out, chosen = again, which
     obj.windows_done += 1
     pedestrian = int(out["verdict"]) == Verdict.PEDESTRIAN

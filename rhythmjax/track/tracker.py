@@ -69,6 +69,7 @@ class _Object:
     second_look: Callable | None = None  # `match_window`'s look at a refused window (rule 37)
     mean_rows: list[tuple[float, ...]] | None = None  # rule 35b: per row, window B's and the
     # candidate_rows' windows' I(k) per pixel (`vision.window_b.window_b_means`)
+    mean_gate: bool = False  # rule 35c: `match_window` reads mean_rows only behind its gate
 
 
 class _Lost(NamedTuple):
@@ -209,9 +210,9 @@ class OnlineTracker:
                 s = free.pop(0)
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top,
                                          candidate_rows=[] if self._extra else None,
-                                         pace_window=self._pace_scale > 0,
-                                         second_look=self._look,
-                                         mean_rows=[] if self._second_mean else None)
+                                         pace_window=self._pace_scale > 0, second_look=self._look,
+                                         mean_rows=[] if self._second_mean else None,
+                                         mean_gate=self.opt.body.mean_refused_gate)
                 present[s], reset[s] = True, True
                 if opt.body.side_anchor:
                     cut, det = det, sides.anchor_at_side(det, self._walker_px(det.u, det.v),
@@ -433,7 +434,7 @@ class OnlineTracker:
         part = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[rows],
                        vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows],
                        pace_window=obj.pace_window, second_look=obj.second_look,
-                       mean_rows=None if means is None else means[rows])
+                       mean_rows=None if means is None else means[rows], mean_gate=obj.mean_gate)
         self._next_id += 1
         while not part.decided and len(part.rows) >= part.win_start + self.cfg.thresholds.n:
             match_window(self.cfg, part)
