@@ -54,13 +54,14 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   pace and stride from I(k) of window B scaled by 2 where that window says Pedestrian too).
 - window_per_pixel: the tracker's `body.window_per_pixel` True vs False (rule 35: I(k) the
   mean of D over window B, grey levels per pixel, instead of its sum).
-- mean_refused: the tracker's `body.window_mean_refused` True vs False (rule 35b: rule 35's
-  mean read only where the sum refuses a window).
+- mean_refused: the tracker's `body.window_mean_refused` True (with `body.mean_refused_gate`
+  False) vs False (rule 35b: rule 35's mean read only where the sum refuses a window).
 - halves_around: the tracker's `recheck.halves_around` True vs False (rule 44: rule 42's half
   test on the windows before and after the deciding one only).
 - mean_trend: rule 35b with rule 35c's gate (`body.window_mean_refused` and
-  `body.mean_refused_gate` True) vs the defaults: the mean read only where the sum's strongest
-  peak is a trend, and kept only where neither half of the window is faster than any walk.
+  `body.mean_refused_gate` True, the defaults) vs `body.window_mean_refused` False: the mean read
+  only where the sum's strongest peak is a trend, and kept only where neither half of the window
+  is faster than any walk.
 - top_inside: the tracker's `size.top_inside_heights` 0.1 vs 0 (rule 36: the size rule also
   reads rows where a walker's head would leave the image but the measured top lies inside it).
 - twice_pace: the tracker's `size.twice_pace_heights` 0.57 (fitted) vs 0 (rule 37: a window

@@ -158,11 +158,12 @@ RULES = {
                           "before the verdict); found on used seeds 4040001-4070001, "
                           "4160001-4230001 (rule 30d)"),
     "mean_refused": ("tracker", "body.window_mean_refused", True, False, TRACKER_SOURCES,
-                     "nothing fitted (rule 35's mean, read only where the sum refuses a window); "
-                     "found on used radial seeds 4520001-4590001 (rule 35b)"),
-    "mean_trend": ("tracker", "body.mean_refused_gate", True, False, TRACKER_SOURCES,
+                     "nothing fitted (rule 35's mean, read only where the sum refuses a window; "
+                     "ON without rule 35c's gate); found on used radial seeds 4520001-4590001 "
+                     "(rule 35b)"),
+    "mean_trend": ("tracker", "body.window_mean_refused", True, False, TRACKER_SOURCES,
                    "nothing fitted (half Table 1's slowest pace, (14)'s fastest walk); rule 35b "
-                   "behind a trend and halves gate (ON also sets body.window_mean_refused); "
+                   "behind a trend and halves gate (ON also sets body.mean_refused_gate); "
                    "found on used 4640001-4710001, 777001, UCSD Test010 (rule 35c)"),
     "halves_around": ("tracker", "recheck.halves_around", True, False, TRACKER_SOURCES,
                       "nothing fitted (rule 42's half test and (14)'s 2.57 m/s, before and after "
@@ -178,7 +179,8 @@ TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "min_height_track": {"size.min_height_scope": "track"},
                 "recheck_all": {"recheck.earlier": "any"},
                 "pixel_halves": {"body.window_per_pixel": True},
-                "mean_trend": {"body.window_mean_refused": True}}
+                "mean_refused": {"body.mean_refused_gate": False},
+                "mean_trend": {"body.mean_refused_gate": True}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -196,7 +198,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "tail": (), "lean": (), "count_twice_fitted": (), "halves": (),
               "recheck_resolved": (), "pixel_halves": (), "recheck_low": (),
               "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
-              "halves_around": (), "mean_trend": ()}
+              "halves_around": (), "mean_trend": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

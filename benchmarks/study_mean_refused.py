@@ -2,7 +2,8 @@
 chosen here).
 
 Rule 35b (`body.window_mean_refused`) judges a rhythm window again on I(k) per pixel where the
-sum I(k) of Sec. 4.1 does not say Pedestrian. This tracks with the rule on and, per track judged
+sum I(k) of Sec. 4.1 does not say Pedestrian. This tracks with the rule on without rule 35c's
+gate (`body.mean_refused_gate` False; the defaults have it) and, per track judged
 Pedestrian whose deciding window the sum alone would not have judged so (`sum_outcome`: the same
 window judged again with the per-pixel rows left out, rule 37's second look included), prints the
 sum's reason and strongest peaks (Hz, power), the mean's, the speed (12) of the window and of its
@@ -26,7 +27,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-RULE = {"body.window_mean_refused": True}
+RULE = {"body.window_mean_refused": True, "body.mean_refused_gate": False}  # rule 35b alone
 
 
 def sum_outcome(cfg, obj, look=None) -> dict | None:

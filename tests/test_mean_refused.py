@@ -1,11 +1,11 @@
-"""Rule 35b (issue 16, `body.window_mean_refused`, off): a rhythm window that the sum I(k) of
-Sec. 4.1 does not judge Pedestrian is judged again on the same windows' mean of D per pixel
-(rule 35's I(k)), whose Pedestrian outcome then decides; a window the sum judges Pedestrian keeps
-the sum's outcome.
+"""Rule 35b (issue 16, `body.window_mean_refused`, on with rule 35c): a rhythm window that the
+sum I(k) of Sec. 4.1 does not judge Pedestrian is judged again on the same windows' mean of D per
+pixel (rule 35's I(k)), whose Pedestrian outcome then decides; a window the sum judges Pedestrian
+keeps the sum's outcome.
 
-Rule 35c (`body.mean_refused_gate`, with rule 35b): the mean read only where the sum's strongest
-peak lies below half the slowest walking pace (a trend), and its Pedestrian outcome kept only where
-neither half of the window moves faster than any walk.
+Rule 35c (`body.mean_refused_gate`, on, with rule 35b): the mean read only where the sum's
+strongest peak lies below half the slowest walking pace (a trend), and its Pedestrian outcome
+kept only where neither half of the window moves faster than any walk.
 
 References: the rows' samples counted by hand (`window_b_means`); `match_window` on hand-made rows
 whose sum and mean channels are chosen apart (a sine at a walker's pace, noise, a dog's pace);
@@ -153,7 +153,7 @@ def test_tracker_mean_rows_equal_rule_35s_samples(walker_scene):
     per pixel: the same filter, window B's sampling never moves it); the tracks file keeps the
     sums (equal to a run with the rule off); with rule 35 on there are no mean rows."""
     tracks_on, _, objs, _ = _track(walker_scene, window_mean_refused=True)
-    tracks_off, _, _, _ = _track(walker_scene)
+    tracks_off, _, _, _ = _track(walker_scene, window_mean_refused=False)
     per_pixel, _, both, _ = _track(walker_scene, window_per_pixel=True, window_mean_refused=True)
     for k in ("track_id", "frame", "intensity", "intensity_wide"):
         np.testing.assert_array_equal(tracks_on[k], tracks_off[k])
@@ -301,5 +301,7 @@ def test_the_tracker_carries_the_gate(walker_scene, monkeypatch):
     monkeypatch.setattr(recheck, "switch_row", lambda *a, **k: 70)
     _, _, objs, tracker = _track(walker_scene, window_mean_refused=True, mean_refused_gate=True)
     assert tracker.switches == 1 and len(objs) == 2 and all(o.mean_gate for o in objs)
-    _, _, objs, _ = _track(walker_scene, window_mean_refused=True)
+    _, _, objs, _ = _track(walker_scene, window_mean_refused=True, mean_refused_gate=False)
     assert objs and not any(o.mean_gate for o in objs)
+    _, _, objs, _ = _track(walker_scene)  # the defaults: rule 35b with its gate
+    assert objs and all(o.mean_gate and o.mean_rows for o in objs)

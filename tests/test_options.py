@@ -41,9 +41,9 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16 item 2)", "body.window_candidates", True),
     ("(new: issue 16, rule 34)", "body.pace_window_widths", 0.0),
     ("(new: issue 16, rule 35)", "body.window_per_pixel", False),  # I(k) per pixel of B
-    ("(new: issue 16, rule 35b)", "body.window_mean_refused", False),  # per pixel, refused
+    ("(new: issue 16, rule 35b)", "body.window_mean_refused", True),  # per pixel, refused
     ("(new: issue 16, rule 44)", "recheck.halves_around", False),  # halves around the verdict
-    ("(new: issue 16, rule 35c)", "body.mean_refused_gate", False),  # rule 35b's gate
+    ("(new: issue 16, rule 35c)", "body.mean_refused_gate", True),  # rule 35b's gate
     ("min_area", "new.min_area", 40),
     ("outside_margin_px", "new.outside_margin_px", 8),
     ("near_widths", "new.near_widths", 1.0),

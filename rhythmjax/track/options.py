@@ -141,17 +141,19 @@ class BodyOptions:
     # with W^2 as a walker comes nearer: a trend over a rhythm window of one walking towards or
     # away from the camera; the mean has none. Chosen on own scenes with knees (docs/rules.md,
     # rule 35)
-    window_mean_refused: bool = False  # rule 35b (issue 16): where a rhythm window judged on the
+    window_mean_refused: bool = True  # rule 35b (issue 16): where a rhythm window judged on the
     # sum I(k) (candidates and rule 37 included) is not Pedestrian, it is judged again on the
     # same windows' mean of D per pixel (rule 35's I(k)), whose Pedestrian outcome then decides;
     # every window the sum judges Pedestrian keeps the sum's outcome (toolkit.match_window).
     # Ignored with window_per_pixel. Found on used radial seeds 4520001-4590001 (rule 35 moved 11
-    # walkers to Pedestrian there and none back; docs/rules.md)
-    mean_refused_gate: bool = False  # rule 35c (issue 16, with window_mean_refused): the mean is
+    # walkers to Pedestrian there and none back). On with its gate (rule 35c); alone it judged a
+    # bicycle and a cyclist Pedestrian (docs/rules.md)
+    mean_refused_gate: bool = True  # rule 35c (issue 16, with window_mean_refused): the mean is
     # read only where the sum's strongest peak lies below half the slowest walking pace (a trend,
     # toolkit.refused_for_trend), and its Pedestrian outcome stands only where neither half of
     # the window moves faster than any walk (toolkit.fast_half). Nothing fitted (Table 1 at
-    # k_sigma3); found on used radial 4640001-4710001, 777001 and UCSD Test010 (docs/rules.md)
+    # k_sigma3); found on used radial 4640001-4710001, 777001 and UCSD Test010; decided on fresh
+    # radial 4880001-4950001 (walkers 239 -> 246 of 280, non-walkers 1 -> 1; docs/rules.md)
     pace_window_widths: float = 0.0  # rule 34 (issue 16): I(k) summed also in window B scaled
     # by this (2: 2 W wide, 2 W/5 high, bottom row at the foot row), written as the tracks'
     # `intensity_wide` column; it never decides a verdict, but where a rhythm window says
