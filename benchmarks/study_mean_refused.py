@@ -9,10 +9,11 @@ window judged again with the per-pixel rows left out, rule 37's second look incl
 sum's reason and strongest peaks (Hz, power), the mean's, the speed (12) of the window and of its
 halves (`track.toolkit.half_speeds`, m/s), and what the window followed: on the own scenes the
 truth object (`sim.evaluate.window_objects`), on a UCSD Ped2 clip the fraction of the track's rows
-inside the anomaly boxes (`eval_real_video.rows_in_boxes`).
+inside the anomaly boxes (`eval_real_video.rows_in_boxes`); on a dev clip (`--dev`) the track.
 
     python benchmarks/study_mean_refused.py SEED[,SEED...] [--scenes 10] -d DIR
     RHYTHMJAX_DATA=../shared/data/real python benchmarks/study_mean_refused.py --ucsd Test010 -d DIR
+    RHYTHMJAX_DATA=../shared/data python benchmarks/study_mean_refused.py --dev dev_multi_01 -d DIR
 """
 
 from __future__ import annotations
@@ -127,15 +128,44 @@ def ucsd(clip: str) -> None:
                   f"{describe(cfg, o, summed)}")
 
 
+def dev(clip: str) -> None:
+    import json
+
+    import eval_all as ea
+    import eval_real_video as ev
+
+    from rhythmjax.model.camera_np import camera_tuple
+    from rhythmjax.track import track_frames
+    from rhythmjax.track.options import TrackerOptions, with_changes
+    from rhythmjax.track.twice import second_look
+    from rhythmjax.vision.video import open_video
+
+    (entry,) = [c for c in ea._dev_index() if c["clip"] == clip]
+    truth = json.loads((ea.DEV_ROOT / entry["truth"]).read_text())
+    path = ea.DEV_ROOT / entry["video"]
+    cfg = ev.video_config(ea.apply_set(ea.dev_camera(truth), []), path, truth["fps"])
+    opt = with_changes(TrackerOptions(), RULE)
+    with open_video(str(path), fps=truth["fps"]) as src:
+        _, _, objs, _ = track_frames(cfg, src, progress=False, options=opt)
+    look = second_look(cfg, camera_tuple(cfg.camera), opt.size)
+    for o in objs:
+        summed = sum_outcome(cfg, o, look)
+        if summed is not None:
+            print(f"{clip} track {o.track_id} {describe(cfg, o, summed)}")
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("seeds", nargs="?", default="")
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--ucsd", default="", help="a UCSD Ped2 clip (Test010) instead of own seeds")
+    p.add_argument("--dev", default="", help="a dev clip (dev_multi_01) instead of own seeds")
     p.add_argument("-d", "--cache", type=Path, required=True)
     a = p.parse_args(argv)
     if a.ucsd:
         ucsd(a.ucsd)
+    elif a.dev:
+        dev(a.dev)
     else:
         own(a.seeds, a.scenes, a.cache)
     return 0
