@@ -168,6 +168,10 @@ RULES = {
     "halves_around": ("tracker", "recheck.halves_around", True, False, TRACKER_SOURCES,
                       "nothing fitted (rule 42's half test and (14)'s 2.57 m/s, before and after "
                       "the deciding window only); found on used seeds 4650001, 4680001 (rule 44)"),
+    "window_low": ("tracker", "size.every_window", True, False, TRACKER_SOURCES,
+                   "nothing fitted (rule 26's 0.5 walker heights over 10 rows on every window, "
+                   "as the batch classifier reads them); found on own 777001 scene 8 with "
+                   "straight legs (rule 45)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -198,7 +202,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "tail": (), "lean": (), "count_twice_fitted": (), "halves": (),
               "recheck_resolved": (), "pixel_halves": (), "recheck_low": (),
               "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
-              "halves_around": (), "mean_trend": TRACKER_SOURCES}
+              "halves_around": (), "mean_trend": TRACKER_SOURCES, "window_low": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -1,16 +1,18 @@
-"""The tracker's height rules for the batch classifier: rules 37 and 26 as one `second_look` of
-`model.batch.classify_tracks` (`height_looks`), used by `rhythm --boxes`, `classify` and count's
-verdicts, so that every classifier of the project judges a window as the tracker does."""
+"""The tracker's height rules as one `second_look`: for the batch classifier, rules 37 and 26 on
+each window of `model.batch.classify_tracks` (`height_looks`), used by `rhythm --boxes`,
+`classify` and count's verdicts; for the online tracker, rule 37 and, with rule 45
+(`size.every_window`), rule 26 on each window as it completes (`tracker_look`). With rule 45
+every classifier of the project judges a window the same way."""
 
 from __future__ import annotations
 
-from ..model.params import Config
+from ..model.params import Config, host_float
 from .options import SizeOptions
-from .size import batch_size_look
-from .twice import batch_second_look
+from .size import batch_size_look, refuse_low
+from .twice import batch_second_look, second_look
 
 
-__all__ = ["height_looks", "reads_heights"]
+__all__ = ["height_looks", "reads_heights", "tracker_look"]
 
 
 def reads_heights(size: SizeOptions | None) -> bool:
@@ -26,3 +28,21 @@ def height_looks(cfg: Config, batch, size: SizeOptions | None):
     if not reads_heights(size):
         return None
     return batch_size_look(cfg, batch, size, then=batch_second_look(cfg, batch, size))
+
+
+def tracker_look(cfg: Config, camera, size: SizeOptions):
+    """A tracked object's `second_look` (`toolkit.match_window` calls it with a window's outcome
+    and its N rows): rule 37 (`twice.second_look`), then, with rule 45 (`size.every_window`) and
+    rule 26 on, `size.refuse_low` on the window's own rows, so a window judged Pedestrian but
+    lower than `min_height_heights` walker heights is refused (too-low) and matching goes on.
+    None when neither applies."""
+    first = second_look(cfg, camera, size)
+    if not size.every_window or size.min_height_heights <= 0:
+        return first
+    walker_m = host_float(cfg.width.height)
+
+    def look(out: dict, rows: list) -> dict:
+        out = out if first is None else first(out, rows)
+        return refuse_low(out, camera, list(rows), walker_m, size)
+
+    return look

@@ -36,6 +36,7 @@ from ..vision.window_b import window_b_extras, window_b_means
 from . import relink, sides
 from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F401
 from .lean import window_b_foot
+from .looks import tracker_look
 from .options import TrackerOptions
 from .recheck import split_at_switches
 from .rows import NAN_VELOCITY, TrackRow, Velocity
@@ -43,7 +44,6 @@ from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
 from .split import Predicted, split_shared
 from .toolkit import PendingStep, SlotSteps, match_window
-from .twice import second_look
 
 
 @dataclass
@@ -66,7 +66,7 @@ class _Object:
     candidate_rows: list[tuple[float, ...]] | None = None  # per row, I(k) of the candidate windows
     # B (`WINDOW_CANDIDATES` order), then the pace window's (rule 34); NaN where `intensity` is
     pace_window: bool = False  # the last entry of each candidate_rows tuple is the pace window
-    second_look: Callable | None = None  # `match_window`'s look at a refused window (rule 37)
+    second_look: Callable | None = None  # `match_window`'s look at each window (rules 37, 45)
     mean_rows: list[tuple[float, ...]] | None = None  # rule 35b: per row, window B's and the
     # candidate_rows' windows' I(k) per pixel (`vision.window_b.window_b_means`)
     mean_gate: bool = False  # rule 35c: `match_window` reads mean_rows only behind its gate
@@ -108,7 +108,7 @@ class OnlineTracker:
         self.switches = 0  # tracks split by `_split_at_switch` (rule 29)
         self._camera = camera_tuple(cfg.camera)
         self._walker_m = host_float(cfg.width.height)  # rule 41's body height (m)
-        self._look = second_look(cfg, self._camera, self.opt.size)  # rule 37
+        self._look = tracker_look(cfg, self._camera, self.opt.size)  # rules 37 and 45
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
         self._offsets = (tuple(float(off) for _, off in WINDOW_CANDIDATES)
