@@ -202,7 +202,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "tail": (), "lean": (), "count_twice_fitted": (), "halves": (),
               "recheck_resolved": (), "pixel_halves": (), "recheck_low": (),
               "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
-              "halves_around": (), "mean_trend": TRACKER_SOURCES, "window_low": ()}
+              "halves_around": (), "mean_trend": TRACKER_SOURCES,
+              "window_low": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -60,7 +60,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 26)", "size.min_height_heights", 0.5),  # a too-low Pedestrian
     ("(new: issue 16, rule 26)", "size.min_height_rows", 10),
     ("(new: issue 16, rule 26c)", "size.min_height_scope", "window"),
-    ("(new: issue 16, rule 45)", "size.every_window", False),  # rule 26 on every window
+    ("(new: issue 16, rule 45)", "size.every_window", True),  # rule 26 on every window
     ("(new: issue 16, rule 36)", "size.top_inside_heights", 0.1),  # a top seen inside the image
     ("(new: issue 16, rule 37)", "size.twice_pace_heights", 0.57),  # a walker at twice its pace
     ("(new: issue 16, rule 37b)", "size.twice_pace_edge", True),  # ... heads above the view

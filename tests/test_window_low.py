@@ -1,5 +1,5 @@
-"""Rule 45 (issue 16, `size.every_window`): the tracker applies rule 26 to each rhythm window as
-it completes (`looks.tracker_look`, the object's second look after rule 37), so a window judged
+"""Rule 45 (issue 16, `size.every_window`, on): the tracker applies rule 26 to each rhythm window
+as it completes (`looks.tracker_look`, the object's second look after rule 37), so a window judged
 Pedestrian but lower than half a walker is refused (too-low) and the next window is judged, as
 the batch classifier does (`size.batch_size_look`).
 
@@ -106,7 +106,8 @@ def test_the_look_is_rule_37s_when_rule_45_or_26_is_off():
     match_window(CFG, plain)
     out = {k: v for k, v in plain.result.items() if k != "window"}
     assert int(out["verdict"]) == Verdict.PEDESTRIAN
-    for size in (SizeOptions(), SizeOptions(every_window=True, min_height_heights=0.0)):
+    for size in (SizeOptions(every_window=False),
+                 SizeOptions(every_window=True, min_height_heights=0.0)):
         look = looks.tracker_look(CFG, CAMERA, size)
         assert int(look(out, rows)["verdict"]) == Verdict.PEDESTRIAN
         assert int(second_look(CFG, CAMERA, size)(out, rows)["verdict"]) == Verdict.PEDESTRIAN
@@ -116,7 +117,8 @@ def test_the_look_is_rule_37s_when_rule_45_or_26_is_off():
     alone = looks.tracker_look(CFG, CAMERA, SizeOptions(every_window=True,
                                                         twice_pace_heights=0.0))  # rule 26 alone
     assert int(alone(out, rows)["reason"]) == Reason.TOO_LOW
-    assert looks.tracker_look(CFG, CAMERA, SizeOptions(twice_pace_heights=0.0)) is None
+    neither = SizeOptions(every_window=False, twice_pace_heights=0.0)
+    assert looks.tracker_look(CFG, CAMERA, neither) is None
 
 
 def test_the_tracker_reads_every_window_with_the_rule(monkeypatch):
