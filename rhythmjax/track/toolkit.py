@@ -184,7 +184,7 @@ def refused_for_trend(cfg: Config, outcome: dict) -> bool:
     peak (a local maximum, `peak_freq[0]`) below half the slowest pace the walking model accepts
     (`params.walking_pace_band`: 0.75 Hz with Table 1). Neither a walker's pace nor its stride
     frequency lies there: the window's variance is held by a trend (a walker's image growing or
-    shrinking as it walks radially, under two cycles over a window of 64 samples at 15 fps)."""
+    shrinking as it walks radially; 0.75 Hz is 3.2 cycles over 64 samples at 15 fps)."""
     mask, freq = np.asarray(outcome["peak_mask"]), np.asarray(outcome["peak_freq"], np.float64)
     return bool(mask[0]) and float(freq[0]) < walking_pace_band(cfg)[0] / 2
 
