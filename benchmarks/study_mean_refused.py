@@ -33,7 +33,8 @@ RULE = {"body.window_mean_refused": True, "body.mean_refused_gate": False}  # ru
 
 def sum_outcome(cfg, obj, look=None) -> dict | None:
     """The outcome of `obj`'s deciding window (result["window"]) judged on the sum I(k) alone
-    (`track.toolkit.match_window` on a copy without `mean_rows`; `look`: the second look, rule 37)
+    (`track.toolkit.match_window` on a copy without `mean_rows`; `look`: the tracker's second
+    look, rules 37 and 45)
     where `obj` is judged Pedestrian and the sum does not say so; else None."""
     from rhythmjax.model.status import Verdict
     from rhythmjax.track.toolkit import match_window
@@ -49,6 +50,20 @@ def sum_outcome(cfg, obj, look=None) -> dict | None:
     if probe.result is None or int(probe.result["verdict"]) == Verdict.PEDESTRIAN:
         return None
     return probe.result
+
+
+def decided_by_mean(cfg, opt, objs):
+    """(object, its sum outcome) for each of `objs` whose deciding window the sum alone would
+    not have judged Pedestrian (`sum_outcome`, with the tracker's look for `opt`:
+    `track.looks.tracker_look`, rules 37 and 45)."""
+    from rhythmjax.model.camera_np import camera_tuple
+    from rhythmjax.track.looks import tracker_look
+
+    look = tracker_look(cfg, camera_tuple(cfg.camera), opt.size)
+    for o in objs:
+        summed = sum_outcome(cfg, o, look)
+        if summed is not None:
+            yield o, summed
 
 
 def describe(cfg, obj, summed: dict) -> str:
@@ -74,29 +89,24 @@ def own(seeds: str, scenes: int, cache: Path) -> None:
     from eval_synthetic import RECOMMENDED, scene_specs
     from study_tracks import track_scene
 
-    from rhythmjax.model.camera_np import camera_tuple
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.sim.evaluate import deciding_windows, match_tracks, window_objects
     from rhythmjax.sim.presets import synthetic_options
     from rhythmjax.track.options import with_changes
-    from rhythmjax.track.twice import second_look
 
     opt = with_changes(synthetic_options(), RULE)
     cfg = config_from_dict(RECOMMENDED)
-    look = second_look(cfg, camera_tuple(cfg.camera), opt.size)
     for seed in (int(s) for s in seeds.split(",")):
         for i, (s, spec) in enumerate(scene_specs(seed, scenes, camera=cfg.camera)):
             tracks, _, objs, truth = track_scene(cfg, s, spec, cache / "mean_refused" / str(seed),
                                                  options=opt)
             owner = match_tracks(tracks, truth)
             followed = window_objects(tracks, truth, deciding_windows(objs))
-            for o in objs:
-                summed = sum_outcome(cfg, o, look)
-                if summed is not None:
-                    kind = getattr(followed.get(o.track_id), "kind", "none")
-                    scored = getattr(owner.get(o.track_id), "kind", "none")
-                    print(f"{seed}:{i} track {o.track_id} window {kind} (track {scored}) "
-                          f"{describe(cfg, o, summed)}")
+            for o, summed in decided_by_mean(cfg, opt, objs):
+                kind = getattr(followed.get(o.track_id), "kind", "none")
+                scored = getattr(owner.get(o.track_id), "kind", "none")
+                print(f"{seed}:{i} track {o.track_id} window {kind} (track {scored}) "
+                      f"{describe(cfg, o, summed)}")
 
 
 def ucsd(clip: str) -> None:
@@ -104,10 +114,8 @@ def ucsd(clip: str) -> None:
     from eval_all import apply_set
 
     from rhythmjax.evaluation import datasets
-    from rhythmjax.model.camera_np import camera_tuple
     from rhythmjax.track import track_frames
     from rhythmjax.track.options import TrackerOptions, with_changes
-    from rhythmjax.track.twice import second_look
     from rhythmjax.vision.video import open_video
 
     folder, boxes = datasets.ucsd_clip(clip)
@@ -118,14 +126,11 @@ def ucsd(clip: str) -> None:
                                       options=opt)
     inside = ev.rows_in_boxes(tracks, boxes)
     tid, u = np.asarray(tracks["track_id"]), np.asarray(tracks["u"])
-    look = second_look(cfg, camera_tuple(cfg.camera), opt.size)
-    for o in objs:
-        summed = sum_outcome(cfg, o, look)
-        if summed is not None:
-            rows = (tid == o.track_id) & np.isfinite(u)
-            frac = float(inside[rows].mean()) if rows.any() else 0.0
-            print(f"{clip} track {o.track_id} in anomaly boxes {frac:.2f} "
-                  f"{describe(cfg, o, summed)}")
+    for o, summed in decided_by_mean(cfg, opt, objs):
+        rows = (tid == o.track_id) & np.isfinite(u)
+        frac = float(inside[rows].mean()) if rows.any() else 0.0
+        print(f"{clip} track {o.track_id} in anomaly boxes {frac:.2f} "
+              f"{describe(cfg, o, summed)}")
 
 
 def dev(clip: str) -> None:
@@ -134,10 +139,8 @@ def dev(clip: str) -> None:
     import eval_all as ea
     import eval_real_video as ev
 
-    from rhythmjax.model.camera_np import camera_tuple
     from rhythmjax.track import track_frames
     from rhythmjax.track.options import TrackerOptions, with_changes
-    from rhythmjax.track.twice import second_look
     from rhythmjax.vision.video import open_video
 
     (entry,) = [c for c in ea._dev_index() if c["clip"] == clip]
@@ -147,11 +150,8 @@ def dev(clip: str) -> None:
     opt = with_changes(TrackerOptions(), RULE)
     with open_video(str(path), fps=truth["fps"]) as src:
         _, _, objs, _ = track_frames(cfg, src, progress=False, options=opt)
-    look = second_look(cfg, camera_tuple(cfg.camera), opt.size)
-    for o in objs:
-        summed = sum_outcome(cfg, o, look)
-        if summed is not None:
-            print(f"{clip} track {o.track_id} {describe(cfg, o, summed)}")
+    for o, summed in decided_by_mean(cfg, opt, objs):
+        print(f"{clip} track {o.track_id} {describe(cfg, o, summed)}")
 
 
 def main(argv=None) -> int:
