@@ -4,6 +4,7 @@ frames, in one process, with and without the candidate windows B (`body.window_c
 Prints a markdown table.
 
     python benchmarks/bench_pipeline.py [--frames 150] [--repeat 5] [--xla-inline]
+    python benchmarks/bench_pipeline.py --toggle body.window_mean_refused --toggle size.every_window
 
 The floor and the pipeline are timed alternately (best of `repeat` each), so a load change on
 shared cores hits both. `--xla-inline` runs XLA's per-frame step on the calling thread
@@ -47,14 +48,17 @@ def floor(frames: np.ndarray, thr: float = 15.0) -> None:
         prev = cur
 
 
-def pipeline(cfg, frames: np.ndarray, fps: float, candidates: bool = False) -> int:
+def pipeline(cfg, frames: np.ndarray, fps: float, candidates: bool = False,
+             changes: dict | None = None) -> int:
     """The online tracker over `frames`; `candidates`: with the candidate windows B
-    (`body.window_candidates`: three more window B sums a row, four spectra a rhythm window)."""
+    (`body.window_candidates`: three more window B sums a row, four spectra a rhythm window);
+    `changes`: further option changes (`--toggle`)."""
     from rhythmjax.track.options import TrackerOptions, with_changes
     from rhythmjax.track.tracker import OnlineTracker
 
     tr = OnlineTracker(cfg, with_changes(TrackerOptions(),
-                                         {"body.window_candidates": candidates}))
+                                         {"body.window_candidates": candidates,
+                                          **(changes or {})}))
     for i, f in enumerate(frames):
         tr.update(i, i / fps, f)
     _, verdicts, _ = tr.finish()
@@ -80,12 +84,17 @@ def main(argv=None) -> int:
     p.add_argument("--frames", type=int, default=150)
     p.add_argument("--repeat", type=int, default=5)
     p.add_argument("--xla-inline", action="store_true", help="no XLA CPU thread pool")
+    p.add_argument("--toggle", metavar="GROUP.FIELD", action="append", default=[],
+                   help="time the tracker (defaults, candidates on) with these boolean options "
+                        "all false against all true, interleaved (e.g. body.window_mean_refused)")
     a = p.parse_args(argv)
     if a.xla_inline:
         os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " " + SINGLE_THREAD_XLA)
     from rhythmjax.model.params import Config
 
     cfg = Config()
+    if a.toggle:
+        return toggle(cfg, a)
     rows = []
     for n_obj, scene in scenes(a.frames).items():
         frames = scene.frames
@@ -108,6 +117,22 @@ def main(argv=None) -> int:
     for n_obj, p_fps, f_fps, c_fps in rows:
         print(f"| {n_obj} | {p_fps:.0f} | {f_fps:.0f} | {f_fps / p_fps:.1f}x | {c_fps:.0f} "
               f"| {f_fps / c_fps:.1f}x |")
+    return 0
+
+
+def toggle(cfg, a) -> int:
+    """`--toggle`: frames per second of the tracker with the named options false and true."""
+    off, on = ({k: v for k in a.toggle} for v in (False, True))
+    print(f"512x512, {a.frames} frames, best of {a.repeat}, interleaved; options "
+          f"{', '.join(a.toggle)}\n")
+    print("| objects | false (fps) | true (fps) | time true / false |\n|---|---|---|---|")
+    for n_obj, scene in scenes(a.frames).items():
+        runs = [lambda c=c, sc=scene: pipeline(cfg, sc.frames, sc.fps, True, c) for c in (off, on)]
+        for run in runs:
+            run()  # compile
+        t_off, t_on = best_seconds(runs, a.repeat)
+        n = len(scene.frames)
+        print(f"| {n_obj} | {n / t_off:.0f} | {n / t_on:.0f} | {t_on / t_off:.3f} |")
     return 0
 
 
