@@ -46,13 +46,13 @@ def switched(by_track: dict, by_window: dict, verdicts: dict) -> list[tuple[int,
     return out
 
 
-def tracked_scenes(cfg, seeds, n_scenes: int, options):
-    """Per own scene of `seeds` (`eval_synthetic.scene_specs`, `n_scenes` each), tracked with
-    `options`: (seed, scene seed, scene, tracks, verdicts, objects, by_track, by_window), the
-    last two the object each track is scored on (`match_tracks`) and the one its deciding
-    window followed (`window_objects`)."""
+def tracked_scenes(cfg, seeds, n_scenes: int, options, lateral_deg: float | None = None):
+    """Per own scene of `seeds` (`eval_synthetic.scene_specs`, `n_scenes` each, `lateral_deg`
+    its), tracked with `options`: (seed, scene seed, scene, tracks, verdicts, objects, by_track,
+    by_window), the last two the object each track is scored on (`match_tracks`) and the one its
+    deciding window followed (`window_objects`)."""
     for seed in seeds:
-        for s, spec in es.scene_specs(seed, n_scenes, camera=cfg.camera):
+        for s, spec in es.scene_specs(seed, n_scenes, camera=cfg.camera, lateral_deg=lateral_deg):
             scene = render_scene(s, spec)
             frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
             tracks, verdicts, objs, _ = track_frames(cfg, frames, progress=False,
