@@ -64,6 +64,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   is faster than any walk.
 - window_low: the tracker's `size.every_window` True vs False (rule 45: rule 26 on every
   window as it completes, so matching goes on past a window too low for a walker).
+- pace_tall: the tracker's `recheck.pace_tall` True vs False (rule 46: a later window refused
+  by rule 29's pace test alone kept where its rows are a walker's height by rule 37's test).
 - top_inside: the tracker's `size.top_inside_heights` 0.1 vs 0 (rule 36: the size rule also
   reads rows where a walker's head would leave the image but the measured top lies inside it).
 - twice_pace: the tracker's `size.twice_pace_heights` 0.57 (fitted) vs 0 (rule 37: a window

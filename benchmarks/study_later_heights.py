@@ -49,13 +49,18 @@ def followed(obj, tracks, truth, a: int, b: int) -> str:
     return "none" if seen is None else f"{seen.track_id}:{seen.kind[:3]}"
 
 
-def main(argv: list[str]) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def study_arguments(argv: list[str], doc: str) -> argparse.Namespace:
+    """The later-window studies' command line: SEED ..., --scenes, --lateral, -o."""
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
     p.add_argument("seeds", type=int, nargs="+")
     p.add_argument("--scenes", type=int, default=10)
     p.add_argument("--lateral", action="store_true")
     p.add_argument("-o", "--out", type=Path)
-    a = p.parse_args(argv)
+    return p.parse_args(argv)
+
+
+def main(argv: list[str]) -> int:
+    a = study_arguments(argv, __doc__)
     cfg = config_from_dict(es.RECOMMENDED)
     cam, walker_m = camera_tuple(cfg.camera), float(cfg.width.height)
     top = synthetic_options().size.top_inside_heights

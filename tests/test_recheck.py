@@ -71,7 +71,7 @@ def test_not_a_walk_cases(speed, pace, reason, refused):
     assert not_a_walk(result, walking_top_speed(CFG), walking_top_pace(CFG)) is refused
 
 
-def _track(speeds_mps, seed=0, paces_hz=None):
+def walk_rows(speeds_mps, seed=0, paces_hz=None):
     """A track's rows on the paper's 1 m camera: one row a frame, the object moving away along
     y from 8 m at speeds_mps[k] m/s in frame k, its I(k) a sine at paces_hz[k] Hz (default 2.0,
     a walker's pace) plus noise of 0.1, every row observed."""
@@ -87,7 +87,7 @@ def _track(speeds_mps, seed=0, paces_hz=None):
     return SimpleNamespace(rows=rows, win_start=0, windows_done=0, result=None, decided=False)
 
 
-def _judged(obj):
+def judged_online(obj):
     """`obj` after the online windows: judged until one says Pedestrian."""
     while not obj.decided and len(obj.rows) >= obj.win_start + CFG.thresholds.n:
         match_window(CFG, obj)
@@ -99,12 +99,12 @@ def test_a_bicycle_after_the_verdict_is_cut_off():
     the first later window (rows 64..128, hop N/2) moves at about 4 m/s and is refused, so the
     cut is at row 64; the same track walking throughout has no cut, and the object itself is
     left as it was."""
-    obj = _judged(_track([1.3] * 64 + [4.0] * 96))
+    obj = judged_online(walk_rows([1.3] * 64 + [4.0] * 96))
     assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN and obj.result["window"] == (0, 64)
     before = (obj.win_start, obj.windows_done, obj.result)
     assert switch_row(CFG, obj) == 64
     assert (obj.win_start, obj.windows_done, obj.result) == before
-    walker = _judged(_track([1.3] * 160))
+    walker = judged_online(walk_rows([1.3] * 160))
     assert int(walker.result["verdict"]) == Verdict.PEDESTRIAN
     assert switch_row(CFG, walker) is None
 
@@ -112,9 +112,9 @@ def test_a_bicycle_after_the_verdict_is_cut_off():
 def test_no_cut_without_a_pedestrian_verdict_or_later_window():
     """A track judged Non-pedestrian (too fast from the start), and a walker too short for a
     window after its deciding one, are never cut."""
-    fast = _judged(_track([4.0] * 160))
+    fast = judged_online(walk_rows([4.0] * 160))
     assert int(fast.result["verdict"]) != Verdict.PEDESTRIAN and switch_row(CFG, fast) is None
-    short = _judged(_track([1.3] * 100))
+    short = judged_online(walk_rows([1.3] * 100))
     assert int(short.result["verdict"]) == Verdict.PEDESTRIAN and switch_row(CFG, short) is None
 
 
@@ -124,23 +124,23 @@ def test_the_last_window_finds_a_switch_with_no_later_window():
     (40..104, 40 of its rows at 4 m/s, measured about 3.5 m/s) is refused, and the cut is at the
     deciding window's end (64), not at that window's first row (40). 30 rows at 4 m/s (the last
     window measured about 2.5 m/s, under 2.573) and a walk of 104 rows are not cut."""
-    obj = _judged(_track([1.3] * 64 + [4.0] * 40))
+    obj = judged_online(walk_rows([1.3] * 64 + [4.0] * 40))
     assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN and obj.result["window"] == (0, 64)
     assert switch_row(CFG, obj) is None
     assert switch_row(CFG, obj, tail=True) == 64
-    assert switch_row(CFG, _judged(_track([1.3] * 64 + [4.0] * 30)), tail=True) is None
-    assert switch_row(CFG, _judged(_track([1.3] * 104)), tail=True) is None
+    assert switch_row(CFG, judged_online(walk_rows([1.3] * 64 + [4.0] * 30)), tail=True) is None
+    assert switch_row(CFG, judged_online(walk_rows([1.3] * 104)), tail=True) is None
 
 
 def test_an_earlier_window_finds_a_bicycle_before_the_walker():
     """64 rows at 4 m/s, then 96 of a walk: the online windows 0..64 (4 m/s) and 32..96 are
     Non-pedestrian, 64..128 says Pedestrian; the first is refused, so the cut is at the
     deciding window's first row, 64. A walk judged in its first window has no earlier one."""
-    obj = _judged(_track([4.0] * 64 + [1.3] * 96))
+    obj = judged_online(walk_rows([4.0] * 64 + [1.3] * 96))
     assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN
     assert obj.result["window"] == (64, 128)
     assert earlier_switch_row(CFG, obj) == 64
-    walker = _judged(_track([1.3] * 160))
+    walker = judged_online(walk_rows([1.3] * 160))
     assert walker.result["window"] == (0, 64) and earlier_switch_row(CFG, walker) is None
 
 
@@ -149,12 +149,12 @@ def test_the_speed_alone_leaves_a_fast_pace_before_the_verdict():
     above 2.599 Hz), then 96 rows of a 2 Hz walk: the first window is refused by its peak
     (rule 30 cuts at the deciding window's first row) but not by its speed (no cut); the
     bicycle before the walker above is cut either way."""
-    obj = _judged(_track([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96))
+    obj = judged_online(walk_rows([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96))
     assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN
     first = int(obj.result["window"][0])
     assert first > 0 and earlier_switch_row(CFG, obj) == first
     assert earlier_switch_row(CFG, obj, pace=False) is None
-    bicycle = _judged(_track([4.0] * 64 + [1.3] * 96))
+    bicycle = judged_online(walk_rows([4.0] * 64 + [1.3] * 96))
     assert earlier_switch_row(CFG, bicycle, pace=False) == 64
 
 
@@ -176,13 +176,13 @@ def test_resolved_cuts_a_fast_pace_before_the_verdict_only_at_a_resolving_frame_
     judge = lambda o, rows: calls.append((rows.start, rows.stop))  # noqa: E731
     for cfg, cut in ((CFG, True), (slow, False)):
         calls.clear()
-        obj = _judged(_track([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96))
+        obj = judged_online(walk_rows([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96))
         obj.vel = list(range(160))
         first = int(obj.result["window"][0])
         split_at_switches(cfg, obj, opt, judge)
         assert calls == ([(None, first)] if cut else [])
     calls.clear()
-    bicycle = _judged(_track([4.0] * 64 + [1.3] * 96))
+    bicycle = judged_online(walk_rows([4.0] * 64 + [1.3] * 96))
     bicycle.vel = list(range(160))
     split_at_switches(slow, bicycle, opt, judge)
     assert calls == [(None, 64)]
@@ -197,7 +197,7 @@ def test_keep_rows_shifts_the_deciding_window():
     """Rows 64.. of the track above kept: 96 rows, the first is the old row 64, the deciding
     window now rows 0..64, verdict unchanged; keeping rows that cut the window raises, naming
     the track."""
-    obj = _judged(_track([4.0] * 64 + [1.3] * 96))
+    obj = judged_online(walk_rows([4.0] * 64 + [1.3] * 96))
     obj.vel, obj.track_id = list(range(160)), 7
     old_rows, verdict = list(obj.rows), int(obj.result["verdict"])
     keep_rows(obj, slice(64, None))
@@ -210,9 +210,9 @@ def test_keep_rows_shifts_the_deciding_window():
 def test_half_speeds_are_each_halfs_own_speed():
     """A constant speed per half comes back as that speed (the foot points taken to the ground
     through (3) and back, float32: within 2 mm/s); a half of one row has no speed."""
-    first, last = half_speeds(CFG, _track([1.3] * 32 + [4.0] * 32).rows)
+    first, last = half_speeds(CFG, walk_rows([1.3] * 32 + [4.0] * 32).rows)
     assert first == pytest.approx(1.3, abs=2e-3) and last == pytest.approx(4.0, abs=2e-3)
-    first, last = half_speeds(CFG, _track([1.3] * 3).rows)
+    first, last = half_speeds(CFG, walk_rows([1.3] * 3).rows)
     assert math.isnan(first) and last == pytest.approx(1.3, abs=2e-3)
 
 
@@ -221,11 +221,11 @@ def test_fast_half_reads_each_half_against_the_fastest_walk():
     a half at 2.5 m/s lies under the fastest walk (2.573 m/s), one at 2.65 over it (the
     Theil-Sen speed of a constant speed is that speed)."""
     top = walking_top_speed(CFG)
-    assert fast_half(CFG, _track([1.3] * 32 + [4.0] * 32).rows, top) == 32
-    assert fast_half(CFG, _track([4.0] * 32 + [1.3] * 32).rows, top) == 0
-    assert fast_half(CFG, _track([1.3] * 64).rows, top) is None
-    assert fast_half(CFG, _track([1.3] * 32 + [2.5] * 32).rows, top) is None
-    assert fast_half(CFG, _track([1.3] * 32 + [2.65] * 32).rows, top) == 32
+    assert fast_half(CFG, walk_rows([1.3] * 32 + [4.0] * 32).rows, top) == 32
+    assert fast_half(CFG, walk_rows([4.0] * 32 + [1.3] * 32).rows, top) == 0
+    assert fast_half(CFG, walk_rows([1.3] * 64).rows, top) is None
+    assert fast_half(CFG, walk_rows([1.3] * 32 + [2.5] * 32).rows, top) is None
+    assert fast_half(CFG, walk_rows([1.3] * 32 + [2.65] * 32).rows, top) == 32
 
 
 def test_a_walker_and_a_bicycle_in_the_deciding_window():
@@ -233,19 +233,19 @@ def test_a_walker_and_a_bicycle_in_the_deciding_window():
     the Theil-Sen speed of about 1.95 m/s (the median slope is the walker's), and rule 29 has no
     later window; its second half (8 rows of walk, 24 at 4 m/s) is no walk, so rule 42 finds
     row 32. The bicycle first (24 rows, then 40 of walk): row 0. A walk: none."""
-    obj = _judged(_track([1.3] * 40 + [4.0] * 24))
+    obj = judged_online(walk_rows([1.3] * 40 + [4.0] * 24))
     assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN and obj.result["window"] == (0, 64)
     assert float(obj.result["speed_mps"]) < walking_top_speed(CFG)
     assert switch_row(CFG, obj, tail=True) is None and mixed_window_row(CFG, obj) == 32
-    assert mixed_window_row(CFG, _judged(_track([4.0] * 24 + [1.3] * 40))) == 0
-    assert mixed_window_row(CFG, _judged(_track([1.3] * 64))) is None
+    assert mixed_window_row(CFG, judged_online(walk_rows([4.0] * 24 + [1.3] * 40))) == 0
+    assert mixed_window_row(CFG, judged_online(walk_rows([1.3] * 64))) is None
 
 
 def test_a_later_window_cut_at_its_fast_half():
     """104 rows of walk then 24 at 4 m/s (judged in 0..64): the later window 64..128 moves at
     about 1.95 m/s, so rule 29 keeps the track whole; with halves its second half (96..128)
     is no walk and the cut is at row 96."""
-    obj = _judged(_track([1.3] * 104 + [4.0] * 24))
+    obj = judged_online(walk_rows([1.3] * 104 + [4.0] * 24))
     assert obj.result["window"] == (0, 64)
     assert switch_row(CFG, obj) is None and switch_row(CFG, obj, halves=True) == 96
 
@@ -263,7 +263,7 @@ def test_split_at_switches_cuts_a_mixed_window_at_its_middle():
                for h in (True, False))
 
     def judged(speeds):
-        obj = _judged(_track(speeds))
+        obj = judged_online(walk_rows(speeds))
         obj.vel = list(range(len(obj.rows)))
         return obj
 
@@ -285,7 +285,7 @@ def test_split_at_switches_cuts_a_mixed_window_at_its_middle():
     assert calls == [(96, None)] and len(later.rows) == 96 and later.result["window"] == (0, 64)
 
 
-def _tall(obj, rows: slice, height_m: float):
+def with_height(obj, rows: slice, height_m: float):
     """`obj` with the top row v_top of its `rows` that of an upright object `height_m` m tall on
     each foot point (`camera_np.upright_size`); NaN where that top would leave the image (a
     walker's head above the view: its row is not read)."""
@@ -304,9 +304,9 @@ def test_low_window_is_rule_26s_test_on_the_rows_by_hand():
     """Rule 43's window test is rule 26's: rows of an object 0.80 m tall read below 0.5 x 1.7 =
     0.85 m and are refused, 0.90 m not; 9 readable rows (fewer than 10) are never refused; no
     size options, or rule 26 off (0), never refuse. The heights are read back to 1e-3 m."""
-    obj = _tall(_track([1.3] * 64), slice(None), 0.80)
+    obj = with_height(walk_rows([1.3] * 64), slice(None), 0.80)
     assert low_window(CFG, obj.rows, SIZE)
-    assert not low_window(CFG, _tall(_track([1.3] * 64), slice(None), 0.90).rows, SIZE)
+    assert not low_window(CFG, with_height(walk_rows([1.3] * 64), slice(None), 0.90).rows, SIZE)
     assert not low_window(CFG, obj.rows[:9], SIZE) and low_window(CFG, obj.rows[:10], SIZE)
     assert not low_window(CFG, obj.rows, None)
     assert not low_window(CFG, obj.rows, SizeOptions(min_height_heights=0.0))
@@ -322,8 +322,8 @@ def test_a_dogs_rows_before_the_walkers_verdict_are_cut_by_their_height():
     not cut; rule 30b's speed test alone does not cut the dog (1.3 m/s), rule 30's pace test
     does (3.2 Hz), and neither reads with `speed` False."""
     paces = [3.2] * 64 + [2.0] * 96
-    dog = _tall(_track([1.3] * 160, paces_hz=paces), slice(0, 64), 0.6)
-    dog = _judged(dog)
+    dog = with_height(walk_rows([1.3] * 160, paces_hz=paces), slice(0, 64), 0.6)
+    dog = judged_online(dog)
     assert int(dog.result["verdict"]) == Verdict.PEDESTRIAN
     assert dog.result["window"] == (32, 96)
     assert earlier_switch_row(CFG, dog, speed=False, pace=False, low=SIZE) == 32
@@ -331,7 +331,7 @@ def test_a_dogs_rows_before_the_walkers_verdict_are_cut_by_their_height():
     assert earlier_switch_row(CFG, dog, pace=False) is None
     assert earlier_switch_row(CFG, dog, speed=False) is None  # speed False: the pace unread too
     assert earlier_switch_row(CFG, dog) == 32  # rule 30 refuses its 3.2 Hz
-    tall = _judged(_tall(_track([1.3] * 160, paces_hz=paces), slice(0, 64), 1.2))
+    tall = judged_online(with_height(walk_rows([1.3] * 160, paces_hz=paces), slice(0, 64), 1.2))
     assert earlier_switch_row(CFG, tall, speed=False, pace=False, low=SIZE) is None
 
 
@@ -340,11 +340,11 @@ def test_a_dog_after_the_verdict_at_a_walkers_pace_is_cut_by_its_height():
     the same 1.3 m/s and 2 Hz (a dog read at its aliased leg cycle): rule 29 finds no later
     window that is no walk; rule 43 cuts at 64; the tail window of a shorter track (64 + 40
     rows, 40 of them the dog's) is refused by height as well."""
-    obj = _judged(_tall(_track([1.3] * 160), slice(64, None), 0.6))
+    obj = judged_online(with_height(walk_rows([1.3] * 160), slice(64, None), 0.6))
     assert obj.result["window"] == (0, 64)
     assert switch_row(CFG, obj) is None
     assert switch_row(CFG, obj, low=SIZE) == 64
-    short = _judged(_tall(_track([1.3] * 104), slice(64, None), 0.6))
+    short = judged_online(with_height(walk_rows([1.3] * 104), slice(64, None), 0.6))
     assert switch_row(CFG, short, tail=True) is None
     assert switch_row(CFG, short, tail=True, low=SIZE) == 64
 
@@ -356,7 +356,7 @@ def test_split_at_switches_reads_heights_only_with_the_rule_on():
     nothing is cut."""
     def fresh():
         paces = [3.2] * 64 + [2.0] * 96
-        return _judged(_tall(_track([1.3] * 160, paces_hz=paces), slice(0, 64), 0.6))
+        return judged_online(with_height(walk_rows([1.3] * 160, paces_hz=paces), slice(0, 64), 0.6))
 
     calls = []
 
@@ -388,16 +388,17 @@ def test_speed_low_reads_speed_and_height_before_the_verdict_only():
         calls.append((rows.start, rows.stop))
 
     opt = RecheckOptions(earlier="speed-low")
+    dog_first = [3.2] * 64 + [2.0] * 96
     cases = (
-        (lambda: _tall(_track([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96), slice(0, 64), 0.6),
+        (lambda: with_height(walk_rows([1.3] * 160, paces_hz=dog_first), slice(0, 64), 0.6),
          SIZE, [(None, 32)]),
-        (lambda: _track([4.0] * 64 + [1.3] * 96), SIZE, [(None, 64)]),
-        (lambda: _tall(_track([1.3] * 160), slice(64, None), 0.6), SIZE, []),
-        (lambda: _tall(_track([1.3] * 160, paces_hz=[3.2] * 64 + [2.0] * 96), slice(0, 64), 0.6),
+        (lambda: walk_rows([4.0] * 64 + [1.3] * 96), SIZE, [(None, 64)]),
+        (lambda: with_height(walk_rows([1.3] * 160), slice(64, None), 0.6), SIZE, []),
+        (lambda: with_height(walk_rows([1.3] * 160, paces_hz=dog_first), slice(0, 64), 0.6),
          None, []),
     )
     for make, size, cut in cases:
-        obj = _judged(make())
+        obj = judged_online(make())
         assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN
         obj.vel = list(range(len(obj.rows)))
         calls.clear()
@@ -406,7 +407,7 @@ def test_speed_low_reads_speed_and_height_before_the_verdict_only():
 
 
 @pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}, {"recheck.halves": True},
-                                     {"recheck.low": True}])
+                                     {"recheck.low": True}, {"recheck.pace_tall": True}])
 def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone(changes):
     """One rendered walker going away from 8 m, 180 frames: its track (156 rows, judged
     Pedestrian in rows 0..64) has a later window (rows 64..128), and
@@ -443,7 +444,7 @@ def test_rule_44_reads_halves_around_the_deciding_window_only():
         cuts.append((rows.start, rows.stop))
 
     def run(speeds, paces, opt):
-        obj = _judged(_track(speeds, paces_hz=paces))
+        obj = judged_online(walk_rows(speeds, paces_hz=paces))
         obj.vel = list(range(len(obj.rows)))
         cuts.clear()
         split_at_switches(CFG, obj, opt, judge)

@@ -293,6 +293,11 @@ class RecheckOptions:
     # faster than any walk cuts the track at the deciding window's first row, one after it at that
     # half (`recheck.earlier_switch_row`, `switch_row`); a walker's track that followed a bicycle
     # for less than a window before or after its verdict (docs/rules.md, rule 44)
+    pace_tall: bool = True  # rule 46 (with `enabled`): a later or tail window refused by rule
+    # 29's pace test alone is kept where its rows are as tall as a walker by rule 37's height
+    # test (`size`'s `twice_pace_heights`; `recheck.walker_tall`): a walker read at a multiple of
+    # its pace is not a dog (on since issue 16's forty-seventh round: fresh own pools walkers
+    # 1496 -> 1497 of 1680, non-walkers equal; UCSD walker tracks no longer cut; docs/rules.md)
     low: bool = False  # rule 43 (with `enabled`): rule 26's height test (`size`'s options:
     # 0.5 walker heights over 10 rows) refuses a later or tail window too, and reads the windows
     # before the verdict (with `earlier`'s test where that is on): a dog's rows before or after

@@ -39,6 +39,13 @@ tail window as rule 42's does (`switch_row`). A walker's track that followed a b
 than a window before or after its verdict: the whole window's Theil-Sen speed stays under the
 bound, its bicycle half does not.
 
+Rule 46 (`RecheckOptions.pace_tall`, on since issue 16's forty-seventh round) keeps a later
+or tail window that the pace test alone refuses where its rows are as tall as a walker by rule
+37's height test (`walker_tall`: 0.57 walker heights, fitted, over at least 10 rows): a walker
+whose knees and rolling feet put its window's strongest peak at twice or three times its pace
+(the own scenes' walkers since issue 16's thirty-eighth round; UCSD's walkers at 30 fps) is not
+another object, while a dog at its trot (0.5-0.7 m) still is. The speed test is unchanged.
+
 Rule 43 (`RecheckOptions.low`, off) gives every window the recheck reads rule 26's height test
 as well (`low_window`: its rows' median height below `size.min_height_heights` walker heights,
 `track.size.too_low`): a later or tail window so refused cuts as rule 29's; the windows before
@@ -51,28 +58,58 @@ import copy
 import math
 from collections.abc import Callable
 
+import numpy as np
+
 from ..model.camera_np import camera_tuple
 from ..model.params import Config, host_float, walking_top_pace, walking_top_speed
 from ..model.status import Reason, Verdict
 from .options import RecheckOptions, SizeOptions
 from .size import rows_height, too_low
 from .toolkit import RhythmWindows, fast_half, match_window
+from .twice import tall_enough, twice_height
 
 
 __all__ = ["earlier_switch_row", "earlier_windows", "keep_rows", "later_windows", "low_window",
            "mixed_window_row", "not_a_walk", "pace_resolved", "split_at_switches",
-           "switch_row"]
+           "switch_row", "too_fast", "too_quick", "walker_tall"]
 
 
 def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
     """True where a window's outcome (`toolkit.RESULT_FIELDS`) is not a walker's: its speed
-    (m/s) is above `top_speed`, or it found a peak (reason other than no-peak) whose pace (Hz)
+    (m/s) is above `top_speed` (`too_fast`), or it found a peak (reason other than no-peak)
+    whose pace (Hz) is above `top_pace` (`too_quick`)."""
+    return too_fast(result, top_speed) or too_quick(result, top_pace)
+
+
+def too_fast(result: dict, top_speed: float) -> bool:
+    """Rule 29's speed test: the window's speed (12), m/s, is above `top_speed`."""
+    speed = float(result["speed_mps"])
+    return math.isfinite(speed) and speed > top_speed
+
+
+def too_quick(result: dict, top_pace: float) -> bool:
+    """Rule 29's pace test: the window found a peak (reason other than no-peak) whose pace, Hz,
     is above `top_pace`."""
-    speed, pace = float(result["speed_mps"]), float(result["pace_hz"])
-    if math.isfinite(speed) and speed > top_speed:
-        return True
+    pace = float(result["pace_hz"])
     peak = int(result["reason"]) != Reason.NO_PEAK
     return peak and math.isfinite(pace) and pace > top_pace
+
+
+def walker_tall(cfg: Config, rows, size: SizeOptions | None) -> bool:
+    """Rule 46: True where `rows` (`TrackRow`s) are as tall as a walker by rule 37's test
+    (`twice.tall_enough` on `twice.twice_height`: at least `size.min_height_rows` rows read,
+    their median at least `size.twice_pace_heights` walker heights, 0.57 x 1.7 m fitted; the
+    rows at the image's first row read as lower bounds where `size.twice_pace_edge`); False
+    where `size` is None or rule 37 is off."""
+    if size is None or size.twice_pace_heights <= 0:
+        return False
+    walker_m = host_float(cfg.width.height)
+    cols = np.asarray([(r.u, r.v, r.v_top, r.top_at_edge) for r in rows],
+                      np.float64).reshape(-1, 4)
+    height, n = twice_height(camera_tuple(cfg.camera), cols[:, 0], cols[:, 1], cols[:, 2],
+                             cols[:, 3] if size.twice_pace_edge else None, walker_m,
+                             size.top_inside_heights)
+    return tall_enough(height, n, walker_m, size)
 
 
 def low_window(cfg: Config, rows, size: SizeOptions | None) -> bool:
@@ -162,20 +199,25 @@ def _pedestrian(obj: RhythmWindows) -> bool:
 
 
 def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False,
-               halves: bool = False, low: SizeOptions | None = None) -> int | None:
+               halves: bool = False, low: SizeOptions | None = None,
+               tall: SizeOptions | None = None) -> int | None:
     """The first row of the first of `later_windows` that `not_a_walk` refuses (the deciding
     window's end where that window starts inside it: `tail`); None where the track is not
     judged Pedestrian or no later window is refused. halves (rule 42): a window one of whose
     halves is faster than any walk (`fast_half`) is refused too, cut at that half's first row
     (the deciding window's end where that is later). low (rule 43): a window `low_window`
-    refuses with these size options is refused too."""
+    refuses with these size options is refused too. tall (rule 46): a window the pace test
+    alone refuses (`too_quick`, not `too_fast`) is kept where its rows are a walker's height
+    (`walker_tall` with these size options): a walker read at a multiple of its pace."""
     if not _pedestrian(obj):
         return None
     top_speed, top_pace = walking_top_speed(cfg), walking_top_pace(cfg)
     decided_end = int(obj.result["window"][1])
     for result in later_windows(cfg, obj, tail=tail):
         a, b = (int(k) for k in result["window"])
-        if not_a_walk(result, top_speed, top_pace) or low_window(cfg, obj.rows[a:b], low):
+        refused = too_fast(result, top_speed) or (
+            too_quick(result, top_pace) and not walker_tall(cfg, obj.rows[a:b], tall))
+        if refused or low_window(cfg, obj.rows[a:b], low):
             return max(a, decided_end)
         half = fast_half(cfg, obj.rows[a:b], top_speed) if halves else None
         if half is not None:
@@ -233,9 +275,9 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
     the slow half. Rules 30, 30b, 30c, 30d (`opt.earlier`) and 43 (`opt.low`; 30d and 43 with
     `size`, rule 26's options): where a window before the deciding one is no walker's, rows
     ..k-1 (k: the deciding window's first row) become a new track; rule 44
-    (`opt.halves_around`) reads the halves there too. Rules 29, 30a, 42, 43, 44
-    (`switch_row`): where a later window is no walker's, rows k.. (its first row) become a new
-    track. `obj` keeps the rest."""
+    (`opt.halves_around`) reads the halves there too. Rules 29, 30a, 42, 43, 44, 46
+    (`switch_row`; 46: `opt.pace_tall` with `size`): where a later window is no walker's, rows
+    k.. (its first row) become a new track. `obj` keeps the rest."""
     k = mixed_window_row(cfg, obj) if opt.halves else None
     if k is not None:
         a, b = (int(r) for r in obj.result["window"])
@@ -253,7 +295,8 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
         if k is not None:
             judge_afresh(obj, slice(None, k))
             keep_rows(obj, slice(k, None))
-    k = switch_row(cfg, obj, tail=opt.tail, halves=opt.halves or opt.halves_around, low=low)
+    k = switch_row(cfg, obj, tail=opt.tail, halves=opt.halves or opt.halves_around, low=low,
+                   tall=size if opt.pace_tall else None)
     if k is not None:
         judge_afresh(obj, slice(k, None))
         keep_rows(obj, slice(None, k))

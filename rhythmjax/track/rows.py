@@ -25,8 +25,8 @@ class TrackRow(NamedTuple):
     window), an optional column of the tracks format; u_top: the head's column px at v_top
     (`count` writes u + the silhouette's lean, `count.widths.measured_lean`; NaN where not
     measured), optional likewise; top_at_edge: the measured moving region reached the image's
-    first row, so v_top is NaN and the object goes on above it (`count` records it; the
-    tracker leaves it False), the optional column `top_at_edge` (1/0)."""
+    first row, so v_top is NaN and the object goes on above it (`count` and the tracker
+    record it; False where not measured), the optional column `top_at_edge` (1/0)."""
 
     frame: int
     t: float
