@@ -58,15 +58,13 @@ import copy
 import math
 from collections.abc import Callable
 
-import numpy as np
-
 from ..model.camera_np import camera_tuple
 from ..model.params import Config, host_float, walking_top_pace, walking_top_speed
 from ..model.status import Reason, Verdict
 from .options import RecheckOptions, SizeOptions
 from .size import rows_height, too_low
 from .toolkit import RhythmWindows, fast_half, match_window
-from .twice import tall_enough, twice_height
+from .twice import rows_tall_enough
 
 
 __all__ = ["earlier_switch_row", "earlier_windows", "keep_rows", "later_windows", "low_window",
@@ -97,19 +95,13 @@ def too_quick(result: dict, top_pace: float) -> bool:
 
 def walker_tall(cfg: Config, rows, size: SizeOptions | None) -> bool:
     """Rule 46: True where `rows` (`TrackRow`s) are as tall as a walker by rule 37's test
-    (`twice.tall_enough` on `twice.twice_height`: at least `size.min_height_rows` rows read,
+    (`twice.rows_tall_enough`: at least `size.min_height_rows` rows read,
     their median at least `size.twice_pace_heights` walker heights, 0.57 x 1.7 m fitted; the
     rows at the image's first row read as lower bounds where `size.twice_pace_edge`); False
     where `size` is None or rule 37 is off."""
     if size is None or size.twice_pace_heights <= 0:
         return False
-    walker_m = host_float(cfg.width.height)
-    cols = np.asarray([(r.u, r.v, r.v_top, r.top_at_edge) for r in rows],
-                      np.float64).reshape(-1, 4)
-    height, n = twice_height(camera_tuple(cfg.camera), cols[:, 0], cols[:, 1], cols[:, 2],
-                             cols[:, 3] if size.twice_pace_edge else None, walker_m,
-                             size.top_inside_heights)
-    return tall_enough(height, n, walker_m, size)
+    return rows_tall_enough(rows, camera_tuple(cfg.camera), host_float(cfg.width.height), size)
 
 
 def low_window(cfg: Config, rows, size: SizeOptions | None) -> bool:

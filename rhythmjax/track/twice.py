@@ -35,8 +35,8 @@ from .options import SizeOptions
 from .size import row_heights
 
 
-__all__ = ["batch_second_look", "judge_at_half", "judged_at_half", "reads_twice", "second_look",
-           "tall_enough", "twice_height"]
+__all__ = ["batch_second_look", "judge_at_half", "judged_at_half", "reads_twice",
+           "rows_tall_enough", "second_look", "tall_enough", "twice_height"]
 
 
 def reads_twice(res: dict, cfg: Config) -> np.ndarray:
@@ -107,6 +107,18 @@ def tall_enough(height_m: float, rows: int, walker_height_m: float,
         height_m >= options.twice_pace_heights * walker_height_m
 
 
+def rows_tall_enough(rows: list, camera, walker_height_m: float, options: SizeOptions) -> bool:
+    """`tall_enough` on the `twice_height` of `rows` (`rows.TrackRow`: u, v, v_top and, where
+    `options.twice_pace_edge`, top_at_edge): rule 37's height test on a window's rows (rule 46
+    reads it too, `recheck.walker_tall`)."""
+    cols = np.asarray([(r.u, r.v, r.v_top, r.top_at_edge) for r in rows],
+                      np.float64).reshape(-1, 4)
+    height, n = twice_height(camera, cols[:, 0], cols[:, 1], cols[:, 2],
+                             cols[:, 3] if options.twice_pace_edge else None,
+                             walker_height_m, options.top_inside_heights)
+    return tall_enough(height, n, walker_height_m, options)
+
+
 def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: float,
                   options: SizeOptions) -> dict:
     """`out` (a window's outcome: `toolkit.RESULT_FIELDS`) judged at half its strongest peak
@@ -114,12 +126,7 @@ def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: f
     otherwise (and when `options.twice_pace_heights` is 0, off)."""
     if options.twice_pace_heights <= 0 or not bool(reads_twice(out, cfg)[0]):
         return out
-    cols = np.asarray([(r.u, r.v, r.v_top, r.top_at_edge) for r in rows],
-                      np.float64).reshape(-1, 4)
-    height, n = twice_height(camera, cols[:, 0], cols[:, 1], cols[:, 2],
-                             cols[:, 3] if options.twice_pace_edge else None,
-                             walker_height_m, options.top_inside_heights)
-    if not tall_enough(height, n, walker_height_m, options):
+    if not rows_tall_enough(rows, camera, walker_height_m, options):
         return out
     return judged_at_half(out, np.ones(1, bool))
 
