@@ -32,18 +32,16 @@ from rhythmjax.model.params import config_from_dict, walking_top_pace, walking_t
 from rhythmjax.model.status import Reason, Verdict  # noqa: E402
 from rhythmjax.sim.presets import synthetic_options  # noqa: E402
 from rhythmjax.track.options import with_changes  # noqa: E402
-from rhythmjax.track.recheck import later_windows  # noqa: E402
+from rhythmjax.track.recheck import later_windows, too_fast, too_quick  # noqa: E402
 from rhythmjax.track.size import rows_height  # noqa: E402
 
 
 def refused_by(result: dict, top_speed: float, top_pace: float) -> str:
-    """'speed', 'pace' or 'none': the test of `recheck.not_a_walk` that refuses `result`."""
-    speed, pace = float(result["speed_mps"]), float(result["pace_hz"])
-    if math.isfinite(speed) and speed > top_speed:
+    """'speed', 'pace' or 'none': the test of `recheck.not_a_walk` that refuses `result`
+    (`recheck.too_fast` first, then `recheck.too_quick`)."""
+    if too_fast(result, top_speed):
         return "speed"
-    if int(result["reason"]) != Reason.NO_PEAK and math.isfinite(pace) and pace > top_pace:
-        return "pace"
-    return "none"
+    return "pace" if too_quick(result, top_pace) else "none"
 
 
 def main(argv: list[str]) -> int:
@@ -60,7 +58,6 @@ def main(argv: list[str]) -> int:
         for o in objs:
             if o.result is None or int(o.result["verdict"]) != Verdict.PEDESTRIAN:
                 continue
-            k0, k1 = (int(k) for k in o.result["window"])
             f_dec = float(o.result["pace_hz"])
             for r in later_windows(cfg, o, tail=True):
                 a0, b0 = (int(k) for k in r["window"])
