@@ -66,6 +66,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   window as it completes, so matching goes on past a window too low for a walker).
 - pace_tall: the tracker's `recheck.pace_tall` True vs False (rule 46: a later window refused
   by rule 29's pace test alone kept where its rows are a walker's height by rule 37's test).
+- median_pace: the tracker's `recheck.median_pace` True vs False (rule 47: a Pedestrian track's
+  pace and stride the medians over its windows judged Pedestrian; verdicts unchanged).
 - top_inside: the tracker's `size.top_inside_heights` 0.1 vs 0 (rule 36: the size rule also
   reads rows where a walker's head would leave the image but the measured top lies inside it).
 - twice_pace: the tracker's `size.twice_pace_heights` 0.57 (fitted) vs 0 (rule 37: a window

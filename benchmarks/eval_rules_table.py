@@ -176,6 +176,10 @@ RULES = {
                   "nothing fitted (rule 37's fitted 0.57 walker heights over 10 rows on the later "
                   "windows rule 29's pace test refuses); found on used seeds 5120001-5190001 "
                   "(study_later_paces, rule 46)"),
+    "median_pace": ("tracker", "recheck.median_pace", True, False, TRACKER_SOURCES,
+                    "nothing fitted (a Pedestrian track's pace and stride as the medians over "
+                    "its windows judged Pedestrian); suggested by study_lateral_pace's "
+                    "trk_median on used seeds (rule 47)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -207,7 +211,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "recheck_resolved": (), "pixel_halves": (), "recheck_low": (),
               "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
               "halves_around": (), "mean_trend": TRACKER_SOURCES,
-              "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES}
+              "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -70,6 +70,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 42)", "recheck.halves", False),  # a window's halves read, off
     ("(new: issue 16, rule 43)", "recheck.low", False),  # rule 26 in the rechecked windows, off
     ("(new: issue 16, rule 46)", "recheck.pace_tall", True),  # rule 29's pace test vs tall
+    ("(new: issue 16, rule 47)", "recheck.median_pace", False),  # the windows' median pace, off
 ]
 TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]
 

@@ -302,6 +302,13 @@ class RecheckOptions:
     # 0.5 walker heights over 10 rows) refuses a later or tail window too, and reads the windows
     # before the verdict (with `earlier`'s test where that is on): a dog's rows before or after
     # its walker's deciding window cut off (`recheck.low_window`; docs/rules.md, rule 43)
+    median_pace: bool = False  # rule 47 (with `enabled`, after the cuts): a Pedestrian track's
+    # pace and stride are the medians over its windows judged Pedestrian (the deciding one and
+    # the later ones, the tail window with `tail`), not the deciding window's alone; its verdict
+    # stays the deciding window's (`recheck.median_pace`). Off: fresh own pools' pace MAE fell
+    # (radial 0.0198 -> 0.0190, crossing 0.0320 -> 0.0307 Hz) but the own knees radial rose
+    # 0.0197 -> 0.0325 Hz (a later window on another walker) and the dev clips' 0.0163 ->
+    # 0.0181 Hz (issue 16's forty-eighth round; docs/rules.md, rule 47)
 
     def __post_init__(self):
         if self.earlier not in EARLIER_TESTS:

@@ -50,13 +50,21 @@ Rule 43 (`RecheckOptions.low`, off) gives every window the recheck reads rule 26
 as well (`low_window`: its rows' median height below `size.min_height_heights` walker heights,
 `track.size.too_low`): a later or tail window so refused cuts as rule 29's; the windows before
 the verdict are read by this test (with `earlier`'s where that is on), a refused one cutting at
-the deciding window's first row (a dog's rows before its walker's)."""
+the deciding window's first row (a dog's rows before its walker's).
+
+Rule 47 (`RecheckOptions.median_pace`, off: the dev clips' pace read worse) reports a
+Pedestrian track's pace F and stride T (`median_pace`) as the medians over its windows judged
+Pedestrian: the deciding one and each of `later_windows` (with the tail window where `tail` is
+on) that (13)-(15) judge Pedestrian. The verdict, its reason, ratio and speed stay the deciding
+window's (Sec. 4.2)."""
 
 from __future__ import annotations
 
 import copy
 import math
 from collections.abc import Callable
+
+import numpy as np
 
 from ..model.camera_np import camera_tuple
 from ..model.params import Config, host_float, walking_top_pace, walking_top_speed
@@ -68,7 +76,7 @@ from .twice import rows_tall_enough
 
 
 __all__ = ["earlier_switch_row", "earlier_windows", "keep_rows", "later_windows", "low_window",
-           "mixed_window_row", "not_a_walk", "pace_resolved", "split_at_switches",
+           "median_pace", "mixed_window_row", "not_a_walk", "pace_resolved", "split_at_switches",
            "switch_row", "too_fast", "too_quick", "walker_tall"]
 
 
@@ -236,6 +244,21 @@ def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
                 or (halves and fast_half(cfg, obj.rows[a:b], fastest_walk) is not None)):
             return int(obj.result["window"][0])
     return None
+
+
+def median_pace(cfg: Config, obj: RhythmWindows, opt: RecheckOptions) -> dict | None:
+    """Rule 47 (`opt.median_pace`, with `opt.enabled`): `obj`'s result with pace_hz (F, Hz) and
+    stride_m (T, m, (12)) the medians over its deciding window and each of its `later_windows`
+    (`opt.tail`'s tail window too) judged Pedestrian; every other field the deciding window's.
+    The result unchanged where the option is off or the track is not judged Pedestrian."""
+    if not (opt.enabled and opt.median_pace and _pedestrian(obj)):
+        return obj.result
+    paces, strides = [float(obj.result["pace_hz"])], [float(obj.result["stride_m"])]
+    for result in later_windows(cfg, obj, tail=opt.tail):
+        if int(result["verdict"]) == Verdict.PEDESTRIAN:
+            paces.append(float(result["pace_hz"]))
+            strides.append(float(result["stride_m"]))
+    return dict(obj.result, pace_hz=float(np.median(paces)), stride_m=float(np.median(strides)))
 
 
 def keep_rows(obj, rows: slice) -> None:

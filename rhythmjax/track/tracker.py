@@ -38,7 +38,7 @@ from .columns import TRACK_COLUMNS, tracks_columns, verdict_columns  # noqa: F40
 from .lean import window_b_foot
 from .looks import tracker_look
 from .options import TrackerOptions
-from .recheck import split_at_switches
+from .recheck import median_pace, split_at_switches
 from .rows import NAN_VELOCITY, TrackRow, Velocity
 from .size import refuse_low
 from .slot_step import FRAME_IN, STEP_OUT, StepOut, advance_slots
@@ -415,17 +415,17 @@ class OnlineTracker:
             for o in list(self._finished):
                 self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
-        for o in objs:  # rule 26: a Pedestrian too low for a walker (off by default)
+        for o in objs:  # rule 26: a Pedestrian too low for a walker; rule 47: its median pace
             if o.result is not None:
                 o.result = refuse_low(o.result, self._camera, o.rows, self._walker_m, self.opt.size)
+                o.result = median_pace(self.cfg, o, self.opt.recheck)
         return (tracks_columns(objs, candidates=self._offsets is not None,
                                pace=self._pace_scale > 0),
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 
     def _split_at_switch(self, obj: _Object) -> None:
-        """Rules 29, 30a, 30d (on), 30, 30b, 30c, 42 and 43 (off): where a window is no
-        walker's, the rows on its side become a new track judged afresh
-        (`recheck.split_at_switches`; rules 30d and 43 read rule 26's `size` options)."""
+        """Rules 29, 30a, 30d, 46 (on), 30, 30b, 30c, 42-44 (off): a window no walker's cuts
+        the track, its side judged afresh (`recheck.split_at_switches`, rule 26's `size`)."""
         split_at_switches(self.cfg, obj, self.opt.recheck, self._judge_afresh, self.opt.size)
 
     def _judge_afresh(self, obj: _Object, rows: slice) -> None:
