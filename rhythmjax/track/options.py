@@ -307,8 +307,8 @@ class RecheckOptions:
     # the later ones, the tail window with `tail`), not the deciding window's alone; its verdict
     # stays the deciding window's (`recheck.median_pace`). Off: fresh own pools' pace MAE fell
     # (radial 0.0198 -> 0.0190, crossing 0.0320 -> 0.0307 Hz) but the own knees radial rose
-    # 0.0197 -> 0.0325 Hz (a later window on another walker) and the dev clips' 0.0163 ->
-    # 0.0181 Hz (issue 16's forty-eighth round; docs/rules.md, rule 47)
+    # 0.0197 -> 0.0325 Hz (one walker at 1.60 Hz read 2.42 Hz by its later windows) and the
+    # dev clips' 0.0163 -> 0.0181 Hz (issue 16's forty-eighth round; docs/rules.md, rule 47)
 
     def __post_init__(self):
         if self.earlier not in EARLIER_TESTS:
