@@ -68,6 +68,10 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   by rule 29's pace test alone kept where its rows are a walker's height by rule 37's test).
 - median_pace: the tracker's `recheck.median_pace` True vs False (rule 47: a Pedestrian track's
   pace and stride the medians over its windows judged Pedestrian; verdicts unchanged).
+- mass_column: the tracker's `body.mass_column` True vs False (rule 48: window B's column on a
+  measured frame the mean column of the motion over the body, `track.lean.motion_column`).
+- mass_crossing: the tracker's `body.mass_crossing` 0.7071 with `body.mass_column` vs the
+  defaults (rule 48b: rule 48 only where the track crosses the line of sight at >= 45 degrees).
 - top_inside: the tracker's `size.top_inside_heights` 0.1 vs 0 (rule 36: the size rule also
   reads rows where a walker's head would leave the image but the measured top lies inside it).
 - twice_pace: the tracker's `size.twice_pace_heights` 0.57 (fitted) vs 0 (rule 37: a window

@@ -180,6 +180,13 @@ RULES = {
                     "nothing fitted (a Pedestrian track's pace and stride as the medians over "
                     "its windows judged Pedestrian); suggested by study_lateral_pace's "
                     "trk_median on used seeds (rule 47)"),
+    "mass_column": ("tracker", "body.mass_column", True, False, TRACKER_SOURCES,
+                    "nothing fitted (a box u_p +- W wide and one walker height high, a priori); "
+                    "suggested by study_window_column's mass_u on used seeds 5120001-5130001, "
+                    "5280001-5290001, 6080001-6110001 and the dev clips (rule 48)"),
+    "mass_crossing": ("tracker", "body.mass_crossing", 0.7071, 0.0, TRACKER_SOURCES,
+                      "nothing fitted (sin 45 degrees, the midpoint, a priori; ON also sets "
+                      "body.mass_column); found on rule 48's pools 6120001-6350001 (rule 48b)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -192,7 +199,8 @@ TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "recheck_all": {"recheck.earlier": "any"},
                 "pixel_halves": {"body.window_per_pixel": True},
                 "mean_refused": {"body.mean_refused_gate": False},
-                "mean_trend": {"body.mean_refused_gate": True}}
+                "mean_trend": {"body.mean_refused_gate": True},
+                "mass_crossing": {"body.mass_column": True}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -211,7 +219,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "recheck_resolved": (), "pixel_halves": (), "recheck_low": (),
               "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
               "halves_around": (), "mean_trend": TRACKER_SOURCES,
-              "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": ()}
+              "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": (),
+              "mass_column": (), "mass_crossing": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

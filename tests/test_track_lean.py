@@ -92,16 +92,17 @@ def test_window_b_foot_chooses_as_the_tracker_does():
     """The measured point (plus a side cut's shift, less the lean with rule 41) on a measured
     frame; the filtered point on a predicted one or with `body.sample_estimate`."""
     from rhythmjax.track.lean import window_b_foot
-    from rhythmjax.track.options import BodyOptions
+    from rhythmjax.track.options import TrackerOptions, with_changes
 
     z, est = (300.0, 320.0), (297.5, 318.0)
     lean = lean_px(CAMERA, *z, 1.7)
     assert lean > 1.0
-    paper, on = BodyOptions(), BodyOptions(lean_column=True)
+    paper = TrackerOptions()
+    on = with_changes(paper, {"body.lean_column": True})
     assert window_b_foot(z, est, True, 0.0, paper, CAMERA, 1.7) == (300.0, 320.0)
     assert window_b_foot(z, est, True, 4.0, paper, CAMERA, 1.7) == (304.0, 320.0)
     got = window_b_foot(z, est, True, 4.0, on, CAMERA, 1.7)
     assert got[0] == pytest.approx(304.0 - lean, abs=1e-9) and got[1] == 320.0
     assert window_b_foot(z, est, False, 4.0, on, CAMERA, 1.7) == est
-    filtered = BodyOptions(sample_estimate=True, lean_column=True)
+    filtered = with_changes(paper, {"body.sample_estimate": True, "body.lean_column": True})
     assert window_b_foot(z, est, True, 4.0, filtered, CAMERA, 1.7) == est

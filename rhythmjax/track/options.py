@@ -111,6 +111,12 @@ class BodyOptions:
     # height: an upright body off the image's centre leans outwards, and the motion's extent
     # (u_p its centre) spans it from the feet to the head (track/lean.py). Off: the paper's u_p
     # (docs/rules.md, rule 41)
+    mass_column: bool = False  # rule 48: window B's column on a measured frame the mean column of
+    # the motion (D > diff_threshold) in the box u_p +- W wide and one walker height high above
+    # the foot row (track/lean.py `motion_column`). Off: the paper's u_p (docs/rules.md, rule 48)
+    mass_crossing: float = 0.0  # rule 48b: with mass_column, only where the track's ground velocity
+    # crosses the camera's line of sight at an angle with at least this sine (`crossing_sine`);
+    # 0: everywhere
     side_anchor: bool = False  # a detection whose box reaches the image's left or right side
     # and is narrower than W has its foot column placed W/2 from its inner edge (track/sides.py):
     # a walker entering or leaving is measured at its own centre, not at its visible part's.

@@ -323,8 +323,8 @@ class OnlineTracker:
             obj.state = TrackState.PREDICT
             obj.predict_time += 0.0 if held else dt
         measured = bool(np.all(np.isfinite(z)))
-        fu, fv = window_b_foot(z, est_uv, measured, sample_du, self.opt.body, self._camera,
-                               self._walker_m)  # rules 16 and 41 on a measured frame
+        fu, fv = window_b_foot(z, est_uv, measured, sample_du, self.opt, self._camera,
+                               self._walker_m, D, (W, W * self._height_per_W), mean)
         obj.last_uv, obj.last_W = (float(fu), float(fv)), W
         per_pixel = self.opt.body.window_per_pixel  # rule 35
         intensity = (math.nan if no_sample or D is None
