@@ -95,7 +95,11 @@ def test_tracker_sums_window_b_at_the_motion_column(monkeypatch, way):
     from rhythmjax.track import lean, tracker as trk
     from rhythmjax.track.options import TrackerOptions, with_changes
 
-    cfg = Config()
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    # walkers 1.5 m tall in the config: the box's height is the config's, not a fixed 3.4 W
+    cfg = eqx.tree_at(lambda c: c.width.height, Config(), jnp.asarray(1.5, jnp.float32))
     act = (synth.walker(0.4, 15.0, -math.pi / 2, pace_hz=1.9, step_length_m=0.65)
            if way.endswith("along") else
            synth.walker(-2.0, 11.0, 0.0, pace_hz=1.9, step_length_m=0.65))
@@ -199,8 +203,8 @@ def test_window_b_foot_gates_the_mass_by_the_crossing_angle():
     assert window_b_foot(*args, np.array(along)) == z
     assert window_b_foot(*args, np.array((0.0, 0.0, 10.0, 0.0))) == z  # standing: no angle
     assert window_b_foot(*args, None) == z
-    # at 60 degrees (sine 0.87) in, at 30 degrees (0.5) out
-    sixty = (0.0, 1.3 * math.sin(math.radians(60)), 10.0, 1.3 * math.cos(math.radians(60)))
-    thirty = (0.0, 1.3 * math.sin(math.radians(30)), 10.0, 1.3 * math.cos(math.radians(30)))
-    assert window_b_foot(*args, np.array(sixty)) == (294.0, 320.0)
-    assert window_b_foot(*args, np.array(thirty)) == z
+    # at 50 degrees to the line of sight (sine 0.77) in, at 40 (0.64) out; on the centre
+    # column the line of sight is the y axis
+    for deg, expected in ((50, (294.0, 320.0)), (40, z), (60, (294.0, 320.0)), (30, z)):
+        state = (0.0, 1.3 * math.sin(math.radians(deg)), 10.0, 1.3 * math.cos(math.radians(deg)))
+        assert window_b_foot(*args, np.array(state)) == expected, deg
