@@ -9,7 +9,9 @@ bicycle or dog judged Pedestrian either way it prints each Pedestrian track whos
 window looked at it or that is assigned to it: the deciding window (rows, frames), its
 pace F, stride T, ratio R, speed, peaks (freq Hz, power), the candidate window B that decided (0:
 the paper's) and what candidate 0 alone gives in the same window, the half-pace ratio of the
-matched peak (power near 2F / its power), the truth (the object's gait frequency, step, speed
+matched peak (power near 2F / its power), the verdict's reason and the height rule 37 reads
+over the window (`window_height`: a dog read at half its leg cycle by rule 37 shows as
+MATCHED_TWICE with a walker's height), the truth (the object's gait frequency, step, speed
 from the scene spec), and the tracking evidence: the object the whole track is assigned to
 (`match_tracks`), the one it followed in the deciding window (`window_objects`) and, per row of
 that window, the nearest truth foot point (an identity switch shows as a window shared by two
@@ -31,6 +33,7 @@ ground velocity jumped by more than V m/s in 0.5 s (`split_jumps`, the counting 
 `life.max_dv_mps` rule, absent from the rhythm tracker) against the uncut ones.
 
     python benchmarks/study_false_positives.py SEED [SCENES]               # the false positives
+    python benchmarks/study_false_positives.py SEED [SCENES] --lateral 30  # crossing scenes
     python benchmarks/study_false_positives.py SEED [SCENES] --rule half0=0.25 half_any=0.25
     python benchmarks/study_false_positives.py SEED [SCENES] --split-dv 1.5 2.0
     python benchmarks/study_false_positives.py dev --rule half0=0.25       # dev clips, report
@@ -58,16 +61,35 @@ from study_tracks import (  # noqa: E402,E501
 )
 
 from rhythmjax.model.params import config_from_dict  # noqa: E402
-from rhythmjax.model.status import Verdict  # noqa: E402
+from rhythmjax.model.status import Reason, Verdict  # noqa: E402
 from rhythmjax.sim.evaluate import deciding_windows, match_tracks, score, window_objects  # noqa: E402,E501
 
 
-def false_positives(cfg, seed: int, n_scenes: int, cache: Path) -> list[dict]:
-    """One record per non-walker judged Pedestrian (by the windows that looked at it)."""
+def window_height(cfg, o, k0: int, k1: int) -> tuple[float, int]:
+    """(m, rows) rule 37 reads over rows k0..k1-1 of `o` (`twice.twice_height` with the scenes'
+    size options, as `twice.rows_tall_enough` reads a window)."""
+    import numpy as np
+
+    from rhythmjax.model.camera_np import camera_tuple
+    from rhythmjax.sim.presets import synthetic_options
+    from rhythmjax.track.twice import twice_height
+
+    size = synthetic_options().size
+    c = np.asarray([(q.u, q.v, q.v_top, q.top_at_edge) for q in o.rows[k0:k1]], np.float64)
+    return twice_height(camera_tuple(cfg.camera), c[:, 0], c[:, 1], c[:, 2],
+                        c[:, 3] if size.twice_pace_edge else None, float(cfg.width.height),
+                        size.top_inside_heights)
+
+
+def false_positives(cfg, seed: int, n_scenes: int, cache: Path,
+                    lateral_deg: float | None = None) -> list[dict]:
+    """One record per non-walker judged Pedestrian (by the windows that looked at it);
+    `lateral_deg`: the scenes with every path within that many degrees of crossing the view."""
     out = []
-    specs = scene_specs(seed, n_scenes, camera=cfg.camera)
+    specs = scene_specs(seed, n_scenes, camera=cfg.camera, lateral_deg=lateral_deg)
+    sub = str(seed) if lateral_deg is None else f"{seed}-lateral{lateral_deg:g}"
     for i, (s, spec) in enumerate(specs):
-        tracks, verdicts, objs, truth = track_scene(cfg, s, spec, cache / str(seed))
+        tracks, verdicts, objs, truth = track_scene(cfg, s, spec, cache / sub)
         wins = deciding_windows(objs)
         res = score(tracks, verdicts, truth, windows=wins)
         res_track = score(tracks, verdicts, truth)  # eval_all's "by_track"
@@ -107,6 +129,8 @@ def false_positives(cfg, seed: int, n_scenes: int, cache: Path) -> list[dict]:
                     "pace": float(r["pace_hz"]), "stride": float(r["stride_m"]),
                     "ratio": float(r["ratio"]), "speed": float(r["speed_mps"]),
                     "peaks": peaks_text(r), "candidate": int(r.get("candidate", 0)),
+                    "reason": Reason(int(r["reason"])).name,
+                    "height": window_height(cfg, o, k0, k1),
                     "half": half_ratio(r),
                     "cand0": (Verdict(int(c0["verdict"])).name, float(c0["pace_hz"]),
                               float(c0["stride_m"]), float(c0["ratio"]), peaks_text(c0)),
@@ -129,6 +153,8 @@ def print_fp(recs: list[dict]) -> None:
               f"{r['frames'][0]}-{r['frames'][1]}, candidate {r['candidate']}")
         print(f"  F {r['pace']:.3f} Hz, T {r['stride']:.3f} m, R {r['ratio']:.3f}, speed "
               f"{r['speed']:.3f} m/s, half-pace ratio {r['half']:.3f}; peaks {r['peaks']}")
+        print(f"  reason {r['reason']}; rule 37's height {r['height'][0]:.2f} m over "
+              f"{r['height'][1]} rows")
         c = r["cand0"]
         print(f"  candidate 0 alone: {c[0]} F {c[1]:.3f} T {c[2]:.3f} R {c[3]:.3f}; peaks {c[4]}")
         print(f"  nearest truth per measured row: {r['nearest']}")
@@ -232,6 +258,8 @@ def main(argv=None) -> int:
     p.add_argument("seed", help="own scene seed, or 'dev' (the dev clips, report only)")
     p.add_argument("scenes", type=int, nargs="?", default=10)
     p.add_argument("-d", "--cache", default="/tmp/study_fp")
+    p.add_argument("--lateral", type=float, default=None, metavar="DEG",
+                   help="every path within DEG of crossing the view (eval_synthetic's lateral)")
     p.add_argument("--rule", nargs="*", default=[], help="NAME=VALUE, NAME in " + str(list(RULES)))
     p.add_argument("--split-dv", type=float, nargs="*", default=[],
                    help="m/s: also score the tracks cut at velocity jumps (split_jumps)")
@@ -246,7 +274,7 @@ def main(argv=None) -> int:
     if a.seed == "dev":
         return dev_main(a, cache)
     seed = int(a.seed)
-    recs = false_positives(cfg, seed, a.scenes, cache)
+    recs = false_positives(cfg, seed, a.scenes, cache, a.lateral)
     print(f"seed {seed}: {len(recs)} Pedestrian tracks behind a non-walker judged Pedestrian (by "
           f"window or by track)")
     print_fp(recs)
