@@ -72,6 +72,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   measured frame the mean column of the motion over the body, `track.lean.motion_column`).
 - mass_crossing: the tracker's `body.mass_crossing` 0.7071 with `body.mass_column` vs the
   defaults (rule 48b: rule 48 only where the track crosses the line of sight at >= 45 degrees).
+- twice_sub: the tracker's `size.twice_pace_sub` 0.02 vs 0 (rule 49: rule 37 only where the
+  window also has a peak near half its strongest, the walker's own pace).
 - top_inside: the tracker's `size.top_inside_heights` 0.1 vs 0 (rule 36: the size rule also
   reads rows where a walker's head would leave the image but the measured top lies inside it).
 - twice_pace: the tracker's `size.twice_pace_heights` 0.57 (fitted) vs 0 (rule 37: a window

@@ -187,6 +187,10 @@ RULES = {
     "mass_crossing": ("tracker", "body.mass_crossing", 0.7071, 0.0, TRACKER_SOURCES,
                       "nothing fitted (sin 45 degrees, the midpoint, a priori; ON also sets "
                       "body.mass_column); found on rule 48's pools 6120001-6350001 (rule 48b)"),
+    "twice_sub": ("tracker", "size.twice_pace_sub", 0.02, 0.0, TRACKER_SOURCES,
+                  "0.02 chosen on used cached seeds 6120001-6480001 (rule 37's windows: 18 "
+                  "walkers' sub-harmonic 0.000-0.543, 5 dogs' 0.000-0.532); 0.2 Hz a priori "
+                  "(rule 49)"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -220,7 +224,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
               "halves_around": (), "mean_trend": TRACKER_SOURCES,
               "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": (),
-              "mass_column": (), "mass_crossing": ()}
+              "mass_column": (), "mass_crossing": (), "twice_sub": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -90,13 +90,13 @@ def test_tracker_sums_window_b_at_the_motion_column(monkeypatch, way):
     gated, across) or at the measured foot column (off; gated, along: rule 48b leaves a walker
     on the line of sight alone), the measured row either way; the EKF's measurement (the tracks'
     u, v) is the detection's every way."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
     from rhythmjax.model.params import Config
     from rhythmjax.sim import scene as synth
     from rhythmjax.track import lean, tracker as trk
     from rhythmjax.track.options import TrackerOptions, with_changes
-
-    import equinox as eqx
-    import jax.numpy as jnp
 
     # walkers 1.5 m tall in the config: the box's height is the config's, not a fixed 3.4 W
     cfg = eqx.tree_at(lambda c: c.width.height, Config(), jnp.asarray(1.5, jnp.float32))

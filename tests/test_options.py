@@ -66,6 +66,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 36)", "size.top_inside_heights", 0.1),  # a top seen inside the image
     ("(new: issue 16, rule 37)", "size.twice_pace_heights", 0.57),  # a walker at twice its pace
     ("(new: issue 16, rule 37b)", "size.twice_pace_edge", True),  # ... heads above the view
+    ("(new: issue 16, rule 49)", "size.twice_pace_sub", 0.0),  # rule 37 needs f1/2's peak, off
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
     ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
     ("(new: issue 16, rule 30d)", "recheck.earlier", "speed-low"),  # windows before the verdict

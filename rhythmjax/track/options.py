@@ -252,9 +252,12 @@ class SizeOptions:
     # each at the height up to that row, a lower bound (`track.twice.twice_height`). On since
     # issue 16's thirty-ninth round: fresh own knees radial 168 -> 170 of 210 walkers, crossing
     # 62 -> 63 of 70, no non-walker more; dev, PETS09, UCSD, CASIA-B unchanged (docs/rules.md)
+    twice_pace_sub: float = 0.0  # rule 49: rule 37 only where the window also has a peak within
+    # 0.2 Hz of half its strongest (the walker's own pace) of at least this fraction of its power
+    # (`track.twice.reads_twice`); 0: off (docs/rules.md, rule 49)
 
     def __post_init__(self):
-        for name in ("top_inside_heights", "twice_pace_heights"):
+        for name in ("top_inside_heights", "twice_pace_heights", "twice_pace_sub"):
             if not getattr(self, name) >= 0.0:
                 raise ValueError(f"size.{name} must be >= 0, got {getattr(self, name)}")
         if self.min_height_scope not in HEIGHT_SCOPES:

@@ -35,16 +35,23 @@ from .options import SizeOptions
 from .size import row_heights
 
 
-__all__ = ["batch_second_look", "judge_at_half", "judged_at_half", "reads_twice",
+__all__ = ["SUB_HZ", "batch_second_look", "judge_at_half", "judged_at_half", "reads_twice",
            "rows_tall_enough", "second_look", "tall_enough", "twice_height"]
 
 
-def reads_twice(res: dict, cfg: Config) -> np.ndarray:
+SUB_HZ = 0.2  # rule 49: a peak this close (Hz) to f1/2 is the walker's own pace (a priori,
+# about half the width of a MEM peak of N = 64 samples at 25 frames/s)
+
+
+def reads_twice(res: dict, cfg: Config, sub_ratio: float = 0.0) -> np.ndarray:
     """Per window of `res` (window outcomes, `toolkit.RESULT_FIELDS` with a leading window
     axis: verdict (W,), peak_freq (W, peaks), ...), whether its peaks say rule 37 (module doc)
     before the height is read: refused with no-model-match, strongest peak f1 > 0 above P_thr
     with R above R_thr and a finite speed, (14) failing at (f1, v/f1) and passing at
-    (f1/2, 2 v/f1). Bool (W,)."""
+    (f1/2, 2 v/f1); with `sub_ratio` > 0 (rule 49, `SizeOptions.twice_pace_sub`) also a peak
+    within `SUB_HZ` of f1/2 whose power is at least `sub_ratio` times f1's: a walker's steps
+    differ left and right, so its spectrum keeps its true pace; a dog's leg cycle need not.
+    Bool (W,)."""
     thr = cfg.thresholds
     verdict, reason = (np.atleast_1d(np.asarray(res[k])) for k in ("verdict", "reason"))
     first = {k: np.asarray(res[k]).reshape(len(verdict), -1)[:, 0]
@@ -62,6 +69,13 @@ def reads_twice(res: dict, cfg: Config) -> np.ndarray:
         k3 = float(thr.k_sigma3)
         at_f1 = np.asarray(walking_ok(cfg.walking, k3, f, v / f))
         at_half = np.asarray(walking_ok(cfg.walking, k3, f / 2, 2 * v / f))
+    if sub_ratio > 0:
+        freq, power, mask = (np.asarray(res[k]).reshape(len(verdict), -1)
+                             for k in ("peak_freq", "peak_power", "peak_mask"))
+        with np.errstate(invalid="ignore"):
+            near = mask.astype(bool) & (np.abs(freq - f1[:, None] / 2) < SUB_HZ) & \
+                (power >= sub_ratio * first["peak_power"][:, None])
+        maybe = maybe & near.any(axis=1)
     return maybe & ~at_f1 & at_half
 
 
@@ -124,7 +138,8 @@ def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: f
     """`out` (a window's outcome: `toolkit.RESULT_FIELDS`) judged at half its strongest peak
     when rule 37 says so (module doc) for the window's `rows` (`rows.TrackRow`); `out` itself
     otherwise (and when `options.twice_pace_heights` is 0, off)."""
-    if options.twice_pace_heights <= 0 or not bool(reads_twice(out, cfg)[0]):
+    if options.twice_pace_heights <= 0 or \
+            not bool(reads_twice(out, cfg, options.twice_pace_sub)[0]):
         return out
     if not rows_tall_enough(rows, camera, walker_height_m, options):
         return out
@@ -156,7 +171,7 @@ def batch_second_look(cfg: Config, batch, options: SizeOptions):
     edges = getattr(batch, "top_at_edge", None) if options.twice_pace_edge else None
 
     def look(res: dict, track: np.ndarray, start: np.ndarray) -> dict:
-        which = reads_twice(res, cfg)
+        which = reads_twice(res, cfg, options.twice_pace_sub)
         for w in np.flatnonzero(which):
             rows = slice(int(start[w]), int(start[w]) + n)
             uv = batch.z[int(track[w]), rows]
