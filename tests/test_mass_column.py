@@ -95,7 +95,7 @@ def test_tracker_sums_window_b_at_the_motion_column(monkeypatch, way):
 
     from rhythmjax.model.params import Config
     from rhythmjax.sim import scene as synth
-    from rhythmjax.track import lean, tracker as trk
+    from rhythmjax.track import lean, track_frames, tracker as trk
     from rhythmjax.track.options import TrackerOptions, with_changes
 
     # walkers 1.5 m tall in the config: the box's height is the config's, not a fixed 3.4 W
@@ -123,10 +123,8 @@ def test_tracker_sums_window_b_at_the_motion_column(monkeypatch, way):
     opt = with_changes(TrackerOptions(), {"body.mass_column": way != "off",
                                           "body.mass_crossing": 0.7071 if "gated" in way else 0.0,
                                           "body.window_candidates": False})
-    tr = trk.OnlineTracker(cfg, opt)
-    for i, f in enumerate(sc.frames):
-        tr.update(i, i / sc.fps, f)
-    tracks, _, _ = tr.finish()
+    tracks = track_frames(cfg, ((i, i / sc.fps, f) for i, f in enumerate(sc.frames)),
+                          progress=False, options=opt)[0]
     rows = np.isfinite(tracks["intensity"])
     assert rows.sum() >= 25 and len(calls) == rows.sum()
     u, v = tracks["u"][rows], tracks["v"][rows]
