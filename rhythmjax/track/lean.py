@@ -16,8 +16,8 @@ height high above the foot row (`motion_column`): the motion's centre of mass ac
 u_p is the centre of its extent, which one stray column moves (docs/window_b.md, "Window B's
 column and the pace"). With `body.mass_crossing` > 0 (rule 48b) only where the track's ground
 velocity crosses the camera's line of sight at an angle whose sine is at least that
-(`crossing_sine`): a walker coming nearer or going away has its legs side by side under u_p,
-and there the mass column swings with them.
+(`crossing_sine`): the walkers rule 48 lost walked within 25 degrees of the line of sight.
+Both are off (docs/rules.md, rules 48 and 48b).
 """
 
 from __future__ import annotations

@@ -40,7 +40,7 @@ __all__ = ["SUB_HZ", "batch_second_look", "judge_at_half", "judged_at_half", "re
 
 
 SUB_HZ = 0.2  # rule 49: a peak this close (Hz) to f1/2 is the walker's own pace (a priori,
-# about half the width of a MEM peak of N = 64 samples at 25 frames/s)
+# half the resolution 1 / (N dt) = 0.39 Hz of N = 64 samples at 25 frames/s)
 
 
 def reads_twice(res: dict, cfg: Config, sub_ratio: float = 0.0) -> np.ndarray:
