@@ -53,27 +53,22 @@ from rhythmjax.sim.evaluate import match_tracks  # noqa: E402
 from rhythmjax.sim.presets import synthetic_options  # noqa: E402
 from rhythmjax.sim.scene import render_scene  # noqa: E402
 from rhythmjax.track import track_frames  # noqa: E402
+from rhythmjax.track.lean import motion_column  # noqa: E402
 from rhythmjax.track.options import TrackerOptions  # noqa: E402
 
 
 WAYS = ("tracker", "measured", "true_u", "true_v", "true_uv", "filter_u", "mass_u", "trunk_u",
         "centred_u", "causal_u", "candidates_u")
 HEIGHT_PER_W = 3.4  # a walker's height in walker widths (1.7 m / 0.5 m)
-MOTION_GREY = 15  # D above this is motion (`MotionOptions.diff_threshold`)
+MOTION_GREY = 15.0  # D above this is motion (`MotionOptions.diff_threshold`)
 
 
 def mass_column(D, u: float, v: float, W: float, rows: tuple[float, float]) -> float:
     """The mean column (px) of the motion pixels (D > 15) in the box u +- W px across and from
-    rows[0] to rows[1] walker heights (3.4 W) above the foot row v; NaN where it holds none."""
-    if D is None or not all(math.isfinite(x) for x in (u, v, W)):
-        return math.nan
-    H, (h, w) = HEIGHT_PER_W * W, D.shape
-    x0, x1 = int(max(0, u - W)), int(min(w, u + W + 1))
-    r0, r1 = int(max(0, v - rows[1] * H)), int(min(h, v - rows[0] * H + 1))
-    if x1 <= x0 or r1 <= r0:
-        return math.nan
-    cols = np.nonzero(D[r0:r1, x0:x1] > MOTION_GREY)[1]
-    return x0 + float(cols.mean()) if cols.size else math.nan
+    rows[0] to rows[1] walker heights (3.4 W) above the foot row v (`track.lean.motion_column`,
+    rule 48's, over that band); NaN where it holds none."""
+    H = HEIGHT_PER_W * W
+    return motion_column(D, u, v - rows[0] * H, W, (rows[1] - rows[0]) * H, MOTION_GREY)
 
 
 def line_column(frames: np.ndarray, u: np.ndarray, back: int, ahead: int) -> np.ndarray:

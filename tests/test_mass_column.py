@@ -18,13 +18,13 @@ from rhythmjax.track.lean import motion_column, window_b_foot
 
 
 def column_by_loop(D, u, v, W, H, threshold):
-    """The reference: the mean column of D > threshold in the box, u where it holds none."""
+    """The reference: the mean column of D > threshold in the box, NaN where it holds none."""
     total = count = 0.0
     for y in range(max(0, math.floor(v - H)), min(D.shape[0] - 1, math.floor(v)) + 1):
         for x in range(max(0, math.floor(u - W)), min(D.shape[1] - 1, math.floor(u + W)) + 1):
             if float(D[y, x]) > threshold:
                 total, count = total + x, count + 1
-    return total / count if count else u
+    return total / count if count else math.nan
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
@@ -34,8 +34,8 @@ def test_motion_column_is_the_loop_on_random_images(seed):
     for _ in range(25):
         u, v = rng.uniform(-10, 150), rng.uniform(-5, 100)
         W, H = rng.uniform(1, 25), rng.uniform(2, 70)
-        assert motion_column(D, u, v, W, H, 15.0) == pytest.approx(
-            column_by_loop(D, u, v, W, H, 15.0), abs=1e-9)
+        got, want = motion_column(D, u, v, W, H, 15.0), column_by_loop(D, u, v, W, H, 15.0)
+        assert (math.isnan(got) and math.isnan(want)) or got == pytest.approx(want, abs=1e-9)
 
 
 def test_motion_column_by_hand():
@@ -53,14 +53,21 @@ def test_motion_column_by_hand():
         (10 * 30 + 10 * 36 + 38) / 21, abs=1e-12)
 
 
-def test_motion_column_keeps_u_without_motion_or_inputs():
+def test_motion_column_is_nan_without_motion_or_inputs_and_window_b_keeps_u_p():
+    from rhythmjax.model.params import Config
+    from rhythmjax.track.options import TrackerOptions, with_changes
+
     D = np.zeros((50, 50), np.uint8)
     D[10, 10] = 99
-    assert motion_column(D, 30.0, 40.0, 3.0, 10.0, 15.0) == 30.0  # no motion in the box
-    assert motion_column(None, 30.0, 40.0, 3.0, 10.0, 15.0) == 30.0
-    assert motion_column(D, 30.0, 40.0, math.nan, 10.0, 15.0) == 30.0
-    assert motion_column(D, 30.0, math.inf, 3.0, 10.0, 15.0) == 30.0
-    assert motion_column(D, 300.0, 40.0, 3.0, 10.0, 15.0) == 300.0  # the box outside the image
+    assert math.isnan(motion_column(D, 30.0, 40.0, 3.0, 10.0, 15.0))  # no motion in the box
+    assert math.isnan(motion_column(None, 30.0, 40.0, 3.0, 10.0, 15.0))
+    assert math.isnan(motion_column(D, 30.0, 40.0, math.nan, 10.0, 15.0))
+    assert math.isnan(motion_column(D, 30.0, math.inf, 3.0, 10.0, 15.0))
+    assert math.isnan(motion_column(D, 300.0, 40.0, 3.0, 10.0, 15.0))  # the box outside
+    on = with_changes(TrackerOptions(), {"body.mass_column": True})
+    z = (30.0, 40.0)
+    assert window_b_foot(z, (29.0, 39.0), True, 0.0, on, Config().camera, 1.7, D,
+                         (3.0, 10.0)) == z  # none in the box: the paper's u_p
 
 
 def test_window_b_foot_reads_the_mass_only_on_a_measured_frame():
@@ -141,10 +148,11 @@ def test_tracker_sums_window_b_at_the_motion_column(monkeypatch, way):
     moved = 0
     for (D, cu, cv, W), a, b, applies in zip([c for c, m in zip(calls, measured) if m],
                                              u[measured], v[measured], crossing):
-        expected = column_by_loop(D, a, b, W, W * per_W, 15.0) if applies else a
+        mass = column_by_loop(D, a, b, W, W * per_W, 15.0)
+        expected = mass if applies and math.isfinite(mass) else a
         assert cu == pytest.approx(expected, abs=1e-6)
         assert cv == pytest.approx(b, abs=1e-9)
-        moved += abs(column_by_loop(D, a, b, W, W * per_W, 15.0) - a) > 0.25
+        moved += abs(mass - a) > 0.25
     assert moved >= 10  # the mass column lies elsewhere on most rows: the test can tell
 
 

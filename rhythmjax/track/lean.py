@@ -48,18 +48,18 @@ def lean_px(camera, u: float, v: float, height_m: float) -> float:
 
 def motion_column(D, u: float, v: float, W: float, height_px: float, threshold: float) -> float:
     """Rule 48: the mean column (px) of the pixels of D (grey levels) above `threshold` in the box
-    of columns u - W .. u + W and rows v - height_px .. v (px, clipped at the image), where u is
-    returned if the box holds none or an input is not finite."""
+    of columns u - W .. u + W and rows v - height_px .. v (px, clipped at the image); NaN where
+    the box holds none, D is None or an input is not finite."""
     if D is None or not all(math.isfinite(x) for x in (u, v, W, height_px)):
-        return u
+        return math.nan
     h, w = D.shape[:2]
     x0, x1 = max(0, math.floor(u - W)), min(w, math.floor(u + W) + 1)
     y0, y1 = max(0, math.floor(v - height_px)), min(h, math.floor(v) + 1)
     if x1 <= x0 or y1 <= y0:
-        return u
+        return math.nan
     counts = np.count_nonzero(D[y0:y1, x0:x1] > threshold, axis=0)
     total = int(counts.sum())
-    return x0 + float(counts @ np.arange(x1 - x0)) / total if total else u
+    return x0 + float(counts @ np.arange(x1 - x0)) / total if total else math.nan
 
 
 def crossing_sine(camera, x: float, vx: float, y: float, vy: float) -> float:
@@ -82,7 +82,8 @@ def window_b_foot(z, est_uv, measured: bool, side_du: float, opt, camera, height
     `est_uv`. A measured one is moved across by `side_du` px (rule 16: a detection cut by the
     image's side, window B on its visible feet) and, with `body.lean_column`, back by
     `lean_px(camera, *z, height_m)` (rule 41); with `body.mass_column` its column is then
-    `motion_column` of the difference D around it, body_px = (W, walker height) px (rule 48),
+    `motion_column` of the difference D around it (where it has one), body_px = (W, walker
+    height) px (rule 48),
     with `body.mass_crossing` > 0 only where `crossing_sine` of the EKF's state (x, vx, y, vy)
     (m, m/s) reaches it (rule 48b). `opt` a `track.options.TrackerOptions`."""
     body = opt.body
@@ -94,5 +95,6 @@ def window_b_foot(z, est_uv, measured: bool, side_du: float, opt, camera, height
     if body.mass_column and (body.mass_crossing <= 0 or (
             state is not None and crossing_sine(camera, *map(float, state[:4])) >=
             body.mass_crossing)):
-        u = motion_column(D, u, v, *body_px, opt.motion.diff_threshold)
+        mass = motion_column(D, u, v, *body_px, opt.motion.diff_threshold)
+        u = mass if math.isfinite(mass) else u
     return u, v
