@@ -136,6 +136,13 @@ RULES = {
     "tail": ("tail", None, "tail window", "none", TRACKER_SOURCES,
              "nothing fitted (the paper's N rows, no constant); found on used seeds "
              "2930001-2960001, 3110001-3140001, 3300001-3330001, 3380001-3410001 (replay)"),
+    "across": ("across", None, "+-0.1 W across", "none", TRACKER_SOURCES,
+               "nothing fitted (0.1 W, the vertical candidates' step, a priori); suggested by "
+               "study_window_column on used seeds 5120001-5130001, 5280001-5290001 and the dev "
+               "clips (round 48)"),
+    "across_solo": ("across", None, "+-0.1 W across, not through rule 37", "none",
+                    TRACKER_SOURCES, "as across; written after across's UCSD anomaly track "
+                    "(Test004, an across candidate judged by rule 37)"),
     "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
              "nothing fitted (half the config's walker height, a priori); found on used seeds "
              "3300001-3330001, 3380001-3410001 (study_window_placement)"),
@@ -224,7 +231,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "recheck_speed_low": TRACKER_SOURCES, "mean_refused": (),
               "halves_around": (), "mean_trend": TRACKER_SOURCES,
               "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": (),
-              "mass_column": (), "mass_crossing": (), "twice_sub": ()}
+              "mass_column": (), "mass_crossing": (), "twice_sub": (), "across": (),
+              "across_solo": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",
