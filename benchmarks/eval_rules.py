@@ -98,9 +98,10 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   (`benchmarks/fit_height_threshold.py`); count_twice_fitted: counting's, the same values.
 - count_low: counting's `verdicts.min_height_heights` 0.5 vs 0 (rule 26 in count's verdicts:
   a window judged Pedestrian lower than half a walker is refused, too-low).
-- across: window B moved 0.1 W left and right as two more candidate windows B (rule 50; a
-  tracker patch, tracker sources only). across_solo: the same, the two deciding only by
-  (13)-(15) at their own peak, never through rule 37 (rule 50b).
+- across_solo: the tracker's `body.across_candidates` True vs False (the default; rule 50b:
+  window B moved 0.1 W left and right as two more candidate windows B, deciding only by
+  (13)-(15) at their own peak, never through rule 37). across: the same windows deciding as
+  the tracker's own candidates do, rule 37 on them too (rule 50; the option and a patch).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each
@@ -193,77 +194,23 @@ def _patch_tail_window() -> None:
     trk.match_window = match_window
 
 
-def _patch_across(frac: float = 0.1, solo: bool = False) -> None:
-    """Rule 50 as a tracker patch (measured before it is built): two more candidate windows B,
-    window B moved `frac` W left and right on its row (`vision.window_b.window_b_intensity` at
-    u_p -+ frac W), after the tracker's own candidates (`body.window_candidates`, on), so the
-    candidate whose strongest peak is highest decides among all of them. Their I(k) are not
-    written to the tracks table (its candidate columns keep the tracker's own). `solo` (rule
-    50b): an across candidate decides only where (13)-(15) at its own strongest peak say
-    Pedestrian; where one is the strongest and says anything else, the window is judged without
-    them, rule 37's second look (`track.twice`) on window B and the tracker's own candidates."""
-    import math
-
-    import rhythmjax.track.tracker as trk
-    from rhythmjax.vision.window_b import window_b_intensity
-
-    extras, means, init, columns = (trk.window_b_extras, trk.window_b_means,
-                                    trk.OnlineTracker.__init__, trk.tracks_columns)
-
-    def across(D, u, v, W, mean):
-        return tuple(window_b_intensity(D, u + s * frac * W, v, W, mean=mean) for s in (-1, 1))
-
-    def window_b_extras(D, u, v, W, offsets, pace_scale, *, mean=False):
-        return extras(D, u, v, W, offsets, pace_scale, mean=mean) + across(D, u, v, W, mean)
-
-    def window_b_means(D, u, v, W, offsets, pace_scale, sampled=True):
-        out = means(D, u, v, W, offsets, pace_scale, sampled)
-        if D is None or not sampled:
-            return out + (math.nan, math.nan)
-        return out + across(D, u, v, W, True)
-
-    def __init__(self, *a, **k):
-        init(self, *a, **k)
-        if self._offsets is None or self._pace_scale > 0:
-            raise ValueError("rule 50's patch needs body.window_candidates on, the pace window off")
-        self._extra += 2
-
-    def tracks_columns(objs, *, candidates=None, pace=False):
-        kept = [o.candidate_rows for o in objs]
-        for o in objs:
-            if o.candidate_rows is not None:
-                o.candidate_rows = [c[:-2] for c in o.candidate_rows]
-        try:
-            return columns(objs, candidates=candidates, pace=pace)
-        finally:
-            for o, c in zip(objs, kept):
-                o.candidate_rows = c
-
-    trk.window_b_extras, trk.window_b_means = window_b_extras, window_b_means
-    trk.OnlineTracker.__init__, trk.tracks_columns = __init__, tracks_columns
-    if solo:
-        _patch_across_solo()
-
-
-def _patch_across_solo() -> None:
-    """Rule 50b's judging (`_patch_across`'s `solo`): `track.toolkit`'s window judgement with
-    the last two I(k) channels (the across candidates) kept out of rule 37."""
+def _patch_across_any() -> None:
+    """Rule 50 (`across`) from rule 50b's option (`body.across_candidates`, set by the rule's
+    "tracker" kind): the windows moved across decide as the tracker's own candidates do, rule
+    37's second look on whichever is strongest (`track.toolkit`'s judgement with each object's
+    `across` read as 0). Measured first as a patch of its own (docs/rules.md, rules 50 and 50b),
+    whose verdicts this reproduces."""
     import rhythmjax.track.toolkit as tk
-    from rhythmjax.model.status import Verdict
 
     inner = tk._judged
 
     def judged(cfg, obj, window, sigs, rest, candidates):
-        if not candidates:
-            return inner(cfg, obj, window, sigs, rest, candidates)
-        look, obj.second_look = getattr(obj, "second_look", None), None
+        across = getattr(obj, "across", 0)
+        obj.across = 0
         try:
-            out, chosen = inner(cfg, obj, window, sigs, rest, True)
+            return inner(cfg, obj, window, sigs, rest, candidates)
         finally:
-            obj.second_look = look
-        if chosen >= len(sigs) - 2 and int(out["verdict"]) == Verdict.PEDESTRIAN:
-            return out, chosen
-        return inner(cfg, obj, window, sigs[:-2], rest, True)
+            obj.across = across
 
     tk._judged = judged
 
@@ -372,8 +319,8 @@ def run(rule: str, state: str, only, quick: bool, outdir: Path, seeds=None) -> P
             _patch_hop_n(4)
         elif kind == "tail" and state == "on":
             _patch_tail_window()
-        elif kind == "across" and state == "on":
-            _patch_across(solo=rule == "across_solo")
+        if rule == "across" and state == "on":
+            _patch_across_any()
     names = only or (RULES[rule][4] if rule in RULES else ea.SOURCES)
     log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
     path = outdir / (f"{rule}-{state}.json" if not seeds else

@@ -136,12 +136,12 @@ RULES = {
     "tail": ("tail", None, "tail window", "none", TRACKER_SOURCES,
              "nothing fitted (the paper's N rows, no constant); found on used seeds "
              "2930001-2960001, 3110001-3140001, 3300001-3330001, 3380001-3410001 (replay)"),
-    "across": ("across", None, "+-0.1 W across", "none", TRACKER_SOURCES,
+    "across": ("tracker", "body.across_candidates", True, False, TRACKER_SOURCES,
                "nothing fitted (0.1 W, the vertical candidates' step, a priori); suggested by "
                "study_window_column on used seeds 5120001-5130001, 5280001-5290001 and the dev "
-               "clips (round 48)"),
-    "across_solo": ("across", None, "+-0.1 W across, not through rule 37", "none",
-                    TRACKER_SOURCES, "as across; written after across's UCSD anomaly track "
+               "clips (round 48); rule 37 on the across windows too (a patch)"),
+    "across_solo": ("tracker", "body.across_candidates", True, False, TRACKER_SOURCES,
+                    "as across; written after across's UCSD anomaly track "
                     "(Test004, an across candidate judged by rule 37)"),
     "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
              "nothing fitted (half the config's walker height, a priori); found on used seeds "

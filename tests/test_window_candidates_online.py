@@ -24,7 +24,7 @@ from rhythmjax.model.params import Config
 from rhythmjax.model.rhythm import classify_window_candidates_jit, classify_window_jit
 from rhythmjax.model.status import TrackState, Verdict
 from rhythmjax.sim import scene as synth
-from rhythmjax.track import tracker as tracker_module
+from rhythmjax.track import options as options_module
 from rhythmjax.track.boxes import box_intensities, window_widths
 from rhythmjax.track.columns import tracks_columns
 from rhythmjax.track.options import BodyOptions, TrackerOptions
@@ -178,9 +178,10 @@ def test_option_on_writes_the_candidate_columns(runs):
 
 
 def test_a_zero_offset_candidate_equals_intensity(hidden_walker, monkeypatch):
-    """The mechanism with the first offset set to 0: that column is `intensity`, exactly."""
+    """The mechanism with the first offset set to 0 (read by `BodyOptions.candidate_offsets`):
+    that column is `intensity`, exactly."""
     zero = ((CANDIDATE_COLUMNS[0], 0.0),) + tuple(WINDOW_CANDIDATES[1:])
-    monkeypatch.setattr(tracker_module, "WINDOW_CANDIDATES", zero)
+    monkeypatch.setattr(options_module, "WINDOW_CANDIDATES", zero)
     _, tracks, _, _ = _run(hidden_walker[:50], ON)
     assert np.isfinite(tracks["intensity"]).sum() > 30
     np.testing.assert_array_equal(tracks[CANDIDATE_COLUMNS[0]], tracks["intensity"])

@@ -55,23 +55,27 @@ TRACK_COLUMNS = ("track_id", "frame", "t", "u", "v", "width_px", "intensity")
 WINDOW_CANDIDATES = (("intensity_up20", -0.2), ("intensity_up10", -0.1),
                      ("intensity_down10", 0.1))
 CANDIDATE_COLUMNS = tuple(name for name, _ in WINDOW_CANDIDATES)
+# Rule 50b (issue 16, off): window B moved this many W left (negative) and right on its row, two
+# optional columns after the candidates'; they decide a window only by (13)-(15) at their own peak.
+ACROSS_CANDIDATES = (("intensity_left10", -0.1), ("intensity_right10", 0.1))
+ACROSS_COLUMNS = tuple(name for name, _ in ACROSS_CANDIDATES)
 # The pace window (rule 34, issue 16): I(k) summed in a window at window B's foot point as wide
 # as a walker's step, one optional column after the candidates'. It never decides a verdict:
 # where a rhythm window says Pedestrian and the pace window over the same rows does too, that
 # window's pace and stride are the pace window's (`model.candidates.strongest`).
 PACE_COLUMN = "intensity_wide"
 OPTIONAL_TRACK_COLUMNS = ("label", "x", "y", "v_top", "u_top", "top_at_edge", "state",
-                          *CANDIDATE_COLUMNS, PACE_COLUMN)
+                          *CANDIDATE_COLUMNS, *ACROSS_COLUMNS, PACE_COLUMN)
 LABELS = ("pedestrian", "bicycle", "dog", "car", "other")
 TRACK_STATES = ("none", "detect", "observe", "predict")  # `state` (`status.TrackState` names)
 MEASUREMENTS = ("u", "v", "width_px", "intensity", "x", "y", "v_top", "u_top", "top_at_edge",
-                *CANDIDATE_COLUMNS, PACE_COLUMN)
+                *CANDIDATE_COLUMNS, *ACROSS_COLUMNS, PACE_COLUMN)
 MAX_ABS = 1e12
 TRACK_TYPES = {"track_id": "id", "frame": "int", "t": "float", "u": "float", "v": "float",
                "width_px": "float", "intensity": "float", "label": "str", "x": "float",
                "y": "float", "v_top": "float", "u_top": "float", "top_at_edge": "float",
                "state": "str",
-               **{name: "float" for name in (*CANDIDATE_COLUMNS, PACE_COLUMN)}}
+               **{name: "float" for name in (*CANDIDATE_COLUMNS, *ACROSS_COLUMNS, PACE_COLUMN)}}
 TRACK_NOT_EMPTY = ("track_id", "frame", "t")
 TRACK_KEY = "track_id" + KEY_SUFFIX  # a Table's codes of its track ids (`tables.convert_parquet`)
 

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..io.files import CANDIDATE_COLUMNS, PACE_COLUMN
+from ..io.files import ACROSS_COLUMNS, CANDIDATE_COLUMNS, PACE_COLUMN
 from ..model.status import REASON_LABELS, VERDICT_LABELS, Reason, TrackState, Verdict
 from .rows import TrackRow
 
@@ -24,12 +24,13 @@ def candidate_columns(columns) -> list[str]:
     return [c for c in (*CANDIDATE_COLUMNS, PACE_COLUMN) if c in columns]
 
 
-def tracks_columns(objs: list, *, candidates: bool | None = None,
-                   pace: bool = False) -> dict[str, np.ndarray]:
+def tracks_columns(objs: list, *, candidates: bool | None = None, pace: bool = False,
+                   across: bool = False) -> dict[str, np.ndarray]:
     """The tracks format (ARCHITECTURE.md) plus the filter's ground estimate and the state, from
     objects with a track_id and rows (`TrackRow`). `candidates`: also the candidate windows'
     I(k) (grey levels; float64 columns `io.files.CANDIDATE_COLUMNS`) from each object's
     `candidate_rows` (one tuple per row, that order); None: where the objects have them.
+    `across`: rule 50b's windows' I(k) too (`io.files.ACROSS_COLUMNS`, after the candidates').
     `pace`: the pace window's I(k) too (`io.files.PACE_COLUMN`, each tuple's last entry)."""
     rows = [(o.track_id, *r) for o in objs for r in o.rows]
     cols = list(zip(*rows)) if rows else [[] for _ in TRACK_COLUMNS]
@@ -42,7 +43,8 @@ def tracks_columns(objs: list, *, candidates: bool | None = None,
         out[k] = out[k].astype(np.float64)  # top_at_edge: 1/0, the tracks format's float
     if candidates is None:
         candidates = any(getattr(o, "candidate_rows", None) is not None for o in objs)
-    names = (*(CANDIDATE_COLUMNS if candidates else ()), *((PACE_COLUMN,) if pace else ()))
+    names = (*(CANDIDATE_COLUMNS if candidates else ()), *(ACROSS_COLUMNS if across else ()),
+             *((PACE_COLUMN,) if pace else ()))
     if names:
         out.update(candidate_table(objs, names))
     return out

@@ -223,7 +223,24 @@ def _judged(cfg: Config, obj, window, sigs, rest: tuple, candidates: bool
             ) -> tuple[dict, int | None]:
     """(outcome, chosen candidate or None) of one rhythm window of `obj` on its I(k) channels
     `sigs` (window B's, then each candidate's and the pace window's; `rest` the times, ground
-    track, valid flag and foot points of `classify_window_jit`), then `obj`'s second look."""
+    track, valid flag and foot points of `classify_window_jit`), then `obj`'s second look.
+    Rule 50b (`obj.across` > 0: the last that many channels are windows moved across): those
+    decide only where the strongest of all is one of them and says Pedestrian without the look;
+    else the window is judged on the channels before them."""
+    across = getattr(obj, "across", 0) if candidates else 0
+    if across:
+        out, chosen = _strongest(cfg, obj, sigs, rest, True)
+        if chosen >= len(sigs) - across and int(out["verdict"]) == Verdict.PEDESTRIAN:
+            return out, chosen
+        sigs = sigs[:-across]
+    out, chosen = _strongest(cfg, obj, sigs, rest, candidates and len(sigs) > 1)
+    look = getattr(obj, "second_look", None)
+    return (out if look is None else look(out, window)), chosen
+
+
+def _strongest(cfg: Config, obj, sigs, rest: tuple, candidates: bool
+               ) -> tuple[dict, int | None]:
+    """`_judged` before the second look: one channel, or the strongest of several."""
     if not candidates:
         out, chosen = _outcome(classify_window_jit(cfg, jnp.asarray(sigs[0], jnp.float32),
                                                    *rest)), None
@@ -235,8 +252,7 @@ def _judged(cfg: Config, obj, window, sigs, rest: tuple, candidates: bool
                                  pace_last=getattr(obj, "pace_window", False),
                                  min_hz=trend_min_hz(cfg))
         out, chosen = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}, int(best[0])
-    look = getattr(obj, "second_look", None)
-    return (out if look is None else look(out, window)), chosen
+    return out, chosen
 
 
 def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,

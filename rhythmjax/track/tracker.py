@@ -11,11 +11,10 @@ core's EKF step (`ekf_fused.step`: `ekf.step` entry by entry) and the paper's ga
 tracing. A DETECT becomes OBSERVE when the first measurement lies in the detection range, else
 NONE; OBSERVE/PREDICT follow the gate decision; PREDICT ends (NONE) after `predict_timeout_s`
 or when the estimate leaves the range. Each tracked frame samples the rhythm signal I(k) in
-window B at the foot point (with `body.window_candidates` also in window B moved by each offset
-of `io.files.WINDOW_CANDIDATES`); each completed window of N frames (one starts every
-`thresholds.hop_samples` frames) is matched with `rhythm.classify_window` until one says
-Pedestrian (then matching stops; a window at twice a walking pace looked at again, twice.py).
-A track that times out is kept for `relink.within_s` s; a new object there continues it.
+window B at the foot point (also moved by `io.files.WINDOW_CANDIDATES` and, rule 50b, across);
+each completed window of N frames (one every `thresholds.hop_samples`) is matched with
+`rhythm.classify_window` until one says Pedestrian (then matching stops; a window at twice a
+walking pace looked at again, twice.py); a timed-out track waits `relink.within_s` s for a relink.
 """
 
 from __future__ import annotations
@@ -27,7 +26,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..io.files import WINDOW_CANDIDATES
 from ..model.camera_np import camera_tuple, upright_size
 from ..model.params import Config, host_float
 from ..model.status import VERDICT_LABELS, TrackState
@@ -66,6 +64,7 @@ class _Object:
     candidate_rows: list[tuple[float, ...]] | None = None  # per row, I(k) of the candidate windows
     # B (`WINDOW_CANDIDATES` order), then the pace window's (rule 34); NaN where `intensity` is
     pace_window: bool = False  # the last entry of each candidate_rows tuple is the pace window
+    across: int = 0  # rule 50b: the last `across` entries are window B moved across (no pace)
     second_look: Callable | None = None  # `match_window`'s look at each window (rules 37, 45)
     mean_rows: list[tuple[float, ...]] | None = None  # rule 35b: per row, window B's and the
     # candidate_rows' windows' I(k) per pixel (`vision.window_b.window_b_means`)
@@ -111,10 +110,9 @@ class OnlineTracker:
         self._look = tracker_look(cfg, self._camera, self.opt.size)  # rules 37 and 45
         self.duplicate_frames: list[int] = []
         self.n_frames = 0
-        self._offsets = (tuple(float(off) for _, off in WINDOW_CANDIDATES)
-                         if self.opt.body.window_candidates else None)  # in W, + = down
+        self._offsets, self._across = self.opt.body.candidate_offsets()  # in W: + down, right
         self._pace_scale = float(self.opt.body.pace_window_widths)  # rule 34; 0: off
-        self._extra = len(self._offsets or ()) + (self._pace_scale > 0)  # entries a row
+        self._extra = len(self._offsets or ()) + len(self._across) + (self._pace_scale > 0)
         self._second_mean = self.opt.body.window_mean_refused and not self.opt.body.window_per_pixel
 
     def update(self, index: int, t: float, frame: np.ndarray | None) -> None:
@@ -210,7 +208,8 @@ class OnlineTracker:
                 s = free.pop(0)
                 self._slots[s] = _Object(track_id=0, state=TrackState.DETECT, top=det.top,
                                          candidate_rows=[] if self._extra else None,
-                                         pace_window=self._pace_scale > 0, second_look=self._look,
+                                         across=len(self._across), second_look=self._look,
+                                         pace_window=self._pace_scale > 0,
                                          mean_rows=[] if self._second_mean else None,
                                          mean_gate=self.opt.body.mean_refused_gate)
                 present[s], reset[s] = True, True
@@ -332,10 +331,11 @@ class OnlineTracker:
         if obj.candidate_rows is not None:  # NaN exactly where `intensity` is
             obj.candidate_rows.append((math.nan,) * self._extra if math.isnan(intensity) else
                                       window_b_extras(D, fu, fv, W, self._offsets or (),
-                                                      self._pace_scale, mean=per_pixel))
+                                                      self._pace_scale, mean=per_pixel,
+                                                      across=self._across))
         if obj.mean_rows is not None:  # rule 35b, NaN exactly where `intensity` is
-            obj.mean_rows.append(window_b_means(D, fu, fv, W, self._offsets or (),
-                                                self._pace_scale, math.isfinite(intensity)))
+            obj.mean_rows.append(window_b_means(D, fu, fv, W, self._offsets or (), self._pace_scale,
+                                                math.isfinite(intensity), self._across))
         top, obj.top = (obj.top if measured else math.nan), math.nan  # this frame's only
         edge, obj.top_at_edge = measured and obj.top_at_edge, False
         obj.rows.append(TrackRow(index, t, float(z[0]), float(z[1]), float(width), intensity,
@@ -420,7 +420,7 @@ class OnlineTracker:
                 o.result = refuse_low(o.result, self._camera, o.rows, self._walker_m, self.opt.size)
                 o.result = median_pace(self.cfg, o, self.opt.recheck)
         return (tracks_columns(objs, candidates=self._offsets is not None,
-                               pace=self._pace_scale > 0),
+                               pace=self._pace_scale > 0, across=bool(self._across)),
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 
     def _split_at_switch(self, obj: _Object) -> None:
@@ -433,7 +433,7 @@ class OnlineTracker:
         cands, means = obj.candidate_rows, obj.mean_rows
         part = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[rows],
                        vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows],
-                       pace_window=obj.pace_window, second_look=obj.second_look,
+                       pace_window=obj.pace_window, second_look=obj.second_look, across=obj.across,
                        mean_rows=None if means is None else means[rows], mean_gate=obj.mean_gate)
         self._next_id += 1
         while not part.decided and len(part.rows) >= part.win_start + self.cfg.thresholds.n:

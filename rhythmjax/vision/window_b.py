@@ -65,33 +65,46 @@ def window_b_candidates(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number
                  for off in offsets)
 
 
+def window_b_across(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
+                    offsets: Sequence[float], *, mean: bool = False) -> tuple[float, ...]:
+    """Rule 50b's candidates: window B moved across its row, once per offset,
+    `window_b_intensity(absdiff, u_p + offset * W, v_p, W)` (offset in walker widths W px,
+    negative: left; `io.files.ACROSS_CANDIDATES`). NaN rules and `mean` as there."""
+    return tuple(window_b_intensity(absdiff, u_p + float(off) * W, v_p, W, mean=mean)
+                 for off in offsets)
+
+
 def window_b_extras(absdiff: np.ndarray, u_p: Number, v_p: Number, W: Number,
                     offsets: Sequence[float], pace_scale: float, *,
-                    mean: bool = False) -> tuple[float, ...]:
+                    mean: bool = False, across: Sequence[float] = ()) -> tuple[float, ...]:
     """The tracker's extra I(k) samples of a row (grey levels): the candidate windows B
-    (`window_b_candidates` at `offsets`), then, where `pace_scale` > 0, the pace window of rule
-    34 (`io.files.PACE_COLUMN`): window B scaled by `pace_scale` about the foot point, i.e.
+    (`window_b_candidates` at `offsets`), then those moved across (`window_b_across` at
+    `across`, rule 50b), then, where `pace_scale` > 0, the pace window of rule 34
+    (`io.files.PACE_COLUMN`): window B scaled by `pace_scale` about the foot point, i.e.
     `pace_scale` W px wide and `pace_scale` W/5 px high with its bottom row at v_p
     (`window_b_intensity(absdiff, u_p, v_p, pace_scale * W)`). NaN rules as there; `mean`: per
     pixel, as there."""
-    moved = window_b_candidates(absdiff, u_p, v_p, W, offsets, mean=mean)
+    moved = window_b_candidates(absdiff, u_p, v_p, W, offsets, mean=mean) + \
+        window_b_across(absdiff, u_p, v_p, W, across, mean=mean)
     if pace_scale <= 0:
         return moved
     return moved + (window_b_intensity(absdiff, u_p, v_p, pace_scale * W, mean=mean),)
 
 
 def window_b_means(absdiff: np.ndarray | None, u_p: Number, v_p: Number, W: Number,
-                   offsets: Sequence[float], pace_scale: float, sampled: bool = True
-                   ) -> tuple[float, ...]:
+                   offsets: Sequence[float], pace_scale: float, sampled: bool = True,
+                   across: Sequence[float] = ()) -> tuple[float, ...]:
     """Rule 35b's per-pixel samples of a tracked row (grey levels per pixel): window B's I(k)
     (`window_b_intensity(..., mean=True)`), then its extras' (`window_b_extras(..., mean=True)`:
-    the candidate windows at `offsets`, the pace window where `pace_scale` > 0). Every value NaN
-    where not `sampled` (the row's I(k) is NaN) or `absdiff` is None, so that each is NaN exactly
-    where I(k) is; else the NaN rules of `window_b_intensity`."""
+    the candidate windows at `offsets`, those across at `across`, the pace window where
+    `pace_scale` > 0). Every value NaN where not `sampled` (the row's I(k) is NaN) or `absdiff`
+    is None, so that each is NaN exactly where I(k) is; else the NaN rules of
+    `window_b_intensity`."""
     if absdiff is None or not sampled:
-        return (math.nan,) * (1 + len(offsets) + (pace_scale > 0))
+        return (math.nan,) * (1 + len(offsets) + len(across) + (pace_scale > 0))
     return ((window_b_intensity(absdiff, u_p, v_p, W, mean=True),)
-            + window_b_extras(absdiff, u_p, v_p, W, offsets, pace_scale, mean=True))
+            + window_b_extras(absdiff, u_p, v_p, W, offsets, pace_scale, mean=True,
+                              across=across))
 
 
 @jax.jit
