@@ -7,6 +7,7 @@ off, and `track.toolkit`'s window judgement around a stand-in that records its c
 
 from __future__ import annotations
 
+import csv
 import math
 import sys
 import types
@@ -69,7 +70,7 @@ def test_options_switch_the_offsets_and_refuse_the_pace_window():
 
 
 @pytest.mark.parametrize("on", [False, True])
-def test_tracker_rows_and_table_carry_the_across_windows(on):
+def test_tracker_rows_and_table_carry_the_across_windows(on, tmp_path):
     from rhythmjax.sim import scene as synth
     from rhythmjax.track import track_frames
 
@@ -94,6 +95,29 @@ def test_tracker_rows_and_table_carry_the_across_windows(on):
     if on:
         sampled = [c for c in rows if math.isfinite(c[0])]
         assert len(sampled) >= 20 and sum(c[3] != c[4] for c in sampled) >= 10
+    # the writers' order keeps them (`candidate_columns`), the reader checks them
+    from rhythmjax.cli.common import TRACK_ORDER
+    from rhythmjax.io import read_tracks, write_table
+    from rhythmjax.io.errors import BadInput
+    from rhythmjax.track.columns import candidate_columns
+
+    order = TRACK_ORDER + candidate_columns(tracks)
+    assert order[-len(names):] == list(names)
+    path = tmp_path / "tracks.csv"
+    write_table(str(path), tracks, order)
+    with open(path, newline="") as fh:
+        back = list(csv.DictReader(fh))
+    for name in names:
+        got = [float(r[name]) if r[name] else math.nan for r in back]
+        np.testing.assert_allclose(got, tracks[name], rtol=1e-6, equal_nan=True)
+    read_tracks(str(path))
+    back[0][names[-1]] = "-1"
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(back[0]))
+        w.writeheader()
+        w.writerows(back)
+    with pytest.raises(BadInput, match=names[-1]):
+        read_tracks(str(path))
 
 
 def stand_in(outcome, calls):

@@ -208,7 +208,7 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
         if i is not None:
             raise tab.where(p, i, c, f"{float(a[i])!r} is not a usable value (inf or |value| > "
                             "1e12); leave the cell empty for a missing measurement")
-        if c in ("width_px", "intensity", *CANDIDATE_COLUMNS, PACE_COLUMN):
+        if c in ("width_px", "intensity", *CANDIDATE_COLUMNS, *ACROSS_COLUMNS, PACE_COLUMN):
             i = first_true(a < 0)
             if i is not None:
                 raise tab.where(p, i, c, f"{float(a[i])!r} is negative")

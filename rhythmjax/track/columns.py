@@ -18,10 +18,10 @@ TRACK_COLUMNS = ["track_id", *TrackRow._fields]  # track_id, then the fields of 
 
 
 def candidate_columns(columns) -> list[str]:
-    """The candidate-window columns (`io.files.CANDIDATE_COLUMNS`, then `PACE_COLUMN`) that
-    `columns` (a mapping of tracks columns) holds, in their order: what a writer appends to its
-    column order."""
-    return [c for c in (*CANDIDATE_COLUMNS, PACE_COLUMN) if c in columns]
+    """The candidate-window columns (`io.files.CANDIDATE_COLUMNS`, `ACROSS_COLUMNS`, then
+    `PACE_COLUMN`) that `columns` (a mapping of tracks columns) holds, in their order: what a
+    writer appends to its column order."""
+    return [c for c in (*CANDIDATE_COLUMNS, *ACROSS_COLUMNS, PACE_COLUMN) if c in columns]
 
 
 def tracks_columns(objs: list, *, candidates: bool | None = None, pace: bool = False,
