@@ -62,7 +62,7 @@ class _Object:
     top: float = math.nan  # top row px of the last detection (`detect.Detection.top`)
     top_at_edge: bool = False  # ... its extent reached the image's first row (`Detection`)
     candidate_rows: list[tuple[float, ...]] | None = None  # per row, I(k) of the candidate windows
-    # B (`WINDOW_CANDIDATES` order), then the pace window's (rule 34); NaN where `intensity` is
+    # B (`WINDOW_CANDIDATES`, then across), then the pace window's; NaN where `intensity` is
     pace_window: bool = False  # the last entry of each candidate_rows tuple is the pace window
     across: int = 0  # rule 50b: the last `across` entries are window B moved across (no pace)
     second_look: Callable | None = None  # `match_window`'s look at each window (rules 37, 45)
