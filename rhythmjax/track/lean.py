@@ -83,9 +83,8 @@ def window_b_foot(z, est_uv, measured: bool, side_du: float, opt, camera, height
     image's side, window B on its visible feet) and, with `body.lean_column`, back by
     `lean_px(camera, *z, height_m)` (rule 41); with `body.mass_column` its column is then
     `motion_column` of the difference D around it (where it has one), body_px = (W, walker
-    height) px (rule 48),
-    with `body.mass_crossing` > 0 only where `crossing_sine` of the EKF's state (x, vx, y, vy)
-    (m, m/s) reaches it (rule 48b). `opt` a `track.options.TrackerOptions`."""
+    height) px (rule 48), with `body.mass_crossing` > 0 only where `crossing_sine` of the EKF's
+    state (x, vx, y, vy) (m, m/s) reaches it (rule 48b). `opt` a `track.options.TrackerOptions`."""
     body = opt.body
     if not measured or body.sample_estimate:
         return float(est_uv[0]), float(est_uv[1])
