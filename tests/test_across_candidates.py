@@ -2,8 +2,9 @@
 and right on its row as two more candidate windows B, which decide a rhythm window only by
 (13)-(15) at their own strongest peak, never through rule 37's second look. Checked against
 sums of D over hand-placed windows, the tracker's rows and tracks table with the option on and
-off, and `track.toolkit`'s window judgement around a stand-in that records its calls; rule 50
-(`benchmarks/eval_rules.py`'s `across`: the same windows through rule 37 too) likewise."""
+off, and the shared judgement (`model.candidates.judged`, the tracker's `toolkit._judged`) on
+hand-built window results; rule 50 (`benchmarks/eval_rules.py`'s `across`: the same windows
+through rule 37 too) likewise. The batch classifier: tests/test_across_batch.py."""
 
 from __future__ import annotations
 
@@ -59,14 +60,11 @@ def test_across_windows_are_window_b_moved_along_its_row():
     assert all(math.isnan(x) for x in window_b_across(D, math.nan, 90.0, 40.0, across))
 
 
-def test_options_switch_the_offsets_and_refuse_the_pace_window():
-    assert BodyOptions().candidate_offsets() == ((-0.2, -0.1, 0.1), ())
-    assert BodyOptions(across_candidates=True).candidate_offsets() == ((-0.2, -0.1, 0.1),
-                                                                       (-0.1, 0.1))
-    assert BodyOptions(window_candidates=False, across_candidates=True).candidate_offsets() \
-        == (None, (-0.1, 0.1))
-    with pytest.raises(ValueError, match="pace_window_widths"):
-        BodyOptions(across_candidates=True, pace_window_widths=2.0)
+def test_options_switch_the_offsets():
+    assert BodyOptions().candidate_offsets() == ((-0.2, -0.1, 0.1), (-0.1, 0.1))  # on
+    assert BodyOptions(across_candidates=False).candidate_offsets() == ((-0.2, -0.1, 0.1), ())
+    assert BodyOptions(window_candidates=False).candidate_offsets() == (None, (-0.1, 0.1))
+    assert BodyOptions(pace_window_widths=2.0).candidate_offsets()[1] == (-0.1, 0.1)
 
 
 @pytest.mark.parametrize("on", [False, True])
@@ -120,60 +118,132 @@ def test_tracker_rows_and_table_carry_the_across_windows(on, tmp_path):
         read_tracks(str(path))
 
 
-def stand_in(outcome, calls):
-    """A `toolkit._strongest` that records (channels, candidates) and answers `outcome(n)`:
-    (chosen, verdict) for n channels."""
-    def strongest(cfg, obj, sigs, rest, candidates):
-        calls.append((len(sigs), candidates))
-        chosen, verdict = outcome(len(sigs))
-        return {"verdict": np.asarray(verdict)}, chosen
-    return strongest
-
-
 PED, NON = int(Verdict.PEDESTRIAN), int(Verdict.NON_PEDESTRIAN)
-CFG = Config()  # the judgement's config (not read by the stand-in)
+CFG = Config()  # the judgement's config (its trend rule 38b read by `judged`)
+# six candidates (window B, three moved vertically, left, right) over four windows: candidate
+# c's window w has one peak at 1.8 Hz of power POWERS[c][w]; its pace 1 + c Hz names it
+POWERS = [[1, 1, 1, 1], [2, 2, 2, 2], [3, 5, 3, 3], [4, 4, 8, 4], [5, 9, 5, 9], [9, 6, 6, 6]]
+VERDICTS = [[PED] * 4] * 4 + [[PED, NON, PED, PED], [PED] * 4]
 
 
-@pytest.mark.parametrize("outcome, calls, chosen, verdict, looked", [
-    (lambda n: (5, PED) if n == 6 else (2, NON), [(6, True)], 5, PED, False),  # right, alone
-    (lambda n: (4, PED) if n == 6 else (2, NON), [(6, True)], 4, PED, False),  # left, alone
-    (lambda n: (4, NON) if n == 6 else (1, PED), [(6, True), (4, True)], 1, PED, True),
-    (lambda n: (3, PED), [(6, True), (4, True)], 3, PED, True),  # a vertical candidate
-])
-def test_across_windows_decide_only_by_their_own_peak(monkeypatch, outcome, calls, chosen,
-                                                      verdict, looked):
+def window_results(powers=POWERS, verdicts=VERDICTS, window=None):
+    """Per candidate, `classify_window`-like results (leading window axis; `window` w: that
+    window alone, kept as an axis of 1)."""
+    out = []
+    for c, (p, v) in enumerate(zip(powers, verdicts)):
+        p, v = np.asarray(p, np.float32), np.asarray(v, np.int32)
+        if window is not None:
+            p, v = p[[window]], v[[window]]
+        W = len(p)
+        out.append({"verdict": v, "reason": np.zeros(W, np.int32),
+                    "pace_hz": np.full(W, 1.0 + c, np.float32),
+                    "stride_m": np.full(W, 0.7, np.float32), "ratio": np.ones(W, np.float32),
+                    "speed_mps": np.ones(W, np.float32),
+                    "peak_freq": np.tile(np.float32([1.8, 0.0]), (W, 1)),
+                    "peak_power": np.stack([p, np.zeros_like(p)], 1),
+                    "peak_mask": np.tile([True, False], (W, 1))})
+    return out
+
+
+def recording_look(calls):
+    """A second look that records `twice` and marks the windows it saw: reason 1 with rule
+    37 (twice), 2 without; without it a window paced 5 Hz (the left window) is refused, as
+    rule 26 refuses a window too low for a walker."""
+    def look(res, twice=True):
+        calls.append(twice)
+        res = {k: np.array(v) for k, v in res.items()}
+        res["reason"][:] = 1 if twice else 2
+        if not twice:
+            res["verdict"] = np.where(res["pace_hz"] == 5.0, NON, res["verdict"])
+        return res
+    return look
+
+
+def test_across_windows_decide_only_by_their_own_peak():
+    from rhythmjax.model.candidates import judged, strongest
+
+    calls = []
+    got, chosen = judged(window_results(), recording_look(calls), across=2)
+    # w0: the right window strongest and Pedestrian, decides unlooked by rule 37; w1: the left
+    # strongest but refused: judged on the four before it (candidate 2), rule 37 looking; w2:
+    # a vertical candidate strongest; w3: the left window decides, refused by the height look
+    np.testing.assert_array_equal(chosen, [5, 2, 3, 4])
+    np.testing.assert_array_equal(got["verdict"], [PED, PED, PED, NON])
+    np.testing.assert_array_equal(got["pace_hz"], [6.0, 3.0, 4.0, 5.0])
+    np.testing.assert_array_equal(got["reason"], [2, 1, 1, 2])
+    assert calls == [True, False]
+    again, chosen = judged(window_results(), None, across=2)  # no look: w3 stays Pedestrian
+    np.testing.assert_array_equal(again["verdict"], [PED] * 4)
+    np.testing.assert_array_equal(chosen, [5, 2, 3, 4])
+    calls.clear()  # across 0: the strongest of all six, then the look, as before rule 50b
+    plain, chosen = judged(window_results(), recording_look(calls))
+    merged, best = strongest(window_results())
+    np.testing.assert_array_equal(chosen, best)
+    np.testing.assert_array_equal(chosen, [5, 4, 3, 4])
+    np.testing.assert_array_equal(plain["reason"], [1] * 4)
+    np.testing.assert_array_equal(plain["pace_hz"], merged["pace_hz"])
+    assert calls == [True]
+    calls.clear()  # no across window strongest and Pedestrian: one look only
+    inner, chosen = judged(window_results(), recording_look(calls), across=2)
+    assert calls.count(False) == 1
+
+
+def test_with_the_pace_window_last_it_is_no_candidate():
+    """Rule 34's pace window after the across windows (the tracker's and the tracks file's
+    order): it never decides, gives a Pedestrian window's pace where it says Pedestrian too,
+    and the across windows are still the two before it."""
+    from rhythmjax.model.candidates import judged
+
+    pace = window_results([[99] * 4], [[PED] * 4])[0]  # strongest of all, yet never chosen
+    pace["pace_hz"][:] = 42.0
+    got, chosen = judged(window_results() + [pace], None, across=2, pace_last=True)
+    np.testing.assert_array_equal(chosen, [5, 2, 3, 4])
+    np.testing.assert_array_equal(got["pace_hz"], [42.0] * 4)  # every window Pedestrian
+    pace["verdict"][:] = NON
+    got, chosen = judged(window_results() + [pace], None, across=2, pace_last=True)
+    np.testing.assert_array_equal(chosen, [5, 2, 3, 4])
+    np.testing.assert_array_equal(got["pace_hz"], [6.0, 3.0, 4.0, 5.0])
+
+
+@pytest.mark.parametrize("window", [0, 1, 2, 3])
+def test_the_trackers_judgement_is_the_shared_one_in_one_call(monkeypatch, window):
+    """`toolkit._judged` judges all six channels in one call (no second call for the channels
+    before the across windows) and agrees with `candidates.judged` window by window."""
     import rhythmjax.track.toolkit as tk
+    from rhythmjax.model.candidates import judged
 
-    seen, looks = [], []
-    monkeypatch.setattr(tk, "_strongest", stand_in(outcome, seen))
-
-    def look(out, window):
-        looks.append(int(out["verdict"]))
-        return out
-
-    obj = types.SimpleNamespace(second_look=look, across=2)
-    out, c = tk._judged(CFG, obj, None, [np.zeros(4)] * 6, (), True)
-    assert (c, int(out["verdict"])) == (chosen, verdict)
-    assert seen == calls and bool(looks) == looked
-
-
-def test_without_across_windows_the_judgement_is_the_old_one(monkeypatch):
-    import rhythmjax.track.toolkit as tk
-
+    res = window_results(window=window)
+    stacked = {k: np.stack([r[k][0] for r in res]) for k in res[0]}
+    classified = []
+    monkeypatch.setattr(tk, "classify_window_candidates_jit", lambda cfg, sigs, *rest: (
+        classified.append(len(sigs)) or types.SimpleNamespace(**stacked)))
     seen = []
-    monkeypatch.setattr(tk, "_strongest", stand_in(lambda n: (5, PED), seen))
+
+    def look(out, rows, twice=True):
+        seen.append(rows)
+        return recording_look([])({k: np.asarray(v)[None] for k, v in out.items()}, twice)
+
+    obj = types.SimpleNamespace(second_look=lambda out, rows, twice=True: {
+        k: v[0] for k, v in look(out, rows, twice).items()}, across=2)
+    out, c = tk._judged(CFG, obj, "rows", [np.zeros(4)] * 6, (), True)
+    want, best = judged(window_results(window=window), recording_look([]), across=2)
+    assert classified == [6] and set(seen) == {"rows"}
+    assert c == int(best[0]) == [5, 2, 3, 4][window]
+    for k in ("verdict", "reason", "pace_hz"):
+        assert out[k] == want[k][0], k
+
+
+def test_one_channel_is_judged_alone_and_looked_at(monkeypatch):
+    import rhythmjax.track.toolkit as tk
+
+    one = {k: v[0] for k, v in window_results(window=0)[0].items()}
+    monkeypatch.setattr(tk, "classify_window_jit",
+                        lambda cfg, sig, *rest: types.SimpleNamespace(**one))
     looked = []
-    obj = types.SimpleNamespace(second_look=lambda out, w: looked.append(1) or out, across=0)
-    assert tk._judged(CFG, obj, None, [np.zeros(4)] * 6, (), True)[0]["verdict"] == PED
-    assert seen == [(6, True)] and looked == [1]
-    seen.clear()  # across windows but no candidates asked for: one channel, as before
-    obj.across = 2
-    tk._judged(CFG, obj, None, [np.zeros(4)], (), False)
-    assert seen == [(1, False)]
-    seen.clear()  # across windows alone (no vertical candidates): window B alone after them
-    monkeypatch.setattr(tk, "_strongest", stand_in(lambda n: (0, NON), seen))
-    tk._judged(CFG, obj, None, [np.zeros(4)] * 3, (), True)
-    assert seen == [(3, True), (1, False)]
+    obj = types.SimpleNamespace(second_look=lambda out, w, twice=True: looked.append(twice)
+                                or out, across=2)
+    out, c = tk._judged(CFG, obj, None, [np.zeros(4)] * 3, (), False)  # candidates not asked
+    assert c is None and looked == [True] and int(out["verdict"]) == PED
 
 
 def test_rule_50_patch_lets_rule_37_read_the_across_windows(monkeypatch):

@@ -148,18 +148,20 @@ def _track(scene, **body):
 
 
 def test_tracker_mean_rows_equal_rule_35s_samples(walker_scene):
-    """With the rule on, each object's `mean_rows` (window B's, the three candidates' and the
-    pace window's I(k) per pixel) equal, row by row, the samples of a run with rule 35 on (I(k)
-    per pixel: the same filter, window B's sampling never moves it); the tracks file keeps the
-    sums (equal to a run with the rule off); with rule 35 on there are no mean rows."""
+    """With the rule on, each object's `mean_rows` (window B's, the three candidates', the two
+    moved across (rule 50b, on) and the pace window's I(k) per pixel) equal, row by row, the
+    samples of a run with rule 35 on (I(k) per pixel: the same filter, window B's sampling never
+    moves it); the tracks file keeps the sums (equal to a run with the rule off); with rule 35
+    on there are no mean rows."""
     tracks_on, _, objs, _ = _track(walker_scene, window_mean_refused=True)
     tracks_off, _, _, _ = _track(walker_scene, window_mean_refused=False)
     per_pixel, _, both, _ = _track(walker_scene, window_per_pixel=True, window_mean_refused=True)
     for k in ("track_id", "frame", "intensity", "intensity_wide"):
         np.testing.assert_array_equal(tracks_on[k], tracks_off[k])
     means = np.asarray([m for o in objs for m in o.mean_rows], np.float64)
-    assert means.shape == (len(tracks_on["frame"]), 5) and len(tracks_on["frame"]) > 60
-    cols = ("intensity", "intensity_up20", "intensity_up10", "intensity_down10", "intensity_wide")
+    assert means.shape == (len(tracks_on["frame"]), 7) and len(tracks_on["frame"]) > 60
+    cols = ("intensity", "intensity_up20", "intensity_up10", "intensity_down10",
+            "intensity_left10", "intensity_right10", "intensity_wide")
     want = np.stack([per_pixel[c] for c in cols], axis=1)
     np.testing.assert_array_equal(np.isnan(means), np.isnan(want))
     np.testing.assert_allclose(means, want, rtol=1e-9, equal_nan=True)
@@ -192,7 +194,7 @@ def test_mean_rows_are_nan_exactly_where_intensity_is():
     means = np.asarray([m for o in objs for m in o.mean_rows], np.float64)
     unsampled = np.isnan(tracks["intensity"])
     assert unsampled.sum() >= 5 and (~unsampled).sum() > 100
-    np.testing.assert_array_equal(np.isnan(means), np.repeat(unsampled[:, None], 5, axis=1))
+    np.testing.assert_array_equal(np.isnan(means), np.repeat(unsampled[:, None], 7, axis=1))
 
 
 def test_a_relinked_track_keeps_its_mean_rows():
@@ -210,8 +212,8 @@ def test_a_relinked_track_keeps_its_mean_rows():
     assert tracker.relinked == 1
     means = np.asarray([m for o in objs for m in o.mean_rows], np.float64)
     unsampled = np.isnan(tracks["intensity"])
-    assert means.shape == (len(unsampled), 4) and (tracks["state"] == "none").sum() >= 3
-    np.testing.assert_array_equal(np.isnan(means), np.repeat(unsampled[:, None], 4, axis=1))
+    assert means.shape == (len(unsampled), 6) and (tracks["state"] == "none").sum() >= 3
+    np.testing.assert_array_equal(np.isnan(means), np.repeat(unsampled[:, None], 6, axis=1))
 
 
 # ----------------------------------------------------------------------------------------------

@@ -39,7 +39,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 41)", "body.lean_column", False),  # window B under the body, off
     ("(new: issue 16, rule 48)", "body.mass_column", False),  # window B at the motion's mass
     ("(new: issue 16, rule 48b)", "body.mass_crossing", 0.0),  # ... only across the view
-    ("(new: issue 16, rule 50b)", "body.across_candidates", False),  # window B moved across
+    ("(new: issue 16, rule 50b)", "body.across_candidates", True),  # window B moved across
     ("high_foot_frames", "body.high_foot_frames", 3),
     ("(new: issue 16 item 2)", "body.window_candidates", True),
     ("(new: issue 16, rule 34)", "body.pace_window_widths", 0.0),

@@ -17,7 +17,7 @@ import pytest
 from rhythmjax.cli.common import TRACK_ORDER
 from rhythmjax.io import read_tracks, to_batch, write_table
 from rhythmjax.io.errors import BadInput
-from rhythmjax.io.files import CANDIDATE_COLUMNS, PACE_COLUMN
+from rhythmjax.io.files import ACROSS_COLUMNS, CANDIDATE_COLUMNS, PACE_COLUMN
 from rhythmjax.model.batch import classify_tracks
 from rhythmjax.model.candidates import strongest
 from rhythmjax.model.params import Config
@@ -149,7 +149,7 @@ def test_the_batch_classifier_reads_the_pace_column(crossing, tmp_path, segment_
         write_table(str(path), tracks, TRACK_ORDER + candidate_columns(tracks))
         back = read_tracks(str(path), fps=CFG.camera.fps)
         assert back.pace_window == (i == 0)
-        assert back.candidates.shape[1] == len(CANDIDATE_COLUMNS) + (i == 0)
+        assert back.candidates.shape[1] == len(CANDIDATE_COLUMNS) + len(ACROSS_COLUMNS) + (i == 0)
         gap = max(1, round(float(CFG.thresholds.predict_timeout) * CFG.camera.fps))
         batch = to_batch(back, max_gap_frames=gap, min_len=CFG.thresholds.n)
         again = classify_tracks(CFG, batch, progress=False, segment_rows=segment_rows)

@@ -154,7 +154,7 @@ def test_classify_tracks_hands_the_look_each_window_once_with_its_rows():
     batch = _batch([_object(1.7, n=160, pace=2.0), _object(1.7, n=160, seed=1)])
     seen = []
 
-    def record(res, track, start):
+    def record(res, track, start, twice=True):
         seen.extend(zip(track.tolist(), start.tolist()))
         return res
 
@@ -239,3 +239,39 @@ def test_a_negative_or_nan_height_is_refused_by_count_options():
     for bad in (-0.5, float("nan")):
         with pytest.raises(ValueError, match="twice_pace_heights"):
             with_changes(CountOptions(), {"verdicts.twice_pace_heights": bad})
+
+
+def test_without_twice_the_looks_leave_rule_37_out():
+    """Rule 50b's windows moved across are looked at with `twice` False: rule 37 reads none of
+    them (the walker read at twice its pace stays refused), rule 26 still refuses a window too
+    low for a walker (a 0.6 m dog judged Pedestrian): the batch looks and the tracker's."""
+    from rhythmjax.model.camera_np import camera_tuple
+    from rhythmjax.track.looks import tracker_look
+    from rhythmjax.track.size import batch_size_look
+    from rhythmjax.track.twice import second_look
+
+    walker, dog = _object(1.7), _object(0.6)
+    dog_ped = {**_out(f1=2.0), "verdict": np.asarray(int(Verdict.PEDESTRIAN))}
+    res = {k: np.stack([_out()[k], dog_ped[k]]) for k in dog_ped}
+    z = np.stack([np.stack([o["u"], o["v"]], -1) for o in (walker, dog)])
+    batch = type("B", (), {"z": z, "v_top": np.stack([walker["v_top"], dog["v_top"]])})()
+    track, start = np.asarray([0, 1]), np.asarray([0, 0])
+    size = SizeOptions(twice_pace_heights=0.75, twice_pace_edge=False, min_height_heights=0.5)
+    twice = batch_second_look(CFG, batch, size)
+    assert twice(res, track, start, twice=False) is res
+    both = batch_size_look(CFG, batch, size, then=twice)
+    P, NP = int(Verdict.PEDESTRIAN), int(Verdict.NON_PEDESTRIAN)
+    assert [int(v) for v in both(res, track, start)["verdict"]] == [P, NP]
+    got = both(res, track, start, twice=False)
+    assert [int(v) for v in got["verdict"]] == [NP, NP]
+    assert [int(r) for r in got["reason"]] == [int(Reason.NO_MODEL_MATCH), int(Reason.TOO_LOW)]
+    camera, n = camera_tuple(CFG.camera), CFG.thresholds.n
+    one = {k: v[0] for k, v in res.items()}
+    plain = second_look(CFG, camera, size)
+    assert int(plain(one, _rows(walker, 0, n))["verdict"]) == P
+    assert plain(one, _rows(walker, 0, n), twice=False) is one
+    look = tracker_look(CFG, camera, size)
+    assert int(look(one, _rows(walker, 0, n))["verdict"]) == P
+    assert int(look(one, _rows(walker, 0, n), twice=False)["verdict"]) == NP
+    low = look(dog_ped, _rows(dog, 0, n), twice=False)
+    assert (int(low["verdict"]), int(low["reason"])) == (NP, int(Reason.TOO_LOW))

@@ -17,7 +17,7 @@ import pytest
 
 from rhythmjax.cli.main import main as cli_main
 from rhythmjax.io import read_table
-from rhythmjax.io.files import CANDIDATE_COLUMNS, WINDOW_CANDIDATES
+from rhythmjax.io.files import ACROSS_COLUMNS, CANDIDATE_COLUMNS, WINDOW_CANDIDATES
 from rhythmjax.io.mot import write_mot
 from rhythmjax.model.camera import project
 from rhythmjax.model.params import Config
@@ -103,8 +103,9 @@ def _run(frames, options=None):
 
 @pytest.fixture(scope="module")
 def runs(hidden_walker):
-    """The scene tracked with the option off (default options and the key given as False) and
-    on; on, every window-B sum the tracker makes is recorded: (D, u, v, W, I)."""
+    """The scene tracked with the option off (the key given as False, rule 50b's windows moved
+    across off too), by default and on; on, every window-B sum the tracker makes is recorded:
+    (D, u, v, W, I)."""
     calls = []
     real = detect.window_b_intensity
 
@@ -113,7 +114,8 @@ def runs(hidden_walker):
         calls.append((D.copy(), u, v, W, value))
         return value
 
-    off = _run(hidden_walker, TrackerOptions(body=BodyOptions(window_candidates=False)))
+    off = _run(hidden_walker, TrackerOptions(body=BodyOptions(window_candidates=False,
+                                                              across_candidates=False)))
     default = _run(hidden_walker)  # the default is on
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(detect, "window_b_intensity", spy)
@@ -137,11 +139,11 @@ def test_option_off_writes_no_candidates_and_changes_nothing(runs):
     assert all(o.candidate_rows is None and (o.result is None or "candidate" not in o.result)
                for o in objs)
     # the default is on: the same tables as the option given as True
-    assert set(tracks_d) == set(tracks_on) == set(tracks) | set(CANDIDATE_COLUMNS)
+    assert set(tracks_d) == set(tracks_on) == set(tracks) | set(CANDIDATE_COLUMNS + ACROSS_COLUMNS)
     _same_columns(tracks_d, tracks_on, tracks_on)
     _same_columns(verdicts_d, verdicts_on, verdicts_on)
     # the option changes what is sampled, never the tracking: every other column equal
-    assert set(tracks_on) == set(tracks) | set(CANDIDATE_COLUMNS)
+    assert set(tracks_on) == set(tracks) | set(CANDIDATE_COLUMNS + ACROSS_COLUMNS)
     _same_columns(tracks, tracks_on, tracks)
 
 

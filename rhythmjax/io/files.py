@@ -108,8 +108,11 @@ class Tracks:
     track_key: np.ndarray | None = None  # int64 codes equal where track_id is (`run_key`)
     state: np.ndarray | None = None  # object array of `TRACK_STATES` ("" = not given)
     candidates: np.ndarray | None = None  # (rows, K) float64: `CANDIDATE_COLUMNS`' I(k)
-    # (where given), then `PACE_COLUMN`'s (where given: `pace_window`)
+    # (where given), then `ACROSS_COLUMNS`' (where given: `across`), then `PACE_COLUMN`'s
+    # (where given: `pace_window`)
     pace_window: bool = False  # the last candidates column is the pace window (rule 34)
+    across: int = 0  # rule 50b: the candidates columns before the pace window's that are
+    # `ACROSS_COLUMNS` (0 or their count)
 
     def __len__(self) -> int:
         return int(self.frame.shape[0])
@@ -177,6 +180,7 @@ class TrackBatch:
     top_at_edge: np.ndarray | None = None  # (B, T): 1 where the region reached the image's top
     candidates: np.ndarray | None = None  # (B, T, K): the candidate windows' I(k), if any
     pace_window: bool = False  # the last candidates column is the pace window's (rule 34)
+    across: int = 0  # rule 50b: that many columns before it are `ACROSS_COLUMNS`' (`Tracks`)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -217,6 +221,12 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
         missing = [c for c in CANDIDATE_COLUMNS if c not in tab]
         raise BadInput(p, f"candidate window columns come together: {', '.join(have)} given, "
                        f"{', '.join(missing)} missing", column=missing[0])
+    across = [c for c in ACROSS_COLUMNS if c in tab]
+    if across and len(across) < len(ACROSS_COLUMNS):
+        missing = [c for c in ACROSS_COLUMNS if c not in tab]
+        raise BadInput(p, f"the columns of the windows moved across come together: "
+                       f"{', '.join(across)} given, {', '.join(missing)} missing",
+                       column=missing[0])
     if "state" in tab:
         state = np.asarray(tab["state"], dtype=object)
         known = np.isin(state, TRACK_STATES + ("",))
@@ -247,7 +257,8 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
         order = None
     col = {k: tab[k] if order is None else tab[k][order] for k in tab if k != "label"}
     pace_window = PACE_COLUMN in tab
-    extra = [*(CANDIDATE_COLUMNS if have else ()), *((PACE_COLUMN,) if pace_window else ())]
+    extra = [*(CANDIDATE_COLUMNS if have else ()), *across,
+             *((PACE_COLUMN,) if pace_window else ())]
     candidates = (np.stack([col[c] for c in extra], axis=1).astype(np.float64)
                   if extra else None)
     lines = tab.lines if order is None else tab.lines[order]
@@ -263,7 +274,7 @@ def validated_tracks(p: str, tab: Table, *, fps: float | int | None = None,
                   fps=None if fps is None else float(fps), v_top=col.get("v_top"),
                   u_top=col.get("u_top"), top_at_edge=col.get("top_at_edge"), notes=notes,
                   track_key=col.get(TRACK_KEY), state=col.get("state"), candidates=candidates,
-                  pace_window=pace_window)
+                  pace_window=pace_window, across=len(across))
 
 
 def run_key(rows) -> np.ndarray:
@@ -363,7 +374,8 @@ def to_batch(tracks: Tracks, *, max_gap_frames: int, min_len: int, bucket: bool 
                       length=length, labels=labels, xy=grid(tracks.x, tracks.y),
                       v_top=grid(tracks.v_top), u_top=grid(tracks.u_top),
                       top_at_edge=grid(tracks.top_at_edge),
-                      candidates=candidate_grid, pace_window=tracks.pace_window)
+                      candidates=candidate_grid, pace_window=tracks.pace_window,
+                      across=tracks.across)
 
 
 __all__: Sequence[str] = (

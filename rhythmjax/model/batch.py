@@ -137,10 +137,11 @@ def classify_tracks(cfg: Config, batch, *, chunk: int = 256, progress: bool = Tr
     memory does not grow with its length; the others as before, padded only to their own
     longest (rounded up to a power of two).
 
-    `second_look` (res, track, start) -> res, where given, may change the outcome of each
-    window classified (window w: rows start[w] .. start[w] + N - 1 of track track[w] of
-    `batch`) before it decides, as the tracker's does (rule 37: `track.twice.
-    batch_second_look`; `fast_batch.classify_segments`)."""
+    `second_look` (res, track, start, twice=True) -> res, where given, may change the outcome
+    of each window classified (window w: rows start[w] .. start[w] + N - 1 of track track[w] of
+    `batch`) before it decides, as the tracker's does (rules 37 and 26: `track.looks.
+    height_looks`; `twice` False on rule 50b's windows moved across, `batch.across`;
+    `fast_batch.classify_segments`)."""
     B = len(batch.ids)
     place = placement(devices)
     long = np.flatnonzero(np.asarray(batch.length) > segment_rows) if split and B else \
@@ -202,7 +203,8 @@ def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progr
             labels=None if batch.labels is None else [batch.labels[i] for i in short],
             xy=take(batch.xy), candidates=take(batch.candidates))
         look = None if second_look is None else \
-            (lambda res, track, start: second_look(res, short[track], start))
+            (lambda res, track, start, twice=True: second_look(res, short[track], start,
+                                                               twice=twice))
         res, owner = classify_fast(cfg, sub, chunk, place, second_look=look)
         parts.append({k: res[k] for k in CODES})
         owners.append(short[owner])
@@ -212,10 +214,12 @@ def _with_long_tracks(cfg: Config, batch, long: np.ndarray, *, chunk: int, progr
         if batch.candidates is not None:
             signal = np.concatenate([signal[:, None], batch.candidates[i, :L]], axis=1)
         look = None if second_look is None else \
-            (lambda res, start, i=i: second_look(res, np.full(len(start), i), start))
+            (lambda res, start, twice=True, i=i: second_look(res, np.full(len(start), i), start,
+                                                             twice=twice))
         pieces = classify_long_track(cfg, batch.z[i, :L], batch.width[i, :L], signal,
                                      batch.dt[i, :L], segment_rows=segment_rows,
-                                     pace_last=batch.pace_window, second_look=look)
+                                     pace_last=batch.pace_window, second_look=look,
+                                     across=batch.across)
         parts.append({k: np.asarray([p[k] for p in pieces]) for k in CODES})
         owners.append(np.full(len(pieces), i))
     owner = np.concatenate(owners)

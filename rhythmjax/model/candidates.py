@@ -23,6 +23,12 @@ is a window that is not Pedestrian and whose strongest peak is such a trend (a w
 growing as it comes nearer), the candidates are compared again without the trend peaks, so that
 a candidate that holds the gait can win.
 
+Rule 50b (`across` > 0: the last candidates are window B moved across its row, `io.files.
+ACROSS_CANDIDATES`): those decide a window only where the strongest of all the candidates is
+one of them and says Pedestrian; rule 37's second look (a refused window read at half its
+pace) is not taken on them, rule 26's height test is. Every other window is judged on the
+candidates before them, then the second look: `judged`, shared by every classifier.
+
 Measured before it was built (docs/window_b.md, "candidate windows"): walkers with a Pedestrian
 window, today -> candidates, own seeds +1, +1, 0, 0; dev clips +2; PETS09 through the tracker +1;
 one dog more on one own training seed.
@@ -93,3 +99,33 @@ def strongest(results: Sequence[Mapping[str, np.ndarray]], *,
         best = np.where(trend, again, best)
     merged = {k: v[best, cols] for k, v in stacked.items()}
     return merged, best.astype(np.int64)
+
+
+def judged(results: Sequence[Mapping[str, np.ndarray]], look=None, *, across: int = 0,
+           pace_last: bool = False, min_hz: float = 0.0) -> tuple[dict, np.ndarray]:
+    """`strongest` of the candidates' results, then the second look `look` (res, twice=True)
+    -> res (rules 37 then 26 on each window; `twice` False: rule 26 only; None: no look).
+    `across` > 0 (rule 50b, module doc): the last `across` candidates (before the pace window's
+    result where `pace_last`) are the windows moved across; a window whose strongest candidate
+    is one of them and says Pedestrian keeps it (looked at with twice False), every other is
+    judged on the candidates before them. Returns the merged dict and the chosen candidate per
+    window, as `strongest`."""
+    pace = list(results[-1:]) if pace_last else []
+    n_cands = len(results) - len(pace)
+    inner = list(results[:n_cands - across]) + pace
+    merged, best = strongest(inner, pace_last=pace_last, min_hz=min_hz)
+    if look is not None:
+        merged = look(merged)
+    if not across:
+        return merged, best
+    every, best_all = strongest(results, pace_last=pace_last, min_hz=min_hz)
+    take = (best_all >= n_cands - across) & (np.asarray(every["verdict"]) == Verdict.PEDESTRIAN)
+    if not take.any():
+        return merged, best
+    if look is not None:
+        every = look(every, twice=False)
+    out = {}
+    for k, v in merged.items():
+        v, w = np.asarray(v), np.asarray(every[k])
+        out[k] = np.where(take.reshape(take.shape + (1,) * (v.ndim - 1)), w, v)
+    return out, np.where(take, best_all, best).astype(np.int64)

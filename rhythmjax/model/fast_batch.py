@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .candidates import strongest, trend_min_hz
+from .candidates import judged, trend_min_hz
 from .devices import Placement
 from .params import Config
 from .rhythm import N_PEAKS
@@ -80,6 +80,7 @@ class Segments:
         extra = rounds[0].rest.candidates if rounds else None
         self.n_candidates = 1 + (0 if extra is None else int(extra.shape[-1]))
         self.pace_window = bool(rounds and rounds[0].rest.pace_window)  # its last column
+        self.across = int(rounds[0].rest.across) if rounds else 0  # rule 50b: the last columns
 
     def __len__(self) -> int:
         return len(self.owner)
@@ -130,26 +131,28 @@ def phases(max_windows: int):
 
 
 def classify_candidates(cfg: Config, segs: Segments, seg: np.ndarray, j: np.ndarray,
-                        place: Placement, block: int) -> tuple[dict, np.ndarray]:
+                        place: Placement, block: int, look=None) -> tuple[dict, np.ndarray]:
     """Windows j of segments `seg` classified (`classify_windows_packed_candidates`), once per
     candidate window B when the batch has candidates (each window's speed once for all), the
-    strongest kept (`candidates.strongest`).
+    strongest kept and looked at by `look` (res, twice=True) -> res (`candidates.judged`, rule
+    50b's windows moved across where the batch has them).
     Returns the results and each window's candidate (0: the paper's window B)."""
     packed = segs.gather_packed(seg, j)
     if segs.n_candidates > 1:  # each window's speed once for every signal
         packed = np.concatenate([packed] + [segs.gather_packed(seg, j, c)[:1]
                                             for c in range(1, segs.n_candidates)])
-    return strongest(classify_windows_packed_candidates(cfg, packed, place, block),
-                     pace_last=segs.pace_window, min_hz=trend_min_hz(cfg))
+    return judged(classify_windows_packed_candidates(cfg, packed, place, block), look,
+                  across=segs.across, pace_last=segs.pace_window, min_hz=trend_min_hz(cfg))
 
 
 def classify_segments(cfg: Config, segs: Segments, place: Placement | None = None,
                       block: int = WINDOW_BLOCK, second_look=None) -> dict[str, np.ndarray]:
     """Per segment (codes, NumPy columns `CODES`), `rhythm.classify_track`'s result: the first
     complete window that says Pedestrian, else window 0 (module doc, step 2). `second_look`
-    (res, track, start) -> res, where given, may change the outcomes of windows (leading axis)
-    from their rows: window w is rows start[w] .. start[w] + N - 1 of the batch's track
-    track[w] (rule 37, `track.twice.batch_second_look`)."""
+    (res, track, start, twice=True) -> res, where given, may change the outcomes of windows
+    (leading axis) from their rows: window w is rows start[w] .. start[w] + N - 1 of the
+    batch's track track[w] (rules 37 and 26, `track.looks.height_looks`; `twice` False on rule
+    50b's windows moved across: rule 26 only)."""
     place = place or Placement()
     S = len(segs)
     nan = np.float32(np.nan)
@@ -173,10 +176,11 @@ def classify_segments(cfg: Config, segs: Segments, place: Placement | None = Non
         count = np.minimum(segs.windows[todo], hi) - lo
         seg = np.repeat(todo, count)
         j = lo + np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
-        res, chosen = classify_candidates(cfg, segs, seg, j, place, block)
-        if second_look is not None:
-            res = second_look(res, segs.owner[seg], segs.first[seg] + segs.k0[seg]
-                              + segs.hop * j)
+        start = segs.first[seg] + segs.k0[seg] + segs.hop * j
+        look = None if second_look is None else \
+            (lambda res, twice=True, track=segs.owner[seg], start=start:
+             second_look(res, track, start, twice=twice))
+        res, chosen = classify_candidates(cfg, segs, seg, j, place, block, look)
         ped = res["verdict"] == Verdict.PEDESTRIAN
         # per segment, its first Pedestrian window of the phase, else (phase 0) window 0
         take = np.zeros(len(seg), bool)

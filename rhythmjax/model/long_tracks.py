@@ -41,7 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import ekf_fused
-from .candidates import strongest, trend_min_hz
+from .candidates import judged, trend_min_hz
 from .ekf import Carry, empty_carry
 from .gates import PaperGates
 from .params import Config
@@ -133,14 +133,15 @@ def _unclassified(reason: int, n_tracked: int) -> dict:
 
 def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
                    window_chunk: int = WINDOW_CHUNK, pace_last: bool = False,
-                   second_look=None) -> dict:
+                   second_look=None, across: int = 0) -> dict:
     """`rhythm.classify_track`'s result for one piece of track (rows not split by Fig. 3) from
     the filter's rows: the first complete window that says Pedestrian, else the first window
     (codes, NumPy scalars). `intensity` (T,), or (T, C) with candidate windows B in columns 1..
     (each window judged by the strongest, `candidates.strongest`; `candidate` its column;
-    `pace_last`: the last column is the pace window's, rule 34). `second_look` (res, start)
-    -> res, where given, may change the outcomes of windows starting at the piece's rows
-    `start` (rule 37, `fast_batch.classify_segments`)."""
+    `pace_last`: the last column is the pace window's, rule 34; `across`: the last that many
+    are rule 50b's windows moved across, `candidates.judged`). `second_look` (res, start,
+    twice=True) -> res, where given, may change the outcomes of windows starting at the
+    piece's rows `start` (rules 37 and 26, `fast_batch.classify_segments`)."""
     n, hop = cfg.thresholds.n, cfg.thresholds.hop_samples
     k0 = int(np.argmax(started)) if len(started) else 0
     n_tracked = int(np.sum(present & started))
@@ -157,12 +158,13 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
         j = np.arange(j0, min(j0 + window_chunk, n_windows))
         rows = (k0 + hop * j)[:, None] + np.arange(n)[None, :]
         signals = intensity[rows] if intensity.ndim == 2 else intensity[rows][..., None]
-        res, chosen = strongest([
+        look = None if second_look is None else \
+            (lambda res, twice=True, at=k0 + hop * j: second_look(res, at, twice=twice))
+        res, chosen = judged([
             classify_window_rows(cfg, signals[..., c], dt[rows], xy[rows], observed[rows],
                                  block=min(window_chunk, WINDOW_BLOCK))
-            for c in range(signals.shape[-1])], pace_last=pace_last, min_hz=trend_min_hz(cfg))
-        if second_look is not None:
-            res = second_look(res, k0 + hop * j)
+            for c in range(signals.shape[-1])], look, across=across, pace_last=pace_last,
+            min_hz=trend_min_hz(cfg))
         res["candidate"] = chosen
         res["window_row"] = k0 + hop * j  # the window's first row in the piece
         if first is None:
@@ -183,12 +185,13 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
 def classify_long_track(cfg: Config, z: np.ndarray, width: np.ndarray, intensity: np.ndarray,
                         dt: np.ndarray, *, segment_rows: int = SEGMENT_ROWS,
                         window_chunk: int = WINDOW_CHUNK, pace_last: bool = False,
-                        second_look=None) -> list[dict]:
+                        second_look=None, across: int = 0) -> list[dict]:
     """One track's rows (no padding: z (T, 2) px, width, intensity (T,) or (T, C) with candidate
     windows B, the last of them the pace window's where `pace_last`, dt (T,) s, dt[0] the
     nominal step) cut at Fig. 3's ends; per piece, in time order, its `classify_piece` result.
     `batch.pick_segments` then picks the track's verdict as for the batch path. `second_look`
-    (res, start) -> res: `classify_piece`'s, `start` the windows' first rows in the track."""
+    (res, start, twice=True) -> res: `classify_piece`'s, `start` the windows' first rows in
+    the track; `across`: `classify_piece`'s."""
     T = len(dt)
     pieces = []
     first = 0
@@ -198,10 +201,10 @@ def classify_long_track(cfg: Config, z: np.ndarray, width: np.ndarray, intensity
                                              segment_rows)
         ds = np.concatenate([[dt0], dt[first + 1:first + m]]).astype(dt.dtype)
         look = None if second_look is None else \
-            (lambda res, start, at=first: second_look(res, at + start))
+            (lambda res, start, twice=True, at=first: second_look(res, at + start, twice=twice))
         piece = classify_piece(cfg, z[first:first + m], intensity[first:first + m], ds,
                                np.ones(m, bool), started, valid, xy, window_chunk, pace_last,
-                               look)
+                               look, across)
         if piece["window_row"] >= 0:  # the deciding window's first row in the track
             piece["window_row"] = first + int(piece["window_row"])
         pieces.append(piece)

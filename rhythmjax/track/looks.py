@@ -35,14 +35,14 @@ def tracker_look(cfg: Config, camera, size: SizeOptions):
     and its N rows): rule 37 (`twice.second_look`), then, with rule 45 (`size.every_window`) and
     rule 26 on, `size.refuse_low` on the window's own rows, so a window judged Pedestrian but
     lower than `min_height_heights` walker heights is refused (too-low) and matching goes on.
-    None when neither applies."""
+    `twice` False (rule 50b's windows moved across): rule 26 only. None when neither applies."""
     first = second_look(cfg, camera, size)
     if not size.every_window or size.min_height_heights <= 0:
         return first
     walker_m = host_float(cfg.width.height)
 
-    def look(out: dict, rows: list) -> dict:
-        out = out if first is None else first(out, rows)
+    def look(out: dict, rows: list, twice: bool = True) -> dict:
+        out = out if first is None else first(out, rows, twice=twice)
         return refuse_low(out, camera, list(rows), walker_m, size)
 
     return look

@@ -169,17 +169,13 @@ class BodyOptions:
     # read from it (model.candidates.strongest). Off: 2 lowered the pace error of own walkers
     # crossing the view (0.034 -> 0.026, 0.029 -> 0.024 Hz on two fresh pools) but raised it on
     # the dev clips, whose walkers all cross it (0.016 -> 0.024 Hz; docs/rules.md, rule 34)
-    across_candidates: bool = False  # rule 50b (issue 16): I(k) summed also in window B moved
+    across_candidates: bool = True  # rule 50b (issue 16): I(k) summed also in window B moved
     # 0.1 W left and right on its row (io.files.ACROSS_CANDIDATES), written as two more tracks'
     # columns after the candidates'; they decide a rhythm window only where (13)-(15) at their
-    # own strongest peak say Pedestrian (never through rule 37; toolkit.match_window). Off until
-    # built into the batch classifier: own crossing walkers' pace 0.0032-0.0041 Hz better on
-    # four fresh pools, radial within 0.0002 Hz, no verdict moved on dev, PETS09, CASIA-B, UCSD
-    # (docs/rules.md, rules 50 and 50b). Needs the pace window off (its channel is the last).
-
-    def __post_init__(self):
-        if self.across_candidates and self.pace_window_widths > 0:
-            raise ValueError("body.across_candidates needs body.pace_window_widths 0 (off)")
+    # own strongest peak say Pedestrian (never through rule 37, through rule 26 as every window;
+    # model.candidates.judged, read by every classifier). Own crossing walkers' pace 0.0032-
+    # 0.0041 Hz better on four fresh pools, radial within 0.0002 Hz, no verdict moved on dev,
+    # PETS09, CASIA-B (docs/rules.md, rules 50 and 50b; on since the fifty-first round)
 
     def candidate_offsets(self) -> tuple[tuple[float, ...] | None, tuple[float, ...]]:
         """(window B's candidate offsets down, in W, or None without candidate windows; its

@@ -118,7 +118,8 @@ def batch_size_look(cfg: Config, batch, options: SizeOptions, then=None):
     (rule 36's rows with `options.top_inside_heights`) is below `options.min_height_heights`
     walker heights over at least `options.min_height_rows` rows is Non-pedestrian, reason
     too-low. Each window is read on its own rows (the tracker's scope "window", rule 26c, for
-    each window rather than the deciding one only). `then` itself when rule 26 is off
+    each window rather than the deciding one only; `twice` False, rule 50b's windows moved
+    across, is handed to `then`). `then` itself when rule 26 is off
     (`min_height_heights` 0) or the batch has no `v_top`."""
     if options.min_height_heights <= 0 or getattr(batch, "v_top", None) is None:
         return then
@@ -126,9 +127,9 @@ def batch_size_look(cfg: Config, batch, options: SizeOptions, then=None):
     walker_m = host_float(cfg.width.height)
     n = int(cfg.thresholds.n)
 
-    def look(res: dict, track: np.ndarray, start: np.ndarray) -> dict:
+    def look(res: dict, track: np.ndarray, start: np.ndarray, twice: bool = True) -> dict:
         if then is not None:
-            res = then(res, track, start)
+            res = then(res, track, start, twice=twice)
         verdict = np.atleast_1d(np.asarray(res["verdict"]))
         ped = np.flatnonzero(verdict == Verdict.PEDESTRIAN)
         if not ped.size:

@@ -27,7 +27,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..model.candidates import strongest, trend_min_hz
+from ..model.candidates import judged, trend_min_hz
 from ..model.ekf import empty_carry
 from ..model.flat_tree import join, split
 from ..model.params import Config, walking_pace_band, walking_top_speed
@@ -223,36 +223,26 @@ def _judged(cfg: Config, obj, window, sigs, rest: tuple, candidates: bool
             ) -> tuple[dict, int | None]:
     """(outcome, chosen candidate or None) of one rhythm window of `obj` on its I(k) channels
     `sigs` (window B's, then each candidate's and the pace window's; `rest` the times, ground
-    track, valid flag and foot points of `classify_window_jit`), then `obj`'s second look.
-    Rule 50b (`obj.across` > 0: the last that many channels are windows moved across): those
-    decide only where the strongest of all is one of them and says Pedestrian without the look;
-    else the window is judged on the channels before them."""
-    across = getattr(obj, "across", 0) if candidates else 0
-    if across:
-        out, chosen = _strongest(cfg, obj, sigs, rest, True)
-        if chosen >= len(sigs) - across and int(out["verdict"]) == Verdict.PEDESTRIAN:
-            return out, chosen
-        sigs = sigs[:-across]
-    out, chosen = _strongest(cfg, obj, sigs, rest, candidates and len(sigs) > 1)
+    track, valid flag and foot points of `classify_window_jit`), after `obj`'s second look.
+    With candidates every channel is judged in one call and `model.candidates.judged` keeps
+    the strongest; `obj.across` > 0 (rule 50b): the last that many channels are windows moved
+    across, deciding only where the strongest and Pedestrian (rule 37's look not taken)."""
     look = getattr(obj, "second_look", None)
-    return (out if look is None else look(out, window)), chosen
+    if not (candidates and len(sigs) > 1):
+        out = _outcome(classify_window_jit(cfg, jnp.asarray(sigs[0], jnp.float32), *rest))
+        return (out if look is None else look(out, window)), None
+    every = _outcome(classify_window_candidates_jit(cfg, jnp.asarray(np.stack(sigs), jnp.float32),
+                                                    *rest))
 
+    def windows_look(res: dict, twice: bool = True) -> dict:  # one window, leading axis 1
+        one = look({name: v[0] for name, v in res.items()}, window, twice=twice)
+        return {name: np.asarray(v)[None] for name, v in one.items()}
 
-def _strongest(cfg: Config, obj, sigs, rest: tuple, candidates: bool
-               ) -> tuple[dict, int | None]:
-    """`_judged` before the second look: one channel, or the strongest of several."""
-    if not candidates:
-        out, chosen = _outcome(classify_window_jit(cfg, jnp.asarray(sigs[0], jnp.float32),
-                                                   *rest)), None
-    else:  # every channel judged in one call, the strongest kept
-        every = _outcome(classify_window_candidates_jit(
-            cfg, jnp.asarray(np.stack(sigs), jnp.float32), *rest))
-        merged, best = strongest([{f: v[c][None] for f, v in every.items()}
-                                  for c in range(len(sigs))],
-                                 pace_last=getattr(obj, "pace_window", False),
-                                 min_hz=trend_min_hz(cfg))
-        out, chosen = {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}, int(best[0])
-    return out, chosen
+    merged, best = judged([{f: v[c][None] for f, v in every.items()} for c in range(len(sigs))],
+                          None if look is None else windows_look,
+                          across=getattr(obj, "across", 0),
+                          pace_last=getattr(obj, "pace_window", False), min_hz=trend_min_hz(cfg))
+    return {name: np.asarray(merged[name][0]) for name in RESULT_FIELDS}, int(best[0])
 
 
 def match_window(cfg: Config, obj: RhythmWindows, *, final: bool = False,

@@ -149,20 +149,23 @@ def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: f
 def second_look(cfg: Config, camera, options: SizeOptions):
     """A tracked object's `second_look` (`toolkit.match_window` calls it on each window) for a
     tracker with `cfg`, `camera` (`camera_np.camera_tuple`) and size `options`: `judge_at_half`
-    on a window's outcome and rows; None when rule 37 is off (`options.twice_pace_heights` 0)."""
+    on a window's outcome and rows (`twice` False: the outcome as it is, rule 50b's windows moved
+    across); None when rule 37 is off (`options.twice_pace_heights` 0)."""
     if options.twice_pace_heights <= 0:
         return None
     walker_m = host_float(cfg.width.height)
-    return lambda out, rows: judge_at_half(out, cfg, rows, camera, walker_m, options)
+    return lambda out, rows, twice=True: (judge_at_half(out, cfg, rows, camera, walker_m, options)
+                                          if twice else out)
 
 
 def batch_second_look(cfg: Config, batch, options: SizeOptions):
     """`model.batch.classify_tracks`' `second_look` for `batch` (a `TrackBatch` with top rows
-    `v_top`): a callable (res, track, start) -> res that judges the windows of `res` (leading
-    window axis; window w holds rows start[w] .. start[w] + N - 1 of track track[w]) as
-    `judge_at_half` does, the rows' foot points from `batch.z` (and, with
-    `options.twice_pace_edge`, the rows at the image's edge from `batch.top_at_edge` where the
-    batch has them). None when rule 37 is off or the batch has no `v_top`."""
+    `v_top`): a callable (res, track, start, twice=True) -> res that judges the windows of `res`
+    (leading window axis; window w holds rows start[w] .. start[w] + N - 1 of track track[w])
+    as `judge_at_half` does (`twice` False: `res` as it is), the rows' foot points from
+    `batch.z` (and, with `options.twice_pace_edge`, the rows at the image's edge from
+    `batch.top_at_edge` where the batch has them). None when rule 37 is off or the batch has no
+    `v_top`."""
     if options.twice_pace_heights <= 0 or getattr(batch, "v_top", None) is None:
         return None
     camera = camera_tuple(cfg.camera)
@@ -170,7 +173,9 @@ def batch_second_look(cfg: Config, batch, options: SizeOptions):
     n = int(cfg.thresholds.n)
     edges = getattr(batch, "top_at_edge", None) if options.twice_pace_edge else None
 
-    def look(res: dict, track: np.ndarray, start: np.ndarray) -> dict:
+    def look(res: dict, track: np.ndarray, start: np.ndarray, twice: bool = True) -> dict:
+        if not twice:
+            return res
         which = reads_twice(res, cfg, options.twice_pace_sub)
         for w in np.flatnonzero(which):
             rows = slice(int(start[w]), int(start[w]) + n)
