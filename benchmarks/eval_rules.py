@@ -98,10 +98,11 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   (`benchmarks/fit_height_threshold.py`); count_twice_fitted: counting's, the same values.
 - count_low: counting's `verdicts.min_height_heights` 0.5 vs 0 (rule 26 in count's verdicts:
   a window judged Pedestrian lower than half a walker is refused, too-low).
-- across_solo: the tracker's `body.across_candidates` True vs False (the default; rule 50b:
-  window B moved 0.1 W left and right as two more candidate windows B, deciding only by
-  (13)-(15) at their own peak, never through rule 37). across: the same windows deciding as
-  the tracker's own candidates do, rule 37 on them too (rule 50; the option and a patch).
+- across_solo: the tracker's `body.across_candidates` True (the default since the fifty-first
+  round) vs False (rule 50b: window B moved 0.1 W left and right as two more candidate windows
+  B, deciding only by (13)-(15) at their own peak, never through rule 37). across: the same
+  windows deciding as the tracker's own candidates do, rule 37 on them too (rule 50; the option
+  and a patch).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

@@ -232,7 +232,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "halves_around": (), "mean_trend": TRACKER_SOURCES,
               "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": (),
               "mass_column": (), "mass_crossing": (), "twice_sub": (), "across": (),
-              "across_solo": ()}
+              "across_solo": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",
