@@ -19,6 +19,7 @@ classifier measured apart from the tracker. Nothing here is chosen on these sour
   track's verdict; walkers / non-walkers judged Pedestrian and the walkers' pace MAE.
 
 `--set SECTION.KEY=VALUE` (repeatable) writes a key into every config, as in eval_all.py;
+`--flag=FLAG` (repeatable) adds a `rhythm` flag to every run (e.g. `--no-across-candidates`);
 `--twice-pace-heights H` and `--min-height-heights H` are passed to every run (rules 37 and 26;
 0: off). Every run is
 `rhythmjax rhythm VIDEO --boxes BOXES -c CONFIG -o DIR --no-camera-check` (the check only adds
@@ -249,8 +250,11 @@ def main(argv=None) -> int:
     p.add_argument("-o", "--output", default="eval_rhythm_boxes.json")
     p.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                    help="override a config key in every run (eval_all.py's --set)")
+    p.add_argument("--flag", action="append", default=[], metavar="FLAG",
+                   help="a further `rhythm` flag in every run (--flag=--no-across-candidates)")
     a = p.parse_args(argv)
     SETS[:] = parse_set(a.set)
+    EXTRA.extend(a.flag)
     for flag in ("twice_pace_heights", "min_height_heights"):
         if getattr(a, flag) is not None:
             EXTRA.extend(["--" + flag.replace("_", "-"), str(getattr(a, flag))])

@@ -134,3 +134,108 @@ def test_the_batch_classifier_gives_the_trackers_verdict(tmp_path, segment_rows)
     assert list(again["verdict"]) == list(verdicts["verdict"]) == ["pedestrian"]
     for k in ("pace_hz", "stride_m"):
         assert float(again[k][0]) == pytest.approx(float(verdicts[k][0]), abs=1e-5), k
+
+
+def _loop(prev, cur, u, v, W):
+    """Window B by its definition in float64 loops (round = floor(x + 0.5), clipped)."""
+    import math
+
+    H, Wd = cur.shape
+    wb, hb = max(1, math.floor(W + 0.5)), max(1, math.floor(W / 5 + 0.5))
+    c0, r1 = math.floor(u - wb / 2 + 0.5), math.floor(v + 0.5)
+    return float(sum(abs(float(cur[r, c]) - float(prev[r, c]))
+                     for r in range(r1 - hb + 1, r1 + 1) for c in range(c0, c0 + wb)
+                     if 0 <= r < H and 0 <= c < Wd))
+
+
+def test_rhythm_verb_samples_the_windows_moved_across(tmp_path, capsys):
+    """`rhythm --boxes` (on by default, as the tracker): the tracks file's two columns, each
+    the float64 loop at window B moved 0.1 W left or right; `--no-across-candidates` writes
+    neither and the vertical candidates are unchanged."""
+    import cv2
+
+    from rhythmjax.cli.main import main as cli_main
+    from rhythmjax.io import read_table
+    from rhythmjax.io.files import ACROSS_CANDIDATES
+    from rhythmjax.io.mot import write_mot
+    from rhythmjax.track.boxes import window_widths
+
+    rng = np.random.default_rng(50)
+    video = tmp_path / "frames"
+    video.mkdir()
+    ground = 100 + rng.integers(0, 40, (512, 512))
+    frames = []
+    for _ in range(8):  # a textured still ground, noise under the motion threshold at the box
+        g = ground.copy()
+        g[150:450, 100:400] += rng.integers(0, 12, (300, 300))
+        frames.append(g.astype(np.uint8))
+    for i, g in enumerate(frames):
+        cv2.imwrite(str(video / f"{i:03d}.png"), g)
+    gt = tmp_path / "gt.txt"
+    k = np.arange(8)
+    write_mot(gt, {"frame": k + 1, "id": np.ones(8, np.int64), "bb_left": 200.0 + 2 * k,
+                   "bb_top": np.full(8, 300.0), "bb_width": np.full(8, 30.0),
+                   "bb_height": np.full(8, 90.0)})
+    base = ["rhythm", str(video), "--boxes", str(gt), "--json", "--no-camera-check", "--fps",
+            "15"]
+    on, off = tmp_path / "on", tmp_path / "off"
+    assert cli_main(base + ["-o", str(on)]) == 0
+    assert cli_main(base + ["-o", str(off), "--no-across-candidates"]) == 0
+    capsys.readouterr()
+    t = read_table(on / "tracks.parquet", ["frame", "u", "v", "intensity"],
+                   list(CANDIDATE_COLUMNS + ACROSS_COLUMNS))
+    W = window_widths(CFG, t["u"], t["v"])
+    for name, off_w in ACROSS_CANDIDATES:
+        assert np.isnan(t[name][0]), name
+        for i in range(1, 8):
+            fr = int(t["frame"][i])
+            assert t[name][i] == _loop(frames[fr - 1], frames[fr], t["u"][i] + off_w * W[i],
+                                       t["v"][i], W[i]), (name, i)
+    assert np.any(t[ACROSS_COLUMNS[0]][1:] != t[ACROSS_COLUMNS[1]][1:])
+    plain = read_table(off / "tracks.parquet", ["intensity"],
+                       list(CANDIDATE_COLUMNS + ACROSS_COLUMNS))
+    assert not set(ACROSS_COLUMNS) & set(plain)
+    for name in ("intensity",) + CANDIDATE_COLUMNS:
+        np.testing.assert_array_equal(plain[name], t[name])
+
+
+def test_rhythm_drops_a_tracks_files_pace_window(tmp_path, capsys, monkeypatch):
+    """A tracks file given as BOXES that carries `intensity_wide` (rule 34): `rhythm` samples its
+    own windows (the file's candidate columns are dropped) and judges them without a pace
+    window: the batch it classifies has the two across columns last and no pace window, and
+    the verdicts equal those of the same file without the column."""
+    import cv2
+
+    import rhythmjax.cli.rhythm as rhythm_verb
+    from rhythmjax.cli.common import TRACK_ORDER
+    from rhythmjax.cli.main import main as cli_main
+    from rhythmjax.sim import scene as synth
+    from rhythmjax.track import track_frames
+    from rhythmjax.track.columns import candidate_columns
+
+    act = synth.walker(-3.4, 12.0, 0.0, pace_hz=1.9, step_length_m=0.62)
+    sc = synth.render_scene(3, synth.SceneSpec(n_frames=110, actors=(act,), camera=CFG.camera))
+    video = tmp_path / "frames"
+    video.mkdir()
+    for i, f in enumerate(sc.frames):
+        cv2.imwrite(str(video / f"{i:03d}.png"), f)
+    tracks, _, _, _ = track_frames(CFG, ((i, i / sc.fps, f) for i, f in enumerate(sc.frames)),
+                                   progress=False)
+    order = TRACK_ORDER + candidate_columns(tracks)
+    plain, wide = tmp_path / "plain.csv", tmp_path / "wide.csv"
+    write_table(str(plain), tracks, order)
+    write_table(str(wide), {**tracks, PACE_COLUMN: tracks["intensity"]}, order + [PACE_COLUMN])
+    assert read_tracks(str(wide)).pace_window
+    batches, inner = [], rhythm_verb.classify_tracks
+    monkeypatch.setattr(rhythm_verb, "classify_tracks",
+                        lambda cfg, batch, **kw: batches.append(batch) or inner(cfg, batch, **kw))
+    got = []
+    for boxes in (plain, wide):
+        out = tmp_path / boxes.stem
+        assert cli_main(["rhythm", str(video), "--boxes", str(boxes), "-o", str(out), "--json",
+                         "--no-camera-check", "--fps", "15"]) == 0
+        capsys.readouterr()
+        got.append((out / "verdicts.csv").read_text())
+    assert got[0] == got[1] and "pedestrian" in got[1]
+    for b in batches:
+        assert (b.pace_window, b.across, b.candidates.shape[-1]) == (False, 2, 5)

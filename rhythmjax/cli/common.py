@@ -69,6 +69,18 @@ def add_window_candidates(p: argparse.ArgumentParser, default: bool) -> None:
                    "by the candidate whose strongest spectral peak is highest")
 
 
+def add_across_candidates(p: argparse.ArgumentParser, default: bool) -> None:
+    """--across-candidates / --no-across-candidates (rule 50b: window B moved across its row as
+    two more candidates); `default` the verb's options' default."""
+    from ..io.files import ACROSS_CANDIDATES
+
+    p.add_argument("--across-candidates", action=argparse.BooleanOptionalAction,
+                   default=default, help="also sum I(k) in window B moved by "
+                   + ", ".join(f"{o:+g} W ({c})" for c, o in ACROSS_CANDIDATES)
+                   + " (negative: left), written as tracks columns; they decide a rhythm window "
+                   "only where they say Pedestrian at their own strongest peak")
+
+
 def add_window_per_pixel(p: argparse.ArgumentParser, default: bool) -> None:
     """--window-per-pixel / --no-window-per-pixel (rule 35: I(k) as the mean of D over window
     B, grey levels per pixel, instead of its sum); `default` the verb's options' default."""

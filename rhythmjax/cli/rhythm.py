@@ -15,7 +15,7 @@ from ..io import (
     to_batch,
     write_table,
 )
-from ..io.files import CANDIDATE_COLUMNS, WINDOW_CANDIDATES
+from ..io.files import ACROSS_CANDIDATES, ACROSS_COLUMNS, CANDIDATE_COLUMNS, WINDOW_CANDIDATES
 from ..io.mot import read_mot_numbered
 from ..model.batch import VERDICT_COLUMNS, classify_tracks, summarise
 from ..model.params import ConfigError
@@ -23,6 +23,7 @@ from ..track.boxes import box_intensities, check_in_image, tracks_from_mot, wind
 from ..track.looks import height_looks
 from ..track.options import BodyOptions
 from .common import (
+    add_across_candidates,
     add_camera_check,
     add_common,
     add_height_rules,
@@ -85,6 +86,9 @@ def cmd_rhythm(args) -> int:
     --window-candidates: I(k) also in window B moved by -0.2, -0.1 and +0.1 W (the tracker's
     body.window_candidates; columns intensity_up20, intensity_up10, intensity_down10), and each
     rhythm window judged by the candidate with the strongest spectral peak.
+    --across-candidates: I(k) also in window B moved 0.1 W left and right (the tracker's
+    body.across_candidates, rule 50b; columns intensity_left10, intensity_right10), deciding a
+    rhythm window only where they say Pedestrian at their own strongest peak.
     --window-per-pixel: each I(k) the mean of the difference over its window instead of the
     sum (the tracker's body.window_per_pixel, rule 35).
     --twice-pace-heights H: a window whose strongest peak is twice a walker's pace (two bursts
@@ -116,8 +120,9 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
         check_in_image(tracks, src.width, src.height, mot, args.box_scale)
         W = window_widths(cfg, tracks.u, tracks.v)
         offsets = tuple(off for _, off in WINDOW_CANDIDATES) if args.window_candidates else ()
+        across = tuple(off for _, off in ACROSS_CANDIDATES) if args.across_candidates else ()
         sig = box_intensities(src, tracks.frame, tracks.u, tracks.v, W, offsets=offsets,
-                              mean=args.window_per_pixel)
+                              across=across, mean=args.window_per_pixel)
         reading_check(args, src)
     late = np.flatnonzero(tracks.frame >= sig.n_frames)
     if late.size:
@@ -127,7 +132,8 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
         raise BadInput(args.boxes, f"frame {int(tracks.frame[k])} (0-based) is past the video's "
                        f"last ({sig.n_frames - 1}; {args.video})", **where)
     tracks.intensity = sig.intensity
-    tracks.candidates = sig.candidates  # None without --window-candidates (a file's are dropped)
+    tracks.candidates = sig.candidates  # None without either option (a file's are dropped)
+    tracks.across, tracks.pace_window = len(across), False
     n = cfg.thresholds.n
     batch = to_batch(tracks, max_gap_frames=max(1, round(float(cfg.thresholds.predict_timeout)
                                                          * cfg.camera.fps)), min_len=n)
@@ -149,8 +155,9 @@ def _rhythm(args, outs, out_tracks, out_verdicts) -> int:
             cols[name] = getattr(tracks, name)
             track_order.append(name)
     if sig.candidates is not None:
-        cols.update({c: sig.candidates[:, j] for j, c in enumerate(CANDIDATE_COLUMNS)})
-        track_order += list(CANDIDATE_COLUMNS)
+        names = (CANDIDATE_COLUMNS if offsets else ()) + (ACROSS_COLUMNS if across else ())
+        cols.update({c: sig.candidates[:, j] for j, c in enumerate(names)})
+        track_order += list(names)
     write_table(outs.path(out_tracks), cols, track_order)
     write_table(outs.path(out_verdicts), verdicts, order)
     sampled = int(np.sum(np.isfinite(sig.intensity)))
@@ -193,6 +200,7 @@ def register(sub, formatter=None) -> None:
     p.add_argument("--fps", type=fps_arg, help="frame rate (frames/s): --fps, else the config's "
                    "camera.fps, else the file's; needed for a frame folder without camera.fps")
     add_window_candidates(p, BodyOptions().window_candidates)
+    add_across_candidates(p, BodyOptions().across_candidates)
     add_window_per_pixel(p, BodyOptions().window_per_pixel)
     add_height_rules(p)
     add_camera_check(p)

@@ -36,7 +36,7 @@ import numpy as np
 from ..io import BadInput, Tracks
 from ..model.params import Config
 from ..vision import detect, stabilise
-from ..vision.window_b import window_b_candidates
+from ..vision.window_b import window_b_across, window_b_candidates
 from .options import MotionOptions
 
 
@@ -137,8 +137,9 @@ def window_widths(cfg: Config, u: np.ndarray, v: np.ndarray) -> np.ndarray:
 class BoxSignal:
     """I(k) per row (grey levels; NaN = no sample), the frames read from the video, and the
     frames that gave no sample: `glitch` (duplicate or global change) and `bad` (not decoded).
-    `candidates`: (rows, K) float64, I(k) of window B moved by each of K offsets (NaN exactly
-    where `intensity` is); None when no offsets were asked for."""
+    `candidates`: (rows, K) float64, I(k) of window B moved down by each offset, then across
+    by each of `box_intensities`' `across` (NaN exactly where `intensity` is); None when
+    neither was asked for."""
 
     intensity: np.ndarray
     n_frames: int
@@ -149,7 +150,8 @@ class BoxSignal:
 
 def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.ndarray,
                     W: np.ndarray, *, motion: MotionOptions = MotionOptions(),
-                    offsets: Sequence[float] = (), mean: bool = False) -> BoxSignal:
+                    offsets: Sequence[float] = (), across: Sequence[float] = (),
+                    mean: bool = False) -> BoxSignal:
     """I(k) of window B for rows (frame, u, v, W) (0-based frame index, px) over the
     `(index, t, gray | None)` stream `frames`, one pass, holding two frames: the sum of
     D = |gray_k - gray_(k-1)| over W x W/5 px ending at the foot row (`window_b_intensity`).
@@ -159,13 +161,15 @@ def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.nd
     shake is compensated as in the tracker (`motion.stabilise`, `vision.stabilise.Stabiliser`),
     on the frames with rows to sample (a fixed camera's D is unchanged). `offsets` (walker widths
     W, negative: up): also I(k) of window B moved down by offset x W px, per offset
-    (`vision.window_b.window_b_candidates`), as `BoxSignal.candidates`. `mean`: each I(k) the
+    (`vision.window_b.window_b_candidates`), then per offset of `across` window B moved right by
+    offset x W px (rule 50b, `window_b_across`), as `BoxSignal.candidates`. `mean`: each I(k) the
     mean of D over its window (grey levels per pixel; the tracker's `body.window_per_pixel`,
     rule 35)."""
     frame = np.asarray(frame, np.int64)
     out = np.full(frame.shape, np.nan)
-    offsets = tuple(float(o) for o in offsets)
-    cand = np.full(frame.shape + (len(offsets),), np.nan) if offsets else None
+    offsets, across = tuple(float(o) for o in offsets), tuple(float(o) for o in across)
+    n_cand = len(offsets) + len(across)
+    cand = np.full(frame.shape + (n_cand,), np.nan) if n_cand else None
     order = np.argsort(frame, kind="stable")
     fs = frame[order]
     cuts = np.flatnonzero(np.r_[True, fs[1:] != fs[:-1]]) if len(fs) else np.zeros(0, np.int64)
@@ -194,8 +198,9 @@ def box_intensities(frames: Iterable, frame: np.ndarray, u: np.ndarray, v: np.nd
                         out[r] = detect.window_b_intensity(D, float(u[r]), float(v[r]),
                                                            float(W[r]), mean=mean)
                         if cand is not None:
-                            cand[r] = window_b_candidates(D, float(u[r]), float(v[r]),
-                                                          float(W[r]), offsets, mean=mean)
+                            at = (D, float(u[r]), float(v[r]), float(W[r]))
+                            cand[r] = window_b_candidates(*at, offsets, mean=mean) + \
+                                window_b_across(*at, across, mean=mean)
         prev = gray
         if index >= last:
             break
