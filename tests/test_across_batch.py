@@ -149,9 +149,9 @@ def _loop(prev, cur, u, v, W):
 
 
 def test_rhythm_verb_samples_the_windows_moved_across(tmp_path, capsys):
-    """`rhythm --boxes` (on by default, as the tracker): the tracks file's two columns, each
-    the float64 loop at window B moved 0.1 W left or right; `--no-across-candidates` writes
-    neither and the vertical candidates are unchanged."""
+    """`rhythm --boxes --across-candidates`: the tracks file's two columns, each the float64
+    loop at window B moved 0.1 W left or right; by default (off behind boxes, decision 51b) and
+    with `--no-across-candidates` neither, and the vertical candidates are unchanged."""
     import cv2
 
     from rhythmjax.cli.main import main as cli_main
@@ -178,9 +178,10 @@ def test_rhythm_verb_samples_the_windows_moved_across(tmp_path, capsys):
                    "bb_height": np.full(8, 90.0)})
     base = ["rhythm", str(video), "--boxes", str(gt), "--json", "--no-camera-check", "--fps",
             "15"]
-    on, off = tmp_path / "on", tmp_path / "off"
-    assert cli_main(base + ["-o", str(on)]) == 0
+    on, off, default = tmp_path / "on", tmp_path / "off", tmp_path / "default"
+    assert cli_main(base + ["-o", str(on), "--across-candidates"]) == 0
     assert cli_main(base + ["-o", str(off), "--no-across-candidates"]) == 0
+    assert cli_main(base + ["-o", str(default)]) == 0
     capsys.readouterr()
     t = read_table(on / "tracks.parquet", ["frame", "u", "v", "intensity"],
                    list(CANDIDATE_COLUMNS + ACROSS_COLUMNS))
@@ -192,11 +193,12 @@ def test_rhythm_verb_samples_the_windows_moved_across(tmp_path, capsys):
             assert t[name][i] == _loop(frames[fr - 1], frames[fr], t["u"][i] + off_w * W[i],
                                        t["v"][i], W[i]), (name, i)
     assert np.any(t[ACROSS_COLUMNS[0]][1:] != t[ACROSS_COLUMNS[1]][1:])
-    plain = read_table(off / "tracks.parquet", ["intensity"],
-                       list(CANDIDATE_COLUMNS + ACROSS_COLUMNS))
-    assert not set(ACROSS_COLUMNS) & set(plain)
-    for name in ("intensity",) + CANDIDATE_COLUMNS:
-        np.testing.assert_array_equal(plain[name], t[name])
+    for d in (off, default):
+        plain = read_table(d / "tracks.parquet", ["intensity"],
+                           list(CANDIDATE_COLUMNS + ACROSS_COLUMNS))
+        assert not set(ACROSS_COLUMNS) & set(plain)
+        for name in ("intensity",) + CANDIDATE_COLUMNS:
+            np.testing.assert_array_equal(plain[name], t[name])
 
 
 def test_rhythm_drops_a_tracks_files_pace_window(tmp_path, capsys, monkeypatch):
@@ -233,7 +235,7 @@ def test_rhythm_drops_a_tracks_files_pace_window(tmp_path, capsys, monkeypatch):
     for boxes in (plain, wide):
         out = tmp_path / boxes.stem
         assert cli_main(["rhythm", str(video), "--boxes", str(boxes), "-o", str(out), "--json",
-                         "--no-camera-check", "--fps", "15"]) == 0
+                         "--no-camera-check", "--fps", "15", "--across-candidates"]) == 0
         capsys.readouterr()
         got.append((out / "verdicts.csv").read_text())
     assert got[0] == got[1] and "pedestrian" in got[1]

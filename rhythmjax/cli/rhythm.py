@@ -88,7 +88,8 @@ def cmd_rhythm(args) -> int:
     rhythm window judged by the candidate with the strongest spectral peak.
     --across-candidates: I(k) also in window B moved 0.1 W left and right (the tracker's
     body.across_candidates, rule 50b; columns intensity_left10, intensity_right10), deciding a
-    rhythm window only where they say Pedestrian at their own strongest peak.
+    rhythm window only where they say Pedestrian at their own strongest peak. Off here (on in
+    the tracker, whose foot column scatters about the feet more than a box's).
     --window-per-pixel: each I(k) the mean of the difference over its window instead of the
     sum (the tracker's body.window_per_pixel, rule 35).
     --twice-pace-heights H: a window whose strongest peak is twice a walker's pace (two bursts
@@ -200,7 +201,8 @@ def register(sub, formatter=None) -> None:
     p.add_argument("--fps", type=fps_arg, help="frame rate (frames/s): --fps, else the config's "
                    "camera.fps, else the file's; needed for a frame folder without camera.fps")
     add_window_candidates(p, BodyOptions().window_candidates)
-    add_across_candidates(p, BodyOptions().across_candidates)
+    add_across_candidates(p, False)  # off here, on in the tracker: behind the own truth boxes
+    # the windows moved across read the crossing walkers' pace worse (docs/rhythm_boxes.md)
     add_window_per_pixel(p, BodyOptions().window_per_pixel)
     add_height_rules(p)
     add_camera_check(p)
