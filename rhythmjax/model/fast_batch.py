@@ -80,7 +80,7 @@ class Segments:
         extra = rounds[0].rest.candidates if rounds else None
         self.n_candidates = 1 + (0 if extra is None else int(extra.shape[-1]))
         self.pace_window = bool(rounds and rounds[0].rest.pace_window)  # its last column
-        self.across = int(rounds[0].rest.across) if rounds else 0  # rule 50b: the last columns
+        self.across = int(rounds[0].rest.across) if rounds else 0  # rule 50b: columns before it
 
     def __len__(self) -> int:
         return len(self.owner)

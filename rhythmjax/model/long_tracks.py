@@ -138,8 +138,8 @@ def classify_piece(cfg: Config, z, intensity, dt, present, started, valid, xy,
     the filter's rows: the first complete window that says Pedestrian, else the first window
     (codes, NumPy scalars). `intensity` (T,), or (T, C) with candidate windows B in columns 1..
     (each window judged by the strongest, `candidates.strongest`; `candidate` its column;
-    `pace_last`: the last column is the pace window's, rule 34; `across`: the last that many
-    are rule 50b's windows moved across, `candidates.judged`). `second_look` (res, start,
+    `pace_last`: the last column is the pace window's, rule 34; `across`: that many columns
+    before it are rule 50b's windows moved across, `candidates.judged`). `second_look` (res, start,
     twice=True) -> res, where given, may change the outcomes of windows starting at the
     piece's rows `start` (rules 37 and 26, `fast_batch.classify_segments`)."""
     n, hop = cfg.thresholds.n, cfg.thresholds.hop_samples

@@ -173,9 +173,10 @@ class BodyOptions:
     # 0.1 W left and right on its row (io.files.ACROSS_CANDIDATES), written as two more tracks'
     # columns after the candidates'; they decide a rhythm window only where (13)-(15) at their
     # own strongest peak say Pedestrian (never through rule 37, through rule 26 as every window;
-    # model.candidates.judged, read by every classifier). Own crossing walkers' pace 0.0032-
-    # 0.0041 Hz better on four fresh pools, radial within 0.0002 Hz, no verdict moved on dev,
-    # PETS09, CASIA-B (docs/rules.md, rules 50 and 50b; on since the fifty-first round)
+    # model.candidates.judged, read by every classifier). Own crossing walkers' pace 0.0025-
+    # 0.0041 Hz better on five fresh pools, radial within 0.0002 Hz, no verdict moved on dev,
+    # PETS09, CASIA-B (docs/rules.md, rules 50 and 50b; on since the fifty-first round, its
+    # decision 51). May be on with the pace window (whose channel stays last)
 
     def candidate_offsets(self) -> tuple[tuple[float, ...] | None, tuple[float, ...]]:
         """(window B's candidate offsets down, in W, or None without candidate windows; its
