@@ -17,7 +17,12 @@ import pytest
 
 from rhythmjax.cli.main import main as cli_main
 from rhythmjax.io import read_table
-from rhythmjax.io.files import ACROSS_COLUMNS, CANDIDATE_COLUMNS, WINDOW_CANDIDATES
+from rhythmjax.io.files import (
+    ACROSS_CANDIDATES,
+    ACROSS_COLUMNS,
+    CANDIDATE_COLUMNS,
+    WINDOW_CANDIDATES,
+)
 from rhythmjax.io.mot import write_mot
 from rhythmjax.model.camera import project
 from rhythmjax.model.params import Config
@@ -434,6 +439,25 @@ def test_rhythm_verb_writes_the_candidate_columns(tmp_path, capsys):
         cols = read_table(d / "tracks.parquet", ["intensity"], list(CANDIDATE_COLUMNS))
         assert not set(CANDIDATE_COLUMNS) & set(cols), d
         np.testing.assert_array_equal(cols["intensity"], t["intensity"])
+    # rule 50b's windows moved across (`--across-candidates`; off behind boxes, decision 51b):
+    # two more columns after the three, each the float64 loop at window B moved 0.1 W left or
+    # right; the default and the others without them (checked above and here)
+    across = tmp_path / "across"
+    assert cli_main(base + ["-o", str(across), "--across-candidates"]) == 0
+    capsys.readouterr()
+    got = read_table(across / "tracks.parquet", ["intensity"],
+                     list(CANDIDATE_COLUMNS + ACROSS_COLUMNS))
+    assert not set(ACROSS_COLUMNS) & set(read_table(default / "tracks.parquet", ["intensity"],
+                                                    list(ACROSS_COLUMNS)))
+    for name in ("intensity",) + CANDIDATE_COLUMNS:
+        np.testing.assert_array_equal(got[name], t[name])
+    for name, off in ACROSS_CANDIDATES:
+        assert math.isnan(got[name][0]), name
+        for i in range(1, 8):
+            fr = int(t["frame"][i])
+            assert got[name][i] == _loop(frames[fr - 1], frames[fr], t["u"][i] + off * W[i],
+                                         t["v"][i], W[i]), (name, i)
+    assert np.any(got[ACROSS_COLUMNS[0]][1:] != got[ACROSS_COLUMNS[1]][1:])
 
 
 def test_a_trend_does_not_win_the_candidates(signals):
