@@ -140,7 +140,8 @@ def test_rhythm_drops_a_tracks_files_pace_window(tmp_path, capsys, monkeypatch):
     """A tracks file given as BOXES that carries `intensity_wide` (rule 34): `rhythm` samples its
     own windows (the file's candidate columns are dropped) and judges them without a pace
     window: the batch it classifies has the two across columns last and no pace window, and
-    the verdicts equal those of the same file without the column."""
+    the verdicts equal those of the same file without the column; by default (across off
+    behind boxes) the file's across columns are not counted either."""
     import cv2
 
     import rhythmjax.cli.rhythm as rhythm_verb
@@ -176,3 +177,9 @@ def test_rhythm_drops_a_tracks_files_pace_window(tmp_path, capsys, monkeypatch):
     assert got[0] == got[1] and "pedestrian" in got[1]
     for b in batches:
         assert (b.pace_window, b.across, b.candidates.shape[-1]) == (False, 2, 5)
+    # the file's across columns are dropped with the rest: by default `rhythm` samples none
+    batches.clear()
+    assert cli_main(["rhythm", str(video), "--boxes", str(wide), "-o", str(tmp_path / "d"),
+                     "--json", "--no-camera-check", "--fps", "15"]) == 0
+    capsys.readouterr()
+    assert [(b.pace_window, b.across, b.candidates.shape[-1]) for b in batches] == [(False, 0, 3)]
