@@ -4,7 +4,8 @@ them (issue 16; a study's helper, not the library).
 `replay` re-judges every rhythm window of a tracked object as `rhythmjax.track.toolkit.
 match_window` does: N rows, one window every hop, windows with more than a quarter of their
 samples missing skipped, each window judged once per candidate window B and the strongest peak
-kept (`rhythmjax.model.candidates.strongest`), the first Pedestrian window deciding. A rule
+kept (`rhythmjax.model.candidates.judged`, the windows moved across deciding only where they say
+Pedestrian; without the tracker's second look), the first Pedestrian window deciding. A rule
 (`RULES`) is a post hoc test on a Pedestrian window: False refuses it.
 """
 
@@ -15,7 +16,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from rhythmjax.model.candidates import strongest, trend_min_hz
+from rhythmjax.model.candidates import judged, trend_min_hz
 from rhythmjax.model.rhythm import (
     MAX_MISSING_FRACTION,
     classify_window_candidates_jit,
@@ -69,8 +70,11 @@ def judge(cfg, obj, k: int, candidates: bool = True,
         every = _outcome(classify_window_candidates_jit(
             cfg, jnp.asarray(np.stack(sigs), jnp.float32), tt, xy, jnp.asarray(True), obs))
         outs = [{f: v[c] for f, v in every.items()} for c in range(len(sigs))]
-    merged, best = strongest([{f: v[None] for f, v in r.items()} for r in outs],
-                             min_hz=trend_min_hz(cfg))
+    many = len(sigs) > 1  # rule 50b's windows moved across and rule 34's pace window, as there
+    merged, best = judged([{f: v[None] for f, v in r.items()} for r in outs],
+                          across=getattr(obj, "across", 0) if many else 0,
+                          pace_last=getattr(obj, "pace_window", False) and many,
+                          min_hz=trend_min_hz(cfg))
     return {f: np.asarray(merged[f][0]) for f in FIELDS}, int(best[0]), outs
 
 

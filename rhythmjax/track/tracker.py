@@ -64,7 +64,7 @@ class _Object:
     candidate_rows: list[tuple[float, ...]] | None = None  # per row, I(k) of the candidate windows
     # B (`WINDOW_CANDIDATES`, then across), then the pace window's; NaN where `intensity` is
     pace_window: bool = False  # the last entry of each candidate_rows tuple is the pace window
-    across: int = 0  # rule 50b: the last `across` entries are window B moved across (no pace)
+    across: int = 0  # rule 50b: window B moved across, the `across` entries before the pace one
     second_look: Callable | None = None  # `match_window`'s look at each window (rules 37, 45)
     mean_rows: list[tuple[float, ...]] | None = None  # rule 35b: per row, window B's and the
     # candidate_rows' windows' I(k) per pixel (`vision.window_b.window_b_means`)
