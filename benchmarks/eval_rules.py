@@ -103,6 +103,12 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   B, deciding only by (13)-(15) at their own peak, never through rule 37). across: the same
   windows deciding as the tracker's own candidates do, rule 37 on them too (rule 50; the option
   and a patch).
+- fast_stretch: the tracker's `recheck.fast_stretch` 0.25 vs 0 (rule 52: after a Pedestrian
+  track's deciding window, the first stretch of N/4 rows whose filter's ground speed (median) is
+  above the fastest walk, 2.57 m/s, cuts the track: a bicycle that took over a walker's track
+  for fewer than N rows at its end).
+- twice_quantile: the tracker's `size.twice_pace_quantile` 0.25 vs 0.5 (rule 53: rule 37's
+  height the lower quartile of its rows' heights, not their median).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

@@ -143,6 +143,14 @@ RULES = {
     "across_solo": ("tracker", "body.across_candidates", True, False, TRACKER_SOURCES,
                     "as across; written after across's UCSD anomaly track "
                     "(Test004, an across candidate judged by rule 37)"),
+    "fast_stretch": ("tracker", "recheck.fast_stretch", 0.25, 0.0, TRACKER_SOURCES,
+                     "nothing fitted ((14)'s fastest walk); the filter's speed and N/4 rows "
+                     "chosen with study_tail_speed on used seeds 7800001-7830001, "
+                     "7960001-7980001 (rule 52)"),
+    "twice_quantile": ("tracker", "size.twice_pace_quantile", 0.25, 0.5, TRACKER_SOURCES,
+                       "0.25 a priori (rule 37's threshold kept); suggested by "
+                       "study_twice_heights on used seeds 8100001-8190001, 8260001-8330001 "
+                       "(rule 53)"),
     "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
              "nothing fitted (half the config's walker height, a priori); found on used seeds "
              "3300001-3330001, 3380001-3410001 (study_window_placement)"),
@@ -232,7 +240,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "halves_around": (), "mean_trend": TRACKER_SOURCES,
               "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": (),
               "mass_column": (), "mass_crossing": (), "twice_sub": (), "across": (),
-              "across_solo": TRACKER_SOURCES}
+              "across_solo": TRACKER_SOURCES, "fast_stretch": (),
+              "twice_quantile": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

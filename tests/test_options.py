@@ -68,6 +68,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 37)", "size.twice_pace_heights", 0.57),  # a walker at twice its pace
     ("(new: issue 16, rule 37b)", "size.twice_pace_edge", True),  # ... heads above the view
     ("(new: issue 16, rule 49)", "size.twice_pace_sub", 0.0),  # rule 37 needs f1/2's peak, off
+    ("(new: issue 16, rule 53)", "size.twice_pace_quantile", 0.5),  # rule 37 reads the median
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
     ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
     ("(new: issue 16, rule 30d)", "recheck.earlier", "speed-low"),  # windows before the verdict
@@ -75,6 +76,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 43)", "recheck.low", False),  # rule 26 in the rechecked windows, off
     ("(new: issue 16, rule 46)", "recheck.pace_tall", True),  # rule 29's pace test vs tall
     ("(new: issue 16, rule 47)", "recheck.median_pace", False),  # the windows' median pace, off
+    ("(new: issue 16, rule 52)", "recheck.fast_stretch", 0.0),  # a fast stretch after, off
 ]
 TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]
 

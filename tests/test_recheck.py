@@ -407,7 +407,8 @@ def test_speed_low_reads_speed_and_height_before_the_verdict_only():
 
 
 @pytest.mark.parametrize("changes", [{}, {"recheck.earlier": "any"}, {"recheck.halves": True},
-                                     {"recheck.low": True}, {"recheck.pace_tall": True}])
+                                     {"recheck.low": True}, {"recheck.pace_tall": True},
+                                     {"recheck.fast_stretch": 0.25}])
 def test_the_tracker_with_the_rule_leaves_a_lone_walker_alone(changes):
     """One rendered walker going away from 8 m, 180 frames: its track (156 rows, judged
     Pedestrian in rows 0..64) has a later window (rows 64..128), and

@@ -273,11 +273,19 @@ class SizeOptions:
     twice_pace_sub: float = 0.0  # rule 49: rule 37 only where the window also has a peak within
     # 0.2 Hz of half its strongest (the walker's own pace) of at least this fraction of its power
     # (`track.twice.reads_twice`); 0: off (docs/rules.md, rule 49)
+    twice_pace_quantile: float = 0.5  # rule 53: rule 37's height (and rule 46's) is this
+    # quantile of the heights its rows read, not their median (0.5): with 0.25, three quarters
+    # of the rows must reach `twice_pace_heights`, so a dog whose moving region merges with a
+    # walker just behind it for part of its window (the walker's head read as its top) is not
+    # read as tall (`track.twice.twice_height`; docs/rules.md, rule 53)
 
     def __post_init__(self):
         for name in ("top_inside_heights", "twice_pace_heights", "twice_pace_sub"):
             if not getattr(self, name) >= 0.0:
                 raise ValueError(f"size.{name} must be >= 0, got {getattr(self, name)}")
+        if not 0.0 <= self.twice_pace_quantile <= 1.0:
+            raise ValueError(f"size.twice_pace_quantile must lie in [0, 1], "
+                             f"got {self.twice_pace_quantile!r}")
         if self.min_height_scope not in HEIGHT_SCOPES:
             raise ValueError(f"size.min_height_scope must be one of {HEIGHT_SCOPES}, "
                              f"got {self.min_height_scope!r}")
@@ -337,7 +345,17 @@ class RecheckOptions:
     # 0.0197 -> 0.0325 Hz (one walker at 1.60 Hz read 2.42 Hz by its later windows) and the
     # dev clips' 0.0163 -> 0.0181 Hz (issue 16's forty-eighth round; docs/rules.md, rule 47)
 
+    fast_stretch: float = 0.0  # rule 52 (with `enabled`; N's fraction, 0: off): after the
+    # deciding window, stretches of this fraction of N rows (one every half stretch, and the
+    # track's last) are read too; the first whose filter's ground speed (median) is above the
+    # fastest walk (14) (2.57 m/s) cuts the track at its first row, the rows from it judged
+    # afresh: a walker's track that a passing bicycle took over for fewer than N rows at its
+    # end (`recheck.fast_stretch_row`; docs/rules.md, rule 52)
+
     def __post_init__(self):
+        if not 0.0 <= self.fast_stretch <= 1.0:
+            raise ValueError(f"recheck.fast_stretch is a fraction of N in [0, 1], "
+                             f"got {self.fast_stretch!r}")
         if self.earlier not in EARLIER_TESTS:
             raise ValueError(f"recheck.earlier must be one of {EARLIER_TESTS}, "
                              f"got {self.earlier!r}")

@@ -1,4 +1,4 @@
-"""Where a track judged Pedestrian went on with something else (rules 29, 30a and 30d, issue
+"""Where a track judged Pedestrian went on with something else (rules 29, 30a, 30d, 52; issue
 16; `options.RecheckOptions`, on by default).
 
 Once a rhythm window has said Pedestrian the tracker stops judging windows (Sec. 4.2), so a
@@ -52,6 +52,13 @@ as well (`low_window`: its rows' median height below `size.min_height_heights` w
 the verdict are read by this test (with `earlier`'s where that is on), a refused one cutting at
 the deciding window's first row (a dog's rows before its walker's).
 
+Rule 52 (`RecheckOptions.fast_stretch`, a fraction of N) reads stretches of that many rows
+after the deciding window (one every half stretch, and the track's last), cut at the first row
+of the first whose filter's ground speed (its median over the stretch, `stretch_speed`) is above
+the fastest walk (`fast_stretch_row`): a walker's track that a passing bicycle
+took over for fewer than N rows at its end keeps, without it, the walker's verdict, since the
+tail window's Theil-Sen speed (the median slope over N rows) is still the walker's.
+
 Rule 47 (`RecheckOptions.median_pace`, off: the dev clips' pace read worse) reports a
 Pedestrian track's pace F and stride T (`median_pace`) as the medians over its windows judged
 Pedestrian: the deciding one and each of `later_windows` (with the tail window where `tail` is
@@ -75,9 +82,10 @@ from .toolkit import RhythmWindows, fast_half, match_window
 from .twice import rows_tall_enough
 
 
-__all__ = ["earlier_switch_row", "earlier_windows", "keep_rows", "later_windows", "low_window",
-           "median_pace", "mixed_window_row", "not_a_walk", "pace_resolved", "split_at_switches",
-           "switch_row", "too_fast", "too_quick", "walker_tall"]
+__all__ = ["earlier_switch_row", "earlier_windows", "fast_stretch_row", "keep_rows",
+           "later_windows", "low_window", "median_pace", "mixed_window_row", "not_a_walk",
+           "pace_resolved", "split_at_switches", "stretch_speed", "stretch_starts", "switch_row",
+           "too_fast", "too_quick", "walker_tall"]
 
 
 def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
@@ -225,6 +233,46 @@ def switch_row(cfg: Config, obj: RhythmWindows, *, tail: bool = False,
     return None
 
 
+def stretch_starts(start: int, end: int, m: int) -> list[int]:
+    """First rows of rule 52's stretches of `m` rows in rows start..end-1: one every m // 2
+    rows from `start`, and the last m rows; none where fewer than m rows."""
+    out = list(range(start, end - m + 1, max(1, m // 2)))
+    if end - m >= start and (not out or out[-1] != end - m):
+        out.append(end - m)
+    return out
+
+
+def stretch_speed(obj: RhythmWindows, start: int, m: int) -> float:
+    """Rule 52's speed of rows start..start+m-1 of `obj`: the median over them of the filter's
+    ground speed |(vx, vy)| (m/s, `obj.vel`; rows without a finite velocity left out, NaN where
+    none has one). The filter's velocity, not the foot points' Theil-Sen slope (12): over 16
+    rows a walker's foot points read up to 4.3 m/s on the own scenes, its filter 2.5 m/s at
+    most (`benchmarks/study_tail_speed.py`)."""
+    vel = np.asarray(obj.vel[start:start + m], np.float64).reshape(-1, 2)
+    speed = np.hypot(vel[:, 0], vel[:, 1])
+    speed = speed[np.isfinite(speed)]
+    return float(np.median(speed)) if len(speed) else math.nan
+
+
+def fast_stretch_row(cfg: Config, obj: RhythmWindows, fraction: float) -> int | None:
+    """Rule 52: the first row of the first stretch of m = max(2, round(`fraction` N)) rows after
+    `obj`'s deciding window (`stretch_starts` from its end) whose speed (`stretch_speed`)
+    exceeds the fastest walk (14) accepts (`params.walking_top_speed`, 2.57 m/s with Table 1);
+    None where `obj` is not judged Pedestrian, `fraction` is 0 or no stretch is that fast. A
+    bicycle that took over a walker's track for fewer than N rows at its end moves at 3 m/s
+    there, while the Theil-Sen speed of the tail window (rule 30a), the median slope over N
+    rows, stays the walker's."""
+    if fraction <= 0 or not _pedestrian(obj):
+        return None
+    m = max(2, round(fraction * cfg.thresholds.n))
+    top = walking_top_speed(cfg)
+    for k in stretch_starts(int(obj.result["window"][1]), len(obj.rows), m):
+        speed = stretch_speed(obj, k, m)
+        if math.isfinite(speed) and speed > top:
+            return k
+    return None
+
+
 def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
                        speed: bool = True, low: SizeOptions | None = None,
                        halves: bool = False) -> int | None:
@@ -291,8 +339,9 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
     `size`, rule 26's options): where a window before the deciding one is no walker's, rows
     ..k-1 (k: the deciding window's first row) become a new track; rule 44
     (`opt.halves_around`) reads the halves there too. Rules 29, 30a, 42, 43, 44, 46
-    (`switch_row`; 46: `opt.pace_tall` with `size`): where a later window is no walker's, rows
-    k.. (its first row) become a new track. `obj` keeps the rest."""
+    (`switch_row`; 46: `opt.pace_tall` with `size`) and 52 (`fast_stretch_row`,
+    `opt.fast_stretch`): where a later window or stretch is no walker's, rows k.. (the first
+    such one's first row) become a new track. `obj` keeps the rest."""
     k = mixed_window_row(cfg, obj) if opt.halves else None
     if k is not None:
         a, b = (int(r) for r in obj.result["window"])
@@ -312,6 +361,8 @@ def split_at_switches(cfg: Config, obj: RhythmWindows, opt: RecheckOptions,
             keep_rows(obj, slice(k, None))
     k = switch_row(cfg, obj, tail=opt.tail, halves=opt.halves or opt.halves_around, low=low,
                    tall=size if opt.pace_tall else None)
+    fast = fast_stretch_row(cfg, obj, opt.fast_stretch)  # rule 52
+    k = fast if k is None else k if fast is None else min(k, fast)
     if k is not None:
         judge_afresh(obj, slice(k, None))
         keep_rows(obj, slice(None, k))

@@ -8,7 +8,8 @@ paper's `count.pedestrian_level.PedestrianLevel`; `count` imports `track`, never
   computes while the host prepares the next frame (XLA dispatch is asynchronous);
 - `velocity_jump`: the filter's ground velocity changed faster than a walker or a cyclist can
   (its measurements slid onto another object): the rows to drop before the track ends;
-- `half_speeds`, `fast_half`: the speed (12) of a window's two halves (rules 42, 44, 35c);
+- `rows_speed`, `half_speeds`, `fast_half`: the speed (12) of rows and of a window's two
+  halves (rules 42, 44, 35c, 52);
 - `match_window`: (13)-(15) of the rhythm paper (Sec. 4.2) on the next completed window of N
   rows of a track (`model.rhythm.classify_window_jit`), one every `thresholds.hop_samples`,
   until one says Pedestrian; where the object carries candidate windows B, once per candidate
@@ -148,25 +149,25 @@ def image_velocity_jump(velocities: Sequence, width_px: float, k: int, max_dv_w:
     return k if math.hypot(a.du - b.du, a.dv - b.dv) > max_dv_w * width_px else 0
 
 
+def rows_speed(cfg: Config, rows) -> float:
+    """Speed (12), m/s, of `rows` (`TrackRow`s; NaN for fewer than 2): `rhythm.window_speed`
+    of their OBSERVE rows' foot points taken to the ground when they are at least half of
+    them, else of the filter's ground positions."""
+    if len(rows) < 2:
+        return math.nan
+    t = np.asarray([r.t for r in rows], np.float64)
+    xy = np.asarray([(r.x_est, r.y_est) for r in rows], np.float64)
+    seen = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE else (math.nan, math.nan)
+                       for r in rows], np.float64)
+    return float(window_speed(cfg, jnp.asarray(t - t[0], jnp.float32),
+                              jnp.asarray(xy, jnp.float32), jnp.asarray(seen, jnp.float32)))
+
+
 def half_speeds(cfg: Config, rows) -> tuple[float, float]:
     """Speed (12), m/s, of the first and the last len(rows) // 2 of `rows` (a window's
-    `TrackRow`s; NaN for a half of fewer than 2 rows): `rhythm.window_speed` of its OBSERVE
-    rows' foot points taken to the ground when they are at least half of it, else of the
-    filter's ground positions."""
+    `TrackRow`s; NaN for a half of fewer than 2 rows): `rows_speed` of each."""
     h = len(rows) // 2
-    out = []
-    for part in (rows[:h], rows[h:]):
-        if len(part) < 2:
-            out.append(math.nan)
-            continue
-        t = np.asarray([r.t for r in part], np.float64)
-        xy = np.asarray([(r.x_est, r.y_est) for r in part], np.float64)
-        seen = np.asarray([(r.u, r.v) if r.state == TrackState.OBSERVE else (math.nan, math.nan)
-                           for r in part], np.float64)
-        out.append(float(window_speed(cfg, jnp.asarray(t - t[0], jnp.float32),
-                                      jnp.asarray(xy, jnp.float32),
-                                      jnp.asarray(seen, jnp.float32))))
-    return out[0], out[1]
+    return rows_speed(cfg, rows[:h]), rows_speed(cfg, rows[h:])
 
 
 def fast_half(cfg: Config, rows, top_speed: float) -> int | None:

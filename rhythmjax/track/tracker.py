@@ -424,7 +424,7 @@ class OnlineTracker:
                 verdict_columns(objs, self.cfg.thresholds.n), objs)
 
     def _split_at_switch(self, obj: _Object) -> None:
-        """Rules 29, 30a, 30d, 46 (on), 30, 30b, 30c, 42-44 (off): a window no walker's cuts
+        """Rules 29, 30a, 30d, 46 (on), 30, 30b, 30c, 42-44, 52 (off): a window no walker's cuts
         the track, its side judged afresh (`recheck.split_at_switches`, rule 26's `size`)."""
         split_at_switches(self.cfg, obj, self.opt.recheck, self._judge_afresh, self.opt.size)
 

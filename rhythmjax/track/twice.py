@@ -9,11 +9,12 @@ judged at half its strongest peak only where the object is as tall as a walker: 
 verdict is Non-pedestrian with reason no-model-match, whose strongest peak f1 (Hz) is above
 P_thr (13) with R above R_thr (15), fails (14) at (f1, v/f1) and passes it at (f1/2, 2 v/f1),
 is Pedestrian with pace f1/2, stride 2 v/f1 (v: the window's speed of (12), m/s) and reason
-matched-twice when its rows' median height (`twice_height`: `size.median_height`'s rows, rules
-26 and 36's, and rows whose moving region reached the image's first row, each read as the height
-up to that row, a lower bound) is at least `twice_pace_heights` walker heights over at least
-`min_height_rows` rows. The rows at the image's edge (`TrackRow.top_at_edge`: the tracker's
-`detect.Detection.top_at_edge`, count's `widths.top_and_edge`) are read where
+matched-twice when its rows' median height (rule 53: a lower quantile, `twice_pace_quantile`;
+`twice_height`: `size.median_height`'s rows, rules 26 and 36's, and rows whose moving region
+reached the image's first row, each read as the height up to that row, a lower bound) is at
+least `twice_pace_heights` walker heights over at least `min_height_rows` rows. The rows at
+the image's edge (`TrackRow.top_at_edge`: the tracker's `detect.Detection.top_at_edge`, count's
+`widths.top_and_edge`) are read where
 `options.twice_pace_edge` (rule 37b): near the camera walkers' heads leave the view (own
 scenes: 54-75 % of walker boxes), and without them rule 37 has no height to read there (issue
 16, thirty-ninth round).
@@ -96,13 +97,14 @@ def judged_at_half(res: dict, which: np.ndarray) -> dict:
 
 
 def twice_height(camera, u, v, v_top, at_edge, walker_height_m: float,
-                 top_inside_heights: float) -> tuple[float, int]:
-    """(median height m, rows read) of rule 37 over rows with foot points (u, v) px, top rows
-    v_top px (NaN where not measured) and `at_edge` (bool, or None: no row): each row that
-    `size.median_height` reads at its height, and each other row whose moving region reached
-    the image's first row (`at_edge`) at the height of the upright segment on its foot point
-    whose top is that row (`camera_np.height_of_top` at v_top = 0): the object is at least
-    that tall there, so the median over both is at most the median of its true heights."""
+                 top_inside_heights: float, quantile: float = 0.5) -> tuple[float, int]:
+    """(height m, rows read) of rule 37 over rows with foot points (u, v) px, top rows v_top px
+    (NaN where not measured) and `at_edge` (bool, or None: no row): the `quantile` (0.5: the
+    median; rule 53: `size.twice_pace_quantile`) of the heights of each row that
+    `size.median_height` reads, at its height, and of each other row whose moving region
+    reached the image's first row (`at_edge`), at the height of the upright segment on its foot
+    point whose top is that row (`camera_np.height_of_top` at v_top = 0): the object is at
+    least that tall there, so the quantile over both is at most that of its true heights."""
     H, read = row_heights(camera, u, v, v_top, walker_height_m, top_inside_heights)
     heights = H[read]
     if at_edge is not None:
@@ -110,13 +112,15 @@ def twice_height(camera, u, v, v_top, at_edge, walker_height_m: float,
         u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
         bound, ok = height_of_top(camera, u, v, np.zeros_like(v))
         heights = np.concatenate([heights, np.asarray(bound)[edge & np.asarray(ok) & ~read]])
-    return (float(np.median(heights)) if heights.size else float("nan")), int(heights.size)
+    return (float(np.quantile(heights, quantile)) if heights.size else float("nan"),
+            int(heights.size))
 
 
 def tall_enough(height_m: float, rows: int, walker_height_m: float,
                 options: SizeOptions) -> bool:
-    """Rule 37's height test: at least `min_height_rows` rows read, their median at least
-    `twice_pace_heights` walker heights."""
+    """Rule 37's height test: at least `min_height_rows` rows read, their height (`twice_height`
+    with `twice_pace_quantile`: the median by default) at least `twice_pace_heights` walker
+    heights."""
     return rows >= options.min_height_rows and \
         height_m >= options.twice_pace_heights * walker_height_m
 
@@ -129,7 +133,8 @@ def rows_tall_enough(rows: list, camera, walker_height_m: float, options: SizeOp
                       np.float64).reshape(-1, 4)
     height, n = twice_height(camera, cols[:, 0], cols[:, 1], cols[:, 2],
                              cols[:, 3] if options.twice_pace_edge else None,
-                             walker_height_m, options.top_inside_heights)
+                             walker_height_m, options.top_inside_heights,
+                             options.twice_pace_quantile)
     return tall_enough(height, n, walker_height_m, options)
 
 
@@ -183,7 +188,7 @@ def batch_second_look(cfg: Config, batch, options: SizeOptions):
             height, count = twice_height(
                 camera, uv[:, 0], uv[:, 1], batch.v_top[int(track[w]), rows],
                 None if edges is None else edges[int(track[w]), rows], walker_m,
-                options.top_inside_heights)
+                options.top_inside_heights, options.twice_pace_quantile)
             which[w] = tall_enough(height, count, walker_m, options)
         return judged_at_half(res, which) if which.any() else res
 
