@@ -21,7 +21,6 @@ stretch and the non-walker stretches above the fastest walk (14) accepts
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from collections import Counter
 from pathlib import Path
@@ -32,24 +31,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 
 from eval_synthetic import RECOMMENDED, scene_specs  # noqa: E402
-from study_tracks import track_scene  # noqa: E402
+from study_tracks import nearest_objects, track_scene  # noqa: E402
 
 
 def nearest_kind(rows, truth) -> tuple[str, float]:
-    """The kind of the true object nearest most of `rows`' measured foot points, and the
-    fraction of the measured rows it is nearest ('none' where no row is measured)."""
-    kinds = []
-    for r in rows:
-        if not math.isfinite(r.u):
-            continue
-        best, bd = "none", math.inf
-        for o in truth:
-            f = int(r.frame)
-            if f < len(o.u) and o.visible[f]:
-                d = math.hypot(r.u - o.u[f], r.v - o.v[f])
-                if d < bd:
-                    best, bd = o.kind, d
-        kinds.append(best)
+    """The kind of the true object nearest most of `rows`' measured foot points
+    (`study_tracks.nearest_objects`), and the fraction of the measured rows it is nearest
+    ('none' where no row is measured)."""
+    kinds = ["none" if o is None else o.kind for o in nearest_objects(rows, truth)]
     if not kinds:
         return "none", 0.0
     kind, n = Counter(kinds).most_common(1)[0]

@@ -99,21 +99,29 @@ def columns_of(objs) -> dict:
             "v": np.asarray(v, float)}
 
 
-def nearest_per_row(obj, k0: int, k1: int, truth) -> str:
-    """Per row k0..k1-1 of obj, the truth object whose foot point is nearest the measured one
-    (rows without a measurement left out): 'id x count' runs."""
-    names = []
-    for r in obj.rows[k0:k1]:
+def nearest_objects(rows, truth) -> list:
+    """Per measured row of `rows` (`TrackRow`s; rows without a measurement left out), the truth
+    object whose foot point is nearest the measured one (None where no object is visible)."""
+    out = []
+    for r in rows:
         if not math.isfinite(r.u):
             continue
-        best, bd = "-", math.inf
+        best, bd = None, math.inf
         for o in truth:
             f = int(r.frame)
             if f < len(o.u) and o.visible[f]:
                 d = math.hypot(r.u - o.u[f], r.v - o.v[f])
                 if d < bd:
-                    best, bd = f"{o.track_id}({o.kind[:3]})", d
-        names.append(best)
+                    best, bd = o, d
+        out.append(best)
+    return out
+
+
+def nearest_per_row(obj, k0: int, k1: int, truth) -> str:
+    """Per row k0..k1-1 of obj, the truth object whose foot point is nearest the measured one
+    (`nearest_objects`): 'id x count' runs."""
+    names = ["-" if o is None else f"{o.track_id}({o.kind[:3]})"
+             for o in nearest_objects(obj.rows[k0:k1], truth)]
     runs = []
     for nm in names:
         if runs and runs[-1][0] == nm:
