@@ -100,7 +100,7 @@ def twice_height(camera, u, v, v_top, at_edge, walker_height_m: float,
                  top_inside_heights: float, quantile: float = 0.5) -> tuple[float, int]:
     """(height m, rows read) of rule 37 over rows with foot points (u, v) px, top rows v_top px
     (NaN where not measured) and `at_edge` (bool, or None: no row): the `quantile` (0.5: the
-    median; rule 53: `size.twice_pace_quantile`) of the heights of each row that
+    median, `np.median`'s; rule 53: `size.twice_pace_quantile`) of the heights of each row that
     `size.median_height` reads, at its height, and of each other row whose moving region
     reached the image's first row (`at_edge`), at the height of the upright segment on its foot
     point whose top is that row (`camera_np.height_of_top` at v_top = 0): the object is at
@@ -112,8 +112,10 @@ def twice_height(camera, u, v, v_top, at_edge, walker_height_m: float,
         u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
         bound, ok = height_of_top(camera, u, v, np.zeros_like(v))
         heights = np.concatenate([heights, np.asarray(bound)[edge & np.asarray(ok) & ~read]])
-    return (float(np.quantile(heights, quantile)) if heights.size else float("nan"),
-            int(heights.size))
+    if not heights.size:
+        return float("nan"), 0
+    return float(np.median(heights) if quantile == 0.5 else np.quantile(heights, quantile)), \
+        int(heights.size)
 
 
 def tall_enough(height_m: float, rows: int, walker_height_m: float,
