@@ -15,16 +15,15 @@ caches of `study_twice_heights.py` and `study_tail_speed.py` are the same).
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from eval_synthetic import RECOMMENDED, scene_specs  # noqa: E402
+from eval_synthetic import RECOMMENDED  # noqa: E402
 from fp_replay import judge  # noqa: E402
-from study_tracks import track_scene  # noqa: E402
+from study_tracks import scenes_of, study_parser  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -35,35 +34,26 @@ def main(argv=None) -> int:
     from rhythmjax.sim.presets import synthetic_options
     from rhythmjax.track.twice import rows_tall_enough
 
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("seeds")
-    p.add_argument("--scenes", type=int, default=10)
-    p.add_argument("--lateral", action="store_true", help="paths within 30 deg of crossing")
-    p.add_argument("-d", "--cache", type=Path, required=True)
-    a = p.parse_args(argv)
+    a = study_parser(__doc__).parse_args(argv)
     cfg = config_from_dict(RECOMMENDED)
     size = synthetic_options().size
     camera, walker_m = camera_tuple(cfg.camera), host_float(cfg.width.height)
-    for seed in (int(s) for s in a.seeds.split(",")):
-        specs = scene_specs(seed, a.scenes, camera=cfg.camera,
-                            lateral_deg=30.0 if a.lateral else None)
-        for i, (s, spec) in enumerate(specs):
-            tracks, _, objs, truth = track_scene(cfg, s, spec, a.cache / str(seed))
-            owner = match_tracks(tracks, truth)
-            for o in objs:
-                r = o.result
-                if r is None or "window" not in r or int(r["verdict"]) != Verdict.PEDESTRIAN:
-                    continue
-                k0, k1 = (int(k) for k in r["window"])
-                b = judge(cfg, o, k0)[2][0]  # window B's own outcome
-                f1 = float(b["peak_freq"][0]) if bool(b["peak_mask"][0]) else float("nan")
-                pace = float(r["pace_hz"])
-                tall = rows_tall_enough(o.rows[k0:k1], camera, walker_m, size)
-                kind = getattr(owner.get(o.track_id), "kind", "none")
-                print(f"{seed}:{i} track {o.track_id} ({kind}) candidate "
-                      f"{int(r.get('candidate', 0))} {Reason(int(r['reason'])).name} "
-                      f"F {pace:.2f} Hz; window B f1 {f1:.2f} Hz power "
-                      f"{float(b['peak_power'][0]):.1f}, f1/F {f1 / pace:.2f}; tall {tall}")
+    for name, tracks, objs, truth in scenes_of(cfg, a):
+        owner = match_tracks(tracks, truth)
+        for o in objs:
+            r = o.result
+            if r is None or "window" not in r or int(r["verdict"]) != Verdict.PEDESTRIAN:
+                continue
+            k0, k1 = (int(k) for k in r["window"])
+            b = judge(cfg, o, k0)[2][0]  # window B's own outcome
+            f1 = float(b["peak_freq"][0]) if bool(b["peak_mask"][0]) else float("nan")
+            pace = float(r["pace_hz"])
+            tall = rows_tall_enough(o.rows[k0:k1], camera, walker_m, size)
+            kind = getattr(owner.get(o.track_id), "kind", "none")
+            print(f"{name} track {o.track_id} ({kind}) candidate "
+                  f"{int(r.get('candidate', 0))} {Reason(int(r['reason'])).name} "
+                  f"F {pace:.2f} Hz; window B f1 {f1:.2f} Hz power "
+                  f"{float(b['peak_power'][0]):.1f}, f1/F {f1 / pace:.2f}; tall {tall}")
     return 0
 
 

@@ -20,7 +20,6 @@ stretch and the non-walker stretches above the fastest walk (14) accepts
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections import Counter
 from pathlib import Path
@@ -30,8 +29,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from eval_synthetic import RECOMMENDED, scene_specs  # noqa: E402
-from study_tracks import nearest_objects, track_scene  # noqa: E402
+from eval_synthetic import RECOMMENDED  # noqa: E402
+from study_tracks import nearest_objects, scenes_of, study_parser  # noqa: E402
 
 
 def nearest_kind(rows, truth) -> tuple[str, float]:
@@ -59,16 +58,12 @@ def main(argv=None) -> int:
     from rhythmjax.track.recheck import stretch_speed, stretch_starts
     from rhythmjax.track.toolkit import rows_speed
 
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("seeds")
-    p.add_argument("--scenes", type=int, default=10)
-    p.add_argument("--lateral", action="store_true", help="paths within 30 deg of crossing")
+    p = study_parser(__doc__)
     p.add_argument("--lengths", default="8,16,24,32")
     p.add_argument("--measure", choices=("feet", "filter", "filter-positions"), default="feet",
                    help="feet: speed (12) of the measured foot points (`toolkit.rows_speed`); "
                    "filter: rule 52's median filter speed (`recheck.stretch_speed`); "
                    "filter-positions: Theil-Sen of the filter's ground positions")
-    p.add_argument("-d", "--cache", type=Path, required=True)
     a = p.parse_args(argv)
     cfg = config_from_dict(RECOMMENDED)
     top = walking_top_speed(cfg)
@@ -76,28 +71,24 @@ def main(argv=None) -> int:
     fastest = {m: (0.0, "") for m in lengths}
     above = {m: [] for m in lengths}
     print(f"fastest walk (14): {top:.2f} m/s")
-    for seed in (int(s) for s in a.seeds.split(",")):
-        specs = scene_specs(seed, a.scenes, camera=cfg.camera,
-                            lateral_deg=30.0 if a.lateral else None)
-        for i, (s, spec) in enumerate(specs):
-            _, _, objs, truth = track_scene(cfg, s, spec, a.cache / str(seed))
-            for o in objs:
-                if (o.result is None or "window" not in o.result
-                        or int(o.result["verdict"]) != Verdict.PEDESTRIAN):
-                    continue
-                k1 = int(o.result["window"][1])
-                for m in lengths:
-                    for k in stretch_starts(k1, len(o.rows), m):
-                        speed = (stretch_speed(o, k, m) if a.measure == "filter" else
-                                 filter_theil_sen(o.rows[k:k + m])
-                                 if a.measure == "filter-positions"
-                                 else rows_speed(cfg, o.rows[k:k + m]))
-                        kind, frac = nearest_kind(o.rows[k:k + m], truth)
-                        where = f"{seed}:{i} track {o.track_id} rows {k}-{k + m} of {len(o.rows)}"
-                        if kind == "pedestrian" and speed > fastest[m][0]:
-                            fastest[m] = (speed, where)
-                        if speed > top:
-                            above[m].append(f"{where} {kind} ({frac:.2f}) {speed:.2f} m/s")
+    for name, _, objs, truth in scenes_of(cfg, a):
+        for o in objs:
+            if (o.result is None or "window" not in o.result
+                    or int(o.result["verdict"]) != Verdict.PEDESTRIAN):
+                continue
+            k1 = int(o.result["window"][1])
+            for m in lengths:
+                for k in stretch_starts(k1, len(o.rows), m):
+                    speed = (stretch_speed(o, k, m) if a.measure == "filter" else
+                             filter_theil_sen(o.rows[k:k + m])
+                             if a.measure == "filter-positions"
+                             else rows_speed(cfg, o.rows[k:k + m]))
+                    kind, frac = nearest_kind(o.rows[k:k + m], truth)
+                    where = f"{name} track {o.track_id} rows {k}-{k + m} of {len(o.rows)}"
+                    if kind == "pedestrian" and speed > fastest[m][0]:
+                        fastest[m] = (speed, where)
+                    if speed > top:
+                        above[m].append(f"{where} {kind} ({frac:.2f}) {speed:.2f} m/s")
     for m in lengths:
         print(f"m={m}: fastest walker stretch {fastest[m][0]:.2f} m/s ({fastest[m][1]}); "
               f"{len(above[m])} stretches above {top:.2f} m/s")

@@ -4,10 +4,12 @@ object's rows (and candidate rows) rendered and tracked as `eval_synthetic.evalu
 scenes) or as `eval_all.run_dev` does (dev clips), pickled under a cache folder so that rules on
 the classification can be replayed without tracking again (the classification never feeds back
 into the tracking); tracks cut post hoc at velocity jumps (`split_jumps`); the truth object
-nearest each row (`nearest_per_row`)."""
+nearest each row (`nearest_per_row`); the seeds, scenes and cache of a study's command line
+(`study_parser`, `scenes_of`)."""
 
 from __future__ import annotations
 
+import argparse
 import math
 import pickle
 import sys
@@ -129,6 +131,28 @@ def nearest_per_row(obj, k0: int, k1: int, truth) -> str:
         else:
             runs.append([nm, 1])
     return " ".join(f"{nm}x{c}" for nm, c in runs)
+
+
+def study_parser(doc: str) -> argparse.ArgumentParser:
+    """A study's parser: SEED[,SEED...], --scenes (10), --lateral (paths within 30 degrees of
+    crossing the view) and -d CACHE; `doc`'s first paragraph its description."""
+    p = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    p.add_argument("seeds")
+    p.add_argument("--scenes", type=int, default=10)
+    p.add_argument("--lateral", action="store_true", help="paths within 30 deg of crossing")
+    p.add_argument("-d", "--cache", type=Path, required=True)
+    return p
+
+
+def scenes_of(cfg, args):
+    """(name "seed:scene", tracks, objs (slim), truth) of every own scene of `args`
+    (`study_parser`'s), tracked as `eval_synthetic.py` tracks them (`track_scene`, cached)."""
+    for seed in (int(s) for s in args.seeds.split(",")):
+        specs = scene_specs(seed, args.scenes, camera=cfg.camera,
+                            lateral_deg=30.0 if args.lateral else None)
+        for i, (s, spec) in enumerate(specs):
+            tracks, _, objs, truth = track_scene(cfg, s, spec, args.cache / str(seed))
+            yield f"{seed}:{i}", tracks, objs, truth
 
 
 def own_scenes(cfg, seed, n_scenes, cache, split_dv: float = 0.0):

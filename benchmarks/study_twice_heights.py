@@ -16,7 +16,6 @@ walker's height.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -25,15 +24,16 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from eval_synthetic import RECOMMENDED, scene_specs  # noqa: E402
-from study_tracks import nearest_per_row, track_scene  # noqa: E402
+from eval_synthetic import RECOMMENDED  # noqa: E402
+from study_tracks import nearest_per_row, scenes_of, study_parser  # noqa: E402
 
 
-QUANTILES = (0.1, 0.25, 0.5)  # of the heights rule 37 reads (m), printed per window
+QUANTILES = (0.1, 0.25, 0.5)  # of the heights rule 37 reads (m), printed per window; the
+# median last
 
 
 def main(argv=None) -> int:
-    from rhythmjax.model.camera_np import camera_tuple, height_of_top
+    from rhythmjax.model.camera_np import camera_tuple
     from rhythmjax.model.params import config_from_dict, host_float
     from rhythmjax.model.status import Reason
     from rhythmjax.sim.evaluate import match_tracks
@@ -41,42 +41,30 @@ def main(argv=None) -> int:
     from rhythmjax.track.size import row_heights
     from rhythmjax.track.twice import twice_height
 
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("seeds")
-    p.add_argument("--scenes", type=int, default=10)
-    p.add_argument("--lateral", action="store_true", help="paths within 30 deg of crossing")
-    p.add_argument("-d", "--cache", type=Path, required=True)
-    a = p.parse_args(argv)
+    a = study_parser(__doc__).parse_args(argv)
     cfg = config_from_dict(RECOMMENDED)
     size = synthetic_options().size
     camera, walker_m = camera_tuple(cfg.camera), host_float(cfg.width.height)
-    for seed in (int(s) for s in a.seeds.split(",")):
-        specs = scene_specs(seed, a.scenes, camera=cfg.camera,
-                            lateral_deg=30.0 if a.lateral else None)
-        for i, (s, spec) in enumerate(specs):
-            tracks, _, objs, truth = track_scene(cfg, s, spec, a.cache / str(seed))
-            owner = match_tracks(tracks, truth)
-            for o in objs:
-                if o.result is None or int(o.result["reason"]) != Reason.MATCHED_TWICE:
-                    continue
-                k0, k1 = (int(k) for k in o.result["window"])
-                cols = np.asarray([(r.u, r.v, r.v_top, r.top_at_edge) for r in o.rows[k0:k1]],
-                                  np.float64)
-                height, n = twice_height(camera, cols[:, 0], cols[:, 1], cols[:, 2],
-                                         cols[:, 3] if size.twice_pace_edge else None,
-                                         walker_m, size.top_inside_heights)
-                heights, read = row_heights(camera, cols[:, 0], cols[:, 1], cols[:, 2],
-                                            walker_m, size.top_inside_heights)
-                bound, ok = height_of_top(camera, cols[:, 0], cols[:, 1], 0 * cols[:, 1])
-                edge = (cols[:, 3] > 0.5) & np.asarray(ok) & ~read
-                every = np.concatenate([heights[read], np.asarray(bound)[edge]])
-                q = np.quantile(every, QUANTILES) if every.size else [np.nan] * len(QUANTILES)
-                kind = getattr(owner.get(o.track_id), "kind", "none")
-                print(f"{seed}:{i} track {o.track_id} ({kind}) rows {k0}-{k1} of {len(o.rows)}: "
-                      f"height {height:.2f} m over {n} rows ({int(read.sum())} read, "
-                      f"{n - int(read.sum())} at the edge), quantiles "
-                      f"{' '.join(f'{x:.2f}' for x in q)}, pace {float(o.result['pace_hz']):.2f}"
-                      f" Hz  {nearest_per_row(o, k0, k1, truth)}")
+    for name, tracks, objs, truth in scenes_of(cfg, a):
+        owner = match_tracks(tracks, truth)
+        for o in objs:
+            if o.result is None or int(o.result["reason"]) != Reason.MATCHED_TWICE:
+                continue
+            k0, k1 = (int(k) for k in o.result["window"])
+            c = np.asarray([(r.u, r.v, r.v_top, r.top_at_edge) for r in o.rows[k0:k1]],
+                           np.float64)
+            q = [twice_height(camera, c[:, 0], c[:, 1], c[:, 2],
+                              c[:, 3] if size.twice_pace_edge else None, walker_m,
+                              size.top_inside_heights, x) for x in QUANTILES]
+            height, n = q[-1]  # the median, rule 37's default
+            _, read = row_heights(camera, c[:, 0], c[:, 1], c[:, 2], walker_m,
+                                  size.top_inside_heights)
+            kind = getattr(owner.get(o.track_id), "kind", "none")
+            print(f"{name} track {o.track_id} ({kind}) rows {k0}-{k1} of {len(o.rows)}: "
+                  f"height {height:.2f} m over {n} rows ({int(read.sum())} read, "
+                  f"{n - int(read.sum())} at the edge), quantiles "
+                  f"{' '.join(f'{h:.2f}' for h, _ in q)}, pace "
+                  f"{float(o.result['pace_hz']):.2f} Hz  {nearest_per_row(o, k0, k1, truth)}")
     return 0
 
 
