@@ -109,6 +109,11 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   for fewer than N rows at its end).
 - twice_quantile: the tracker's `size.twice_pace_quantile` 0.25 vs 0.5 (rule 53: rule 37's
   height the lower quartile of its rows' heights, not their median).
+- upper_filter: the tracker's `body.column_filter_only` True with `body.column_rows` 0.5 vs the
+  defaults (rule 54: rule 33's upper-body column as the filter's measurement only, window B and
+  its candidates on the slice extent's centre, the paper's u_p).
+- upper_always: upper_filter on every detection with a predicted body box, not only the wider
+  ones (`body.column_everywhere`, rule 54b).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

@@ -151,6 +151,14 @@ RULES = {
                        "0.25 a priori (rule 37's threshold kept); suggested by "
                        "study_twice_heights on used seeds 8100001-8190001, 8260001-8330001 "
                        "(rule 53)"),
+    "upper_filter": ("tracker", "body.column_filter_only", True, False, TRACKER_SOURCES,
+                     "nothing fitted (rule 33's 0.5; ON also sets body.column_rows 0.5); "
+                     "written after rule 33 re-tested on the own defaults (round 53: crossing "
+                     "pace and straight-legged walkers lost with window B moved) (rule 54)"),
+    "upper_always": ("tracker", "body.column_everywhere", True, False, TRACKER_SOURCES,
+                     "nothing fitted (ON also sets body.column_rows 0.5 and "
+                     "body.column_filter_only); written after rule 54's screen on the own "
+                     "defaults (round 53: its moved column toggles with the width) (rule 54b)"),
     "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
              "nothing fitted (half the config's walker height, a priori); found on used seeds "
              "3300001-3330001, 3380001-3410001 (study_window_placement)"),
@@ -219,7 +227,9 @@ TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "pixel_halves": {"body.window_per_pixel": True},
                 "mean_refused": {"body.mean_refused_gate": False},
                 "mean_trend": {"body.mean_refused_gate": True},
-                "mass_crossing": {"body.mass_column": True}}
+                "mass_crossing": {"body.mass_column": True},
+                "upper_filter": {"body.column_rows": 0.5},
+                "upper_always": {"body.column_rows": 0.5, "body.column_filter_only": True}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -241,7 +251,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": (),
               "mass_column": (), "mass_crossing": (), "twice_sub": (), "across": (),
               "across_solo": TRACKER_SOURCES, "fast_stretch": (),
-              "twice_quantile": ()}
+              "twice_quantile": (), "upper_filter": (),
+              "upper_always": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -331,6 +331,7 @@ def test_foot_column_of_the_body_core_beside_a_trailing_suitcase():
     assert (paper.u, paper.v, paper.width, paper.box) == (54.5, 90.0, 30.0, (40, 30, 30, 61))
     core = detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_fraction=0.3, **kw)
     assert core.u == 45.0 and (core.v, core.width, core.box) == (90.0, 30.0, (40, 30, 11, 61))
+    assert core.u_extent == 54.5 and math.isnan(paper.u_extent) and paper.window_u(True) == 54.5
     assert detect_in_window(m, centre, size, core=(30, 20, 30, 72), column_fraction=0.3,
                             **kw).u == 54.5  # the extent (30 px) is not wider than the box
     assert detect_in_window(m, centre, size, column_fraction=0.3, **kw).u == 54.5  # no box
@@ -353,13 +354,22 @@ def test_foot_column_of_the_upper_body_beside_a_trailing_suitcase():
     kw = dict(fraction=0.1, halo=0, dilate_px=3)
     upper = detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_rows=0.5, **kw)
     assert upper.u == 45.0 and (upper.v, upper.width, upper.box) == (90.0, 30.0, (40, 30, 11, 61))
+    # rule 54: the paper's column kept for window B (the extent 40..69), u itself otherwise
+    assert (upper.u_extent, upper.window_u(True), upper.window_u(False)) == (54.5, 54.5, 45.0)
+    kept = detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_rows=0.5,
+                            column_box=False, **kw)  # rule 54: only u_p moves, the box stays
+    assert (kept.u, kept.u_extent, kept.box) == (45.0, 54.5, (40, 30, 30, 61))
+    # rule 54b: every detection with a body box, the one as wide as the box too
+    assert detect_in_window(m, centre, size, core=(30, 20, 30, 72), column_rows=0.5,
+                            column_wide_px=0, **kw).u == 45.0
     assert detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_rows=0.8,
                             **kw).u == 45.0
     assert detect_in_window(m, centre, size, core=(35, 20, 24, 72), column_rows=0.9,
                             **kw).u == 54.5
     assert detect_in_window(m, centre, size, core=(30, 20, 30, 72), column_rows=0.5,
                             **kw).u == 54.5
-    assert detect_in_window(m, centre, size, column_rows=0.5, **kw).u == 54.5
+    plain = detect_in_window(m, centre, size, column_rows=0.5, **kw)  # no body box: untouched
+    assert plain.u == 54.5 and math.isnan(plain.u_extent) and plain.window_u(True) == 54.5
 
 
 def test_upper_body_column_ignores_the_legs_swing():

@@ -28,6 +28,9 @@ TRACKER_DEFAULTS = [
     ("fraction", "body.slice_fraction", 0.1),
     ("(new: issue 16, rule 32b)", "body.column_fraction", None),  # the body core's column, off
     ("(new: issue 16, rule 33)", "body.column_rows", None),  # the upper body's column, off
+    ("(new: issue 16, rule 54)", "body.column_filter_only", False),  # rule 33's column moves
+    # window B too
+    ("(new: issue 16, rule 54b)", "body.column_everywhere", False),  # only wider detections
     ("shared_overlap", "body.shared_overlap", 0.5),
     ("(new: issue 16, missed walkers)", "body.split_shared", True),
     ("(new: issue 16, missed walkers)", "body.split_near_widths", 0.3),

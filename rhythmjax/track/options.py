@@ -76,6 +76,13 @@ class BodyOptions:
     # is wider than its predicted body box its u_p is the centre of the slice extent of the
     # columns' motion over the top column_rows of its rows (torso and head, above a suitcase
     # and the legs' swing); None: never. Rule 33 (0.5, a priori; docs/rules.md)
+    column_filter_only: bool = False  # rule 54: the column column_fraction or column_rows
+    # moves is the filter's measurement (the track's foot point) only; window B and its
+    # candidates stay at the slice extent's centre, the paper's u_p (`Detection.window_u`),
+    # and the detection's box stays the extent's
+    column_everywhere: bool = False  # rule 54b: the column rules act on every detection with
+    # a predicted body box, not only where wid_IMG is wider than it (the moved column then
+    # never toggles with the width from frame to frame)
     shared_overlap: float = 0.5  # two tracks' detections overlapping by this fraction of the
     # smaller box are one (merged) blob: it updates only the track whose predicted foot point is
     # nearest its foot point (in W) when the others' are more than twice as far, else none (they
@@ -177,6 +184,12 @@ class BodyOptions:
     # 0.0041 Hz better on five fresh pools, radial within 0.0002 Hz, no verdict moved on dev,
     # PETS09, CASIA-B (docs/rules.md, rules 50 and 50b; on since the fifty-first round, its
     # decision 51). May be on with the pace window (whose channel stays last)
+
+    def column_rules(self) -> dict:
+        """`detect.detect_in_window`'s arguments for the foot column rules (32b, 33, 54b)."""
+        return dict(column_fraction=self.column_fraction, column_rows=self.column_rows,
+                    column_wide_px=0 if self.column_everywhere else None,
+                    column_box=not self.column_filter_only)
 
     def candidate_offsets(self) -> tuple[tuple[float, ...] | None, tuple[float, ...]]:
         """(window B's candidate offsets down, in W, or None without candidate windows; its

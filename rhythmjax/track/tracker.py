@@ -165,10 +165,9 @@ class OnlineTracker:
                 continue
             det = detect.detect_in_window(M, centre, (box_w, box_h),
                                           fraction=opt.body.slice_fraction, core=cores[s],
-                                          column_fraction=opt.body.column_fraction,
-                                          column_rows=opt.body.column_rows,
                                           body_px=opt.body.parts_widths * Wp
-                                          if opt.body.parts_widths > 0 else None)
+                                          if opt.body.parts_widths > 0 else None,
+                                          **opt.body.column_rules())
             if det is not None:
                 dets[s] = det
                 predicted[s] = Predicted(centre, box_h, cores[s], (uv[0], uv[1]), Wp)
@@ -182,13 +181,13 @@ class OnlineTracker:
                              ) if shared and opt.body.split_shared else {}
         shared -= claims | split.keys()
         held = set()  # slots whose object was seen, its foot point unusable: no time-out
-        sample_du = np.zeros(S)  # window B's column less the measured one (side_anchor)
+        sample_du = np.zeros(S)  # window B's column less the measured one (rules 16, 54)
         for s, det in dets.items():
-            own = split.get(s, det)  # a sharer split off measures its own re-detection
+            cut = own = split.get(s, det)  # a sharer split off measures its own re-detection
             if opt.body.side_anchor:
-                cut = own
                 own = sides.anchor_at_side(cut, float(self._next_W[s]), M.shape[1])
-                sample_du[s] = cut.u - own.u  # window B stays on the visible feet
+            # window B stays on the visible feet (rule 16), on the extent (rule 54)
+            sample_du[s] = cut.window_u(opt.body.column_filter_only) - own.u
             if s not in shared and self._foot_too_high(s, own):
                 held.add(s)
             elif s not in shared:

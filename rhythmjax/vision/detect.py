@@ -58,7 +58,10 @@ class Detection:
     number of non-zero motion pixels in the box). `top`: the top row px of the sliced extent (the
     head) where `detect_in_window` measured it; NaN where the extent reaches the window's top
     (clipped: the head may lie above it) and for `find_objects`. `top_at_edge`: the extent
-    reached the image's first row there (the object goes on above the view)."""
+    reached the image's first row there (the object goes on above the view). `u_extent`: the
+    slice extent's centre px (the paper's u_p) where a column rule of `detect_in_window`
+    (`column_fraction`, `column_rows`) moved u (and the box, unless `column_box` is False); NaN
+    where u is it."""
 
     u: float
     v: float
@@ -67,6 +70,12 @@ class Detection:
     area: int
     top: float = math.nan
     top_at_edge: bool = False
+    u_extent: float = math.nan
+
+    def window_u(self, extent: bool) -> float:
+        """The column px of the rhythm window B on this detection: `u_extent` where `extent`
+        (rule 54, `BodyOptions.column_filter_only`) and a column rule moved u; u otherwise."""
+        return self.u_extent if extent and math.isfinite(self.u_extent) else self.u
 
 
 def frame_difference(prev: np.ndarray, cur: np.ndarray) -> np.ndarray:
@@ -137,11 +146,13 @@ def _project(m: np.ndarray, axis: int) -> np.ndarray:
 def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: int,
                   halo: int, column_fraction: Number | None = None,
                   wide_px: Number = math.inf,
-                  column_rows: Number | None = None) -> Detection | None:
+                  column_rows: Number | None = None, column_box: bool = True
+                  ) -> Detection | None:
     """Projections of the motion crop `m` (top-left at (x0, y0) px) sliced into a Detection;
     where wid_IMG exceeds `wide_px`, u_p is the centre of the columns reaching `column_fraction`
     of the vertical projection's maximum, or of the slice extent of the projection over the top
-    `column_rows` of the sliced rows, and the box spans them (None: never; module doc)."""
+    `column_rows` of the sliced rows, and the box spans them where `column_box` (else it stays
+    the slice extent's; None: never; module doc)."""
     cols = _project(m, 0)  # vertical projection: one value per column
     ext = _extent(cols, fraction)
     if ext is None:
@@ -154,13 +165,18 @@ def _bottom_point(m: np.ndarray, x0: int, y0: int, fraction: Number, min_area: i
     if area < min_area:
         return None
     width = float(max(c1 - c0 + 1 - 2 * halo, 1))
+    u_extent = x0 + 0.5 * (c0 + c1)
     if column_fraction is not None and width > wide_px:  # something beside the body: its
         c0, c1 = _extent(cols, max(column_fraction, fraction))  # core's columns, u_p and box
     elif column_rows is not None and width > wide_px:  # ... or its upper body's columns
         upper = m[r0:r0 + max(int(column_rows * (r1 - r0 + 1)), 1), c0:c1 + 1]
         c0, c1 = (c0 + c for c in _extent(_project(upper, 0), fraction) or (0, c1 - c0))
+    else:
+        u_extent = math.nan
+    b0, b1 = (c0, c1) if column_box or math.isnan(u_extent) else ext
     return Detection(u=x0 + 0.5 * (c0 + c1), v=float(y0 + r1), width=width,
-                     box=(x0 + c0, y0 + r0, c1 - c0 + 1, r1 - r0 + 1), area=area)
+                     box=(x0 + b0, y0 + r0, b1 - b0 + 1, r1 - r0 + 1), area=area,
+                     u_extent=u_extent)
 
 
 def _window(shape: tuple[int, ...], cu: float, cv: float, w: int, h: int) -> tuple[int, int, int,
@@ -176,7 +192,9 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
                      core: WindowBox | None = None, dilate_px: int = 3,
                      body_px: Number | None = None,
                      column_fraction: Number | None = None,
-                     column_rows: Number | None = None) -> Detection | None:
+                     column_rows: Number | None = None,
+                     column_wide_px: Number | None = None,
+                     column_box: bool = True) -> Detection | None:
     """Detect the object in a window centred on the predicted foot point `center_uv` = (u, v) px.
 
     `window_size` is (width, height) px or one number for a square; the window is clipped at the
@@ -209,7 +227,10 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
     (the body without a suitcase or bag beside it; module doc, item 4); None: never.
     `column_rows` (with `core`, `column_fraction` None): the same, u_p the centre of the slice
     extent of the vertical projection over the top `column_rows` of the sliced rows (torso and
-    head: a suitcase or the legs' swing lie below); None: never."""
+    head: a suitcase or the legs' swing lie below); None: never. `column_wide_px` (with `core`):
+    the width px wid_IMG must exceed for either column rule (None: `core`'s width; 0: every
+    detection, rule 54b). `column_box` False (rule 54): the box stays the slice extent's, only
+    u_p moves."""
     u, v = (float(c) for c in center_uv)
     if not (math.isfinite(u) and math.isfinite(v)):
         return None
@@ -225,7 +246,9 @@ def detect_in_window(motion: np.ndarray, center_uv: Sequence[Number] | np.ndarra
         if crop is None:
             return None
     det = _bottom_point(crop, x0, y0, fraction, min_area, halo, column_fraction,
-                        math.inf if core is None else core[2], column_rows)
+                        math.inf if core is None else
+                        core[2] if column_wide_px is None else column_wide_px, column_rows,
+                        column_box)
     if det is None:
         return None
     if det.box[1] <= y0:  # the extent reaches the window's top: no top row (at the image's
