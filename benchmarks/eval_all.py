@@ -18,20 +18,22 @@ and a fresh seed, FRESH_SEED), `count` (benchmarks/eval_count.py's counting scen
 FRESH_SEED), `synthetic_any` and `count_any` (the same scenes with clothing of any grey, some
 close to the ground's: `sim.scene.random_spec`'s clothing "any"), `synthetic_suitcase` (the
 scenes with half the walkers pulling a wheeled suitcase: `random_spec`'s suitcase_fraction 0.5),
-`synthetic_lateral` (the scenes with every path within 30 degrees of crossing the view). The own
-scenes' walkers bend their knees and roll their feet heel to toe (`random_spec`'s articulated,
-`sim.legs`; since issue 16's thirty-eighth round); `synthetic_rods`, `synthetic_lateral_rods` and
-`count_rods` are the same scenes with the straight legs drawn before it (`synthetic_knees` and
-`synthetic_lateral_knees`, the names of the thirty-seventh round, stay as aliases),
-`dev` (the 15 single/multi clips of ../shared/data/dev through the tracker, as `rhythmjax run
--c CAMERA.json`), `dev_count`
-(the 3 crowd clips through `count_frames`, as `rhythmjax count -c CAMERA.json`), `pets` (the
-tracker, eval_real_video's scoring), `pets_count`, `pets_boxes` (`rhythmjax rhythm --boxes` on
-the annotated boxes, when that verb exists), `ucsd`, `casia`. Dev clips: the config is the
-camera section of the truth JSON only (README of the folder; principal point 255.5), everything
-else the defaults; a track belongs to the object whose truth foot point it follows
-(`sim.evaluate.match_tracks`), an object's verdict is its longest judged track's. Own scenes:
-eval_synthetic's verdicts by track (the same rule).
+`synthetic_lateral` (the scenes with every path within 30 degrees of crossing the view),
+`synthetic_lateral_suitcase` (crossing paths and half the walkers pulling a suitcase, which then
+trails beside them in the image, as `dev_walk_05`'s does; since issue 16's fifty-third round).
+The own scenes' walkers bend their knees and roll their feet heel to toe (`random_spec`'s
+articulated, `sim.legs`; since issue 16's thirty-eighth round); `synthetic_rods`,
+`synthetic_lateral_rods` and `count_rods` are the same scenes with the straight legs drawn
+before it (`synthetic_knees` and `synthetic_lateral_knees`, the names of the thirty-seventh
+round, stay as aliases), `dev` (the 15 single/multi clips of ../shared/data/dev through the
+tracker, as `rhythmjax run -c CAMERA.json`), `dev_count` (the 3 crowd clips through
+`count_frames`, as `rhythmjax count -c CAMERA.json`), `pets` (the tracker, eval_real_video's
+scoring), `pets_count`, `pets_boxes` (`rhythmjax rhythm --boxes` on the annotated boxes, when
+that verb exists), `ucsd`, `casia`. Dev clips: the config is the camera section of the truth
+JSON only (README of the folder; principal point 255.5), everything else the defaults; a track
+belongs to the object whose truth foot point it follows (`sim.evaluate.match_tracks`), an
+object's verdict is its longest judged track's. Own scenes: eval_synthetic's verdicts by track
+(the same rule).
 
 `--set SECTION.KEY=VALUE` (repeatable) overrides a config key for every source, e.g.
 `--set thresholds.harmonic_max_ratio=0` (the paper's rule; the default 0.25 is the half-pace
@@ -70,11 +72,13 @@ from eval_all_score import (
 FRESH_SEED = 777_001  # a seed no rule was chosen on (eval_synthetic's is 20240603)
 DEV_ROOT = Path(os.environ.get("RHYTHMJAX_DEV", "/work/shared/data/dev"))
 SOURCES = ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitcase",
-           "synthetic_lateral", "synthetic_rods", "synthetic_lateral_rods", "count_rods", "dev",
-           "dev_count", "pets", "pets_count", "pets_boxes", "ucsd", "casia")
+           "synthetic_lateral", "synthetic_lateral_suitcase", "synthetic_rods",
+           "synthetic_lateral_rods", "count_rods", "dev", "dev_count", "pets", "pets_count",
+           "pets_boxes", "ucsd", "casia")
 OWN_SOURCES = ("synthetic", "count", "synthetic_any", "count_any", "synthetic_suitcase",
-               "synthetic_lateral", "synthetic_rods", "synthetic_lateral_rods", "count_rods",
-               "synthetic_knees", "synthetic_lateral_knees")  # one row per seed
+               "synthetic_lateral", "synthetic_lateral_suitcase", "synthetic_rods",
+               "synthetic_lateral_rods", "count_rods", "synthetic_knees",
+               "synthetic_lateral_knees")  # one row per seed
 
 
 # ----------------------------------------------------------------------------------------------
@@ -331,6 +335,11 @@ def run_synthetic_lateral(sets, quick, log) -> dict:
     return run_synthetic(sets, quick, log, lateral_deg=30.0)
 
 
+def run_synthetic_lateral_suitcase(sets, quick, log) -> dict:
+    """`synthetic_lateral` with half the walkers pulling a suitcase (beside them in the image)."""
+    return run_synthetic(sets, quick, log, lateral_deg=30.0, suitcase_fraction=0.5)
+
+
 def run_synthetic_rods(sets, quick, log) -> dict:
     """`synthetic` with the straight-legged walkers drawn before the thirty-eighth round."""
     return run_synthetic(sets, quick, log, articulated=False)
@@ -353,6 +362,7 @@ def run_count_any(sets, quick, log) -> dict:
 
 RUNNERS = {"synthetic": run_synthetic, "count": run_count, "synthetic_any": run_synthetic_any,
            "synthetic_suitcase": run_synthetic_suitcase, "synthetic_lateral": run_synthetic_lateral,
+           "synthetic_lateral_suitcase": run_synthetic_lateral_suitcase,
            "synthetic_rods": run_synthetic_rods,
            "synthetic_lateral_rods": run_synthetic_lateral_rods, "count_rods": run_count_rods,
            "synthetic_knees": run_synthetic, "synthetic_lateral_knees": run_synthetic_lateral,

@@ -26,6 +26,7 @@ SOURCE_SCENES = {
     "synthetic_any": {"clothing": "any"},
     "synthetic_suitcase": {"suitcase_fraction": 0.5},
     "synthetic_lateral": {"lateral_deg": 30.0}, "synthetic_lateral_knees": {"lateral_deg": 30.0},
+    "synthetic_lateral_suitcase": {"lateral_deg": 30.0, "suitcase_fraction": 0.5},
     "synthetic_rods": {"articulated": False},
     "synthetic_lateral_rods": {"lateral_deg": 30.0, "articulated": False},
 }
