@@ -114,6 +114,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   its candidates on the slice extent's centre, the paper's u_p).
 - upper_always: upper_filter on every detection with a predicted body box, not only the wider
   ones (`body.column_everywhere`, rule 54b).
+- upper_median: upper_filter with `recheck.median_pace` (rules 54 and 47: the track's pace and
+  stride the medians over its Pedestrian windows).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each

@@ -159,6 +159,10 @@ RULES = {
                      "nothing fitted (ON also sets body.column_rows 0.5 and "
                      "body.column_filter_only); written after rule 54's screen on the own "
                      "defaults (round 53: its moved column toggles with the width) (rule 54b)"),
+    "upper_median": ("tracker", "body.column_filter_only", True, False, TRACKER_SOURCES,
+                     "nothing fitted (ON also sets body.column_rows 0.5 and recheck.median_pace: "
+                     "rules 54 and 47 together); written after decision 54 failed on the "
+                     "crossing pace (round 53)"),
     "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
              "nothing fitted (half the config's walker height, a priori); found on used seeds "
              "3300001-3330001, 3380001-3410001 (study_window_placement)"),
@@ -229,7 +233,8 @@ TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "mean_trend": {"body.mean_refused_gate": True},
                 "mass_crossing": {"body.mass_column": True},
                 "upper_filter": {"body.column_rows": 0.5},
-                "upper_always": {"body.column_rows": 0.5, "body.column_filter_only": True}}
+                "upper_always": {"body.column_rows": 0.5, "body.column_filter_only": True},
+                "upper_median": {"body.column_rows": 0.5, "recheck.median_pace": True}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -252,7 +257,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "mass_column": (), "mass_crossing": (), "twice_sub": (), "across": (),
               "across_solo": TRACKER_SOURCES, "fast_stretch": (),
               "twice_quantile": (), "upper_filter": (),
-              "upper_always": ()}
+              "upper_always": (), "upper_median": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",
