@@ -6,7 +6,8 @@ fifty-third round; a study: nothing is chosen here).
 The rule is given as tracker option changes (`--change body.column_rows=0.5`, repeatable; values
 read as JSON, else as text); each walker's longest judged track on each side
 (`sim.evaluate.match_tracks`). The own scenes are tracked as `eval_synthetic.py` tracks them,
-cached under -d (one folder per side). The last line sums it up: how many walkers' pace errors
+cached under -d (one folder per side; the cache does not record the changes, so give each rule
+its own -d). The last line sums it up: how many walkers' pace errors
 grew by more than 0.01 Hz, how many of those changed deciding window or candidate, and the mean
 share of the rule's deciding-window rows that are predicted yet carry a sample.
 
