@@ -25,8 +25,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from eval_synthetic import RECOMMENDED, scene_specs  # noqa: E402
-from study_tracks import study_parser, track_scene  # noqa: E402
+from eval_synthetic import RECOMMENDED  # noqa: E402
+from study_tracks import scenes_of, study_parser  # noqa: E402
 
 
 WORSE_HZ = 0.01  # a pace error this much larger counts as moved
@@ -77,23 +77,18 @@ def main(argv=None) -> int:
     sides = {"defaults": synthetic_options(), "rule": with_changes(synthetic_options(), changes)}
     moved = changed = both = 0
     carried = []
-    for seed in (int(s) for s in a.seeds.split(",")):
-        specs = scene_specs(seed, a.scenes, camera=cfg.camera,
-                            lateral_deg=30.0 if a.lateral else None)
-        for i, (s, spec) in enumerate(specs):
-            out = {k: track_scene(cfg, s, spec, a.cache / k / str(seed), o)
-                   for k, o in sides.items()}
-            judged = {k: walkers(r[0], r[2], r[3]) for k, r in out.items()}
-            true_hz = {ob.track_id: ob.pace_hz for ob in out["defaults"][3]}
-            for w in sorted(set(judged["defaults"]) & set(judged["rule"])):
-                x, y = (window_of(judged[k][w], true_hz[w]) for k in sides)
-                both += 1
-                carried.append(y[4])
-                if y[0] > x[0] + WORSE_HZ:
-                    moved += 1
-                    changed += (x[1], x[2]) != (y[1], y[2])
-                print(f"{seed}:{i} {w}: pace error {x[0]:.3f} -> {y[0]:.3f} Hz, window {x[1]} -> "
-                      f"{y[1]}, candidate {x[2]} -> {y[2]}, predicted {x[3]:.2f} -> {y[3]:.2f}")
+    for base, rule in zip(*(scenes_of(cfg, a, o, a.cache / k) for k, o in sides.items())):
+        judged = [walkers(*scene[1:]) for scene in (base, rule)]
+        true_hz = {ob.track_id: ob.pace_hz for ob in base[3]}
+        for w in sorted(set(judged[0]) & set(judged[1])):
+            x, y = (window_of(side[w], true_hz[w]) for side in judged)
+            both += 1
+            carried.append(y[4])
+            if y[0] > x[0] + WORSE_HZ:
+                moved += 1
+                changed += (x[1], x[2]) != (y[1], y[2])
+            print(f"{base[0]} {w}: pace error {x[0]:.3f} -> {y[0]:.3f} Hz, window {x[1]} -> "
+                  f"{y[1]}, candidate {x[2]} -> {y[2]}, predicted {x[3]:.2f} -> {y[3]:.2f}")
     print(f"walkers judged Pedestrian both ways {both}; pace error up by > {WORSE_HZ} Hz: "
           f"{moved}, of them with another deciding window or candidate: {changed}; the rule's "
           f"deciding-window rows predicted with a sample: {np.mean(carried) if carried else 0:.3f}")

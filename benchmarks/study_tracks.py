@@ -144,14 +144,16 @@ def study_parser(doc: str) -> argparse.ArgumentParser:
     return p
 
 
-def scenes_of(cfg, args):
+def scenes_of(cfg, args, options=None, cache: Path | None = None):
     """(name "seed:scene", tracks, objs (slim), truth) of every own scene of `args`
-    (`study_parser`'s), tracked as `eval_synthetic.py` tracks them (`track_scene`, cached)."""
+    (`study_parser`'s), tracked as `eval_synthetic.py` tracks them (`track_scene`, cached under
+    `cache`, default args.cache; `options`, default the synthetic scenes')."""
     for seed in (int(s) for s in args.seeds.split(",")):
         specs = scene_specs(seed, args.scenes, camera=cfg.camera,
                             lateral_deg=30.0 if args.lateral else None)
         for i, (s, spec) in enumerate(specs):
-            tracks, _, objs, truth = track_scene(cfg, s, spec, args.cache / str(seed))
+            tracks, _, objs, truth = track_scene(cfg, s, spec,
+                                                 (cache or args.cache) / str(seed), options)
             yield f"{seed}:{i}", tracks, objs, truth
 
 
