@@ -41,15 +41,17 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   window of a Pedestrian track's last N rows and on the windows before its deciding one);
   recheck_tail: `recheck.tail` alone (rule 30a); recheck_speed: `recheck.earlier` "speed"
   (rule 30b: the windows before the deciding one, by the speed test alone).
-- core_column: the tracker's `body.column_fraction` 0.3 vs None (the default; rule 32b: where a
-  detection is wider than its predicted body box, the foot column u_p is the centre of the
-  columns reaching 0.3 of the vertical projection's maximum, not 0.1's).
+- core_column: the tracker's `body.column_fraction` 0.3 vs None (rule 32b: where a detection is
+  wider than its predicted body box, the foot column u_p is the centre of the columns reaching
+  0.3 of the vertical projection's maximum, not 0.1's; both sides without rule 54's
+  `body.column_rows`, ON with `body.column_filter_only` False).
 - height_fallback: the tracker's `size.min_height_scope` "window-or-track" vs "window" (the
   default; rule 26f: a deciding window with fewer than `size.min_height_rows` readable heights
   is read over the whole track).
-- upper_column: the tracker's `body.column_rows` 0.5 vs None (the default; rule 33: where a
-  detection is wider than its predicted body box, u_p is the centre of the slice extent of the
-  motion's columns over the top half of its rows).
+- upper_column: the tracker's `body.column_rows` 0.5 vs None (rule 33: where a detection is
+  wider than its predicted body box, u_p is the centre of the slice extent of the motion's
+  columns over the top half of its rows; ON with `body.column_filter_only` False, window B and
+  the box moved too).
 - pace_window: the tracker's `body.pace_window_widths` 2.0 vs 0 (rule 34: a Pedestrian window's
   pace and stride from I(k) of window B scaled by 2 where that window says Pedestrian too).
 - window_per_pixel: the tracker's `body.window_per_pixel` True vs False (rule 35: I(k) the
@@ -67,7 +69,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - pace_tall: the tracker's `recheck.pace_tall` True vs False (rule 46: a later window refused
   by rule 29's pace test alone kept where its rows are a walker's height by rule 37's test).
 - median_pace: the tracker's `recheck.median_pace` True vs False (rule 47: a Pedestrian track's
-  pace and stride the medians over its windows judged Pedestrian; verdicts unchanged).
+  pace and stride the medians over its windows judged Pedestrian; verdicts unchanged; since
+  decision 55 OFF is rule 55's strongest window, which rule 47 replaces where on).
 - mass_column: the tracker's `body.mass_column` True vs False (rule 48: window B's column on a
   measured frame the mean column of the motion over the body, `track.lean.motion_column`).
 - mass_crossing: the tracker's `body.mass_crossing` 0.7071 with `body.mass_column` vs the
@@ -109,13 +112,20 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   for fewer than N rows at its end).
 - twice_quantile: the tracker's `size.twice_pace_quantile` 0.25 vs 0.5 (rule 53: rule 37's
   height the lower quartile of its rows' heights, not their median).
-- upper_filter: the tracker's `body.column_filter_only` True with `body.column_rows` 0.5 vs the
-  defaults (rule 54: rule 33's upper-body column as the filter's measurement only, window B and
-  its candidates on the slice extent's centre, the paper's u_p).
+- upper_filter: the tracker's `body.column_filter_only` True with `body.column_rows` 0.5 (the
+  defaults since decision 55) vs False with None (rule 54: rule 33's upper-body column as the
+  filter's measurement only, window B and its candidates on the slice extent's centre, the
+  paper's u_p). The OFF sides of the rules built with rules 54 and 55 set the keys of the
+  defaults before decision 55 (`TRACKER_WITH_OFF`).
 - upper_always: upper_filter on every detection with a predicted body box, not only the wider
   ones (`body.column_everywhere`, rule 54b).
 - upper_median: upper_filter with `recheck.median_pace` (rules 54 and 47: the track's pace and
-  stride the medians over its Pedestrian windows).
+  stride the medians over its Pedestrian windows) vs neither rule, rule 55 off.
+- strongest_pace: the tracker's `recheck.strongest_pace` True (the default since decision 55)
+  vs False (rule 55: a Pedestrian track's pace and stride those of its Pedestrian window whose
+  chosen peak is the strongest).
+- upper_strongest: upper_filter with `recheck.strongest_pace` (rules 54 and 55, the defaults)
+  vs neither (decision 55).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each
@@ -159,6 +169,7 @@ from eval_rules_table import (  # noqa: E402
     COUNT_VARIANTS,
     RULES,
     TRACKER_WITH,
+    TRACKER_WITH_OFF,
     table,
     variant_mask,
 )
@@ -316,7 +327,8 @@ def run(rule: str, state: str, only, quick: bool, outdir: Path, seeds=None) -> P
         if kind == "config":
             sets = [(key[0], key[1], val)]
         elif kind == "tracker":
-            _patch_tracker({key: val, **(TRACKER_WITH.get(rule, {}) if state == "on" else {})})
+            with_keys = (TRACKER_WITH if state == "on" else TRACKER_WITH_OFF).get(rule, {})
+            _patch_tracker({key: val, **with_keys})
             if key == "body.window_candidates":  # `rhythm --boxes` runs in a subprocess
                 ea.RHYTHM_FLAGS.append(f"--{'' if val else 'no-'}window-candidates")
         elif kind == "count":

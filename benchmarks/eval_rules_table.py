@@ -163,6 +163,14 @@ RULES = {
                      "nothing fitted (ON also sets body.column_rows 0.5 and recheck.median_pace: "
                      "rules 54 and 47 together); written after decision 54 failed on the "
                      "crossing pace (round 53)"),
+    "strongest_pace": ("tracker", "recheck.strongest_pace", True, False, TRACKER_SOURCES,
+                       "nothing fitted (a Pedestrian track's pace and stride those of its "
+                       "Pedestrian window with the strongest chosen peak); written after "
+                       "decision 54's crossing pace (round 53's lead) (rule 55)"),
+    "upper_strongest": ("tracker", "body.column_filter_only", True, False, TRACKER_SOURCES,
+                        "nothing fitted (ON also sets body.column_rows 0.5 and "
+                        "recheck.strongest_pace: rules 54 and 55 together); written after "
+                        "decision 54 failed on the crossing pace (round 54)"),
     "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
              "nothing fitted (half the config's walker height, a priori); found on used seeds "
              "3300001-3330001, 3380001-3410001 (study_window_placement)"),
@@ -234,7 +242,18 @@ TRACKER_WITH = {"split_depth": {"body.split_shared": True},
                 "mass_crossing": {"body.mass_column": True},
                 "upper_filter": {"body.column_rows": 0.5},
                 "upper_always": {"body.column_rows": 0.5, "body.column_filter_only": True},
-                "upper_median": {"body.column_rows": 0.5, "recheck.median_pace": True}}
+                "upper_median": {"body.column_rows": 0.5, "recheck.median_pace": True},
+                "upper_strongest": {"body.column_rows": 0.5, "recheck.strongest_pace": True},
+                "upper_column": {"body.column_filter_only": False},
+                "core_column": {"body.column_filter_only": False}}
+# tracker keys a rule's OFF side sets besides its own, where the defaults are not that side
+# (rules 54 and 55 on since decision 55: the OFF side of the rules built with them is the
+# defaults before it, no column rule and the deciding window's pace)
+TRACKER_WITH_OFF = {"upper_filter": {"body.column_rows": None},
+                    "upper_median": {"body.column_rows": None, "recheck.strongest_pace": False},
+                    "upper_strongest": {"body.column_rows": None,
+                                        "recheck.strongest_pace": False},
+                    "core_column": {"body.column_rows": None}}
 ALL = TRACKER_SOURCES + COUNT_SOURCES + ("pets_boxes",)
 DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "relink": ALL, "stitch": ALL, "parts": ALL, "sample_estimate": (),
@@ -256,8 +275,9 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "window_low": TRACKER_SOURCES, "pace_tall": TRACKER_SOURCES, "median_pace": (),
               "mass_column": (), "mass_crossing": (), "twice_sub": (), "across": (),
               "across_solo": TRACKER_SOURCES, "fast_stretch": (),
-              "twice_quantile": (), "upper_filter": (),
-              "upper_always": (), "upper_median": ()}
+              "twice_quantile": (), "upper_filter": TRACKER_SOURCES,
+              "upper_always": (), "upper_median": (), "strongest_pace": TRACKER_SOURCES,
+              "upper_strongest": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

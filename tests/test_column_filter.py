@@ -1,4 +1,5 @@
-"""Rules 54 and 54b (`body.column_filter_only`, `body.column_everywhere`; both off): rule 33's
+"""Rules 54 and 54b (`body.column_filter_only` with `body.column_rows` 0.5, on by default since
+decision 55; `body.column_everywhere`, off): rule 33's
 upper-body column as the filter's measurement only, window B left on the paper's column.
 
 Reference: the detections the tracker makes and the foot points it gives window B, read
@@ -97,8 +98,10 @@ def test_rule_54b_moves_narrow_detections_too(monkeypatch):
 
 def test_rules_54_without_a_column_rule_change_nothing(monkeypatch):
     """Rule 54 and 54b move nothing unless a column rule is on: the tracks are identical."""
-    base, _, _ = track_with_spies(monkeypatch, {})
-    both, _, _ = track_with_spies(monkeypatch, {"body.column_filter_only": True,
+    base, _, _ = track_with_spies(monkeypatch, {"body.column_rows": None,
+                                                "body.column_filter_only": False})
+    both, _, _ = track_with_spies(monkeypatch, {"body.column_rows": None,
+                                               "body.column_filter_only": True,
                                                "body.column_everywhere": True})
     for key in ("frame", "u", "v", "intensity", "x_est", "y_est"):
         np.testing.assert_array_equal(np.asarray(base[key]), np.asarray(both[key]))

@@ -1,9 +1,9 @@
-"""Rule 47 (`recheck.median_pace`, off by default): a Pedestrian track's pace F and stride T
-are the medians over its windows judged Pedestrian (the deciding one and the later ones), its
-verdict the deciding window's. Hand-made tracks on the paper's camera (`test_recheck`'s
-helpers: I(k) a sine at a set pace, the object moving at a set speed): the medians by hand over
-odd and even window counts, windows not judged Pedestrian left out, the option off, a track not
-judged Pedestrian, and the tracker on a rendered lone walker."""
+"""Rule 47 (`recheck.median_pace`, off by default; in place of rule 55 where on): a Pedestrian
+track's pace F and stride T are the medians over its windows judged Pedestrian (the deciding one and
+the later ones), its verdict the deciding window's. Hand-made tracks on the paper's camera
+(`test_recheck`'s helpers: I(k) a sine at a set pace, the object moving at a set speed): the medians
+by hand over odd and even window counts, windows not judged Pedestrian left out, the option off, a
+track not judged Pedestrian, and the tracker on a rendered lone walker."""
 
 import math
 
@@ -43,7 +43,7 @@ def test_three_later_windows_at_another_pace_give_the_median():
     obj = judged_online(walk_rows([SPEED] * 192, paces_hz=[2.0] * 64 + [1.7] * 128))
     assert int(obj.result["verdict"]) == Verdict.PEDESTRIAN and obj.result["window"] == (0, 64)
     assert len(later_paces(obj)) >= 2
-    off = median_pace(CFG, obj, RecheckOptions())
+    off = median_pace(CFG, obj, RecheckOptions(strongest_pace=False))
     assert off is obj.result
     assert off["pace_hz"] == pytest.approx(2.0, abs=PACE_TOL)
     on = median_pace(CFG, obj, ON)

@@ -27,9 +27,9 @@ TRACKER_DEFAULTS = [
     ("body_widths", "body.parts_widths", 1.8),
     ("fraction", "body.slice_fraction", 0.1),
     ("(new: issue 16, rule 32b)", "body.column_fraction", None),  # the body core's column, off
-    ("(new: issue 16, rule 33)", "body.column_rows", None),  # the upper body's column, off
-    ("(new: issue 16, rule 54)", "body.column_filter_only", False),  # rule 33's column moves
-    # window B too
+    ("(new: issue 16, rule 33)", "body.column_rows", 0.5),  # the upper body's column (rule 54)
+    ("(new: issue 16, rule 54)", "body.column_filter_only", True),  # the filter's only
+    # (False: rule 33, window B and the box moved too)
     ("(new: issue 16, rule 54b)", "body.column_everywhere", False),  # only wider detections
     ("shared_overlap", "body.shared_overlap", 0.5),
     ("(new: issue 16, missed walkers)", "body.split_shared", True),
@@ -79,6 +79,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 43)", "recheck.low", False),  # rule 26 in the rechecked windows, off
     ("(new: issue 16, rule 46)", "recheck.pace_tall", True),  # rule 29's pace test vs tall
     ("(new: issue 16, rule 47)", "recheck.median_pace", False),  # the windows' median pace, off
+    ("(new: issue 16, rule 55)", "recheck.strongest_pace", True),  # strongest window's pace
     ("(new: issue 16, rule 52)", "recheck.fast_stretch", 0.0),  # a fast stretch after, off
 ]
 TRACKER_REMOVED = ["max_dv_mps", "dv_window_s"]

@@ -56,7 +56,8 @@ def test_no_ground_point_gives_no_lean():
 def test_tracker_puts_window_b_under_the_body(monkeypatch, on):
     """A walker 2.5 m right of the optical axis coming nearer: every I(k) is summed at the measured
     foot column less the lean (on) or at it (off), at the measured row, and the measurement the
-    EKF reads (the tracks' u, v) is the same either way."""
+    EKF reads (the tracks' u, v) is the same either way. Rule 54's upper-body column is off here:
+    it keeps window B on the slice extent where the track's u moves (`test_column_filter.py`)."""
     from rhythmjax.sim import scene as synth
     from rhythmjax.track import tracker as trk
     from rhythmjax.track.options import TrackerOptions, with_changes
@@ -73,7 +74,8 @@ def test_tracker_puts_window_b_under_the_body(monkeypatch, on):
 
     monkeypatch.setattr(trk.detect, "window_b_intensity", record)
     opt = with_changes(TrackerOptions(), {"body.lean_column": on,
-                                          "body.window_candidates": False})
+                                          "body.window_candidates": False,
+                                          "body.column_rows": None})  # rule 54's column off
     tr = trk.OnlineTracker(cfg, opt)
     for i, f in enumerate(sc.frames):
         tr.update(i, i / sc.fps, f)

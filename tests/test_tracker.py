@@ -159,7 +159,9 @@ def test_rhythm_window_restarts_after_missing_run():
 def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
     """With `body.sample_estimate=True` the rhythm signal is sampled in window B at the filter's
     foot point (its ground estimate projected), not at the measured one, which scatters by more
-    than window B's W/5 rows; the default (False, the paper's) keeps the measured one."""
+    than window B's W/5 rows; the default (False, the paper's) keeps the measured one. Rule 54's
+    upper-body column is off here (with it window B stays on the slice extent where the track's
+    u moves: `test_column_filter.py`)."""
     import jax.numpy as jnp
 
     from rhythmjax.model.camera import project
@@ -171,7 +173,8 @@ def test_window_b_sampled_at_the_filtered_foot_point(walker_scene, monkeypatch):
                         lambda D, u, v, W, **kw: at.append((u, v)) or real(D, u, v, W, **kw))
     for estimate in (True, False):
         at.clear()
-        tr = OnlineTracker(CFG, TrackerOptions(body=BodyOptions(sample_estimate=estimate)))
+        tr = OnlineTracker(CFG, TrackerOptions(body=BodyOptions(sample_estimate=estimate,
+                                                                column_rows=None)))
         for i, f in enumerate(walker_scene.frames[:40]):
             tr.update(i, i / 15.0, f)
         tracks, _, _ = tr.finish()
@@ -197,7 +200,8 @@ def test_body_parts_measured_together():
     so is the shared-blob split (`body.split_shared`), which measures duplicate tracks on one
     walker in their own narrower boxes, parts not joined (median ratio 0.82 with it); and so is
     the body core's foot column (`body.column_fraction`, rule 32b), which re-centres a part's
-    detection wider than its box on its strongest columns (0.89 without joining)."""
+    detection wider than its box on its strongest columns (0.89 without joining), and rule 54's
+    upper-body column (`body.column_rows`), which does the same on its upper half."""
     from rhythmjax.track.options import BodyOptions, TrackerOptions
 
     scene = _walker_scene(y=8.0)
@@ -207,7 +211,8 @@ def test_body_parts_measured_together():
         tr = OnlineTracker(CFG, TrackerOptions(body=BodyOptions(parts_widths=bw,
                                                                 high_foot_widths=0.0,
                                                                 split_shared=False,
-                                                                column_fraction=None)))
+                                                                column_fraction=None,
+                                                                column_rows=None)))
         for i, f in enumerate(scene.frames):
             tr.update(i, i / 15.0, f)
         tracks, _, _ = tr.finish()

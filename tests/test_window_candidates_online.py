@@ -163,14 +163,15 @@ def test_option_on_writes_the_candidate_columns(runs):
     assert gap.sum() >= 3 and np.all(np.isnan(cand[gap]))
     assert all(len(o.candidate_rows) == len(o.rows) for o in objs)
     # each row's candidates recomputed independently from the tracker's own D, foot point and
-    # W: a measured row is found by its foot point and I(k) (window B at the measured foot
-    # point, `body.sample_estimate` off), a predicted one (window B at the filter's foot point)
-    # by its I(k) among the calls with that value
+    # W: a measured row is found by its foot row and I(k) (window B at the measured foot row,
+    # `body.sample_estimate` off; its column the slice extent's, which rule 54 may leave apart
+    # from the track's u), a predicted one (window B at the filter's foot point) by its I(k)
+    # among the calls with that value
     at, by_value = {}, {}
     for D, u, v, W, value in calls:
         if math.isfinite(value):
             want = tuple(window_b_intensity(D, u, v + o * W, W) for o in OFFSETS)
-            at[(float(u), float(v), value)] = want
+            at[(float(v), value)] = want
             by_value.setdefault(value, []).append(want)
     ok = np.isfinite(inten)
     measured = ok & np.isfinite(tracks["u"])
@@ -178,7 +179,7 @@ def test_option_on_writes_the_candidate_columns(runs):
     for i in np.flatnonzero(ok):
         got = tuple(cand[i])
         if measured[i]:
-            assert got == at[(tracks["u"][i], tracks["v"][i], inten[i])], i
+            assert got == at[(tracks["v"][i], inten[i])], i
         else:
             assert got in by_value[inten[i]], i
     assert np.any(cand[ok] != inten[ok][:, None], axis=0).all()  # every window moved

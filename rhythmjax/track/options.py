@@ -72,14 +72,18 @@ class BodyOptions:
     # unchanged; new objects and the shared-blob split's re-detections (as wide as the box)
     # never widen past it. Rule 32b (0.3, a priori): off, it lost walkers and pace on most own
     # sources (docs/rules.md)
-    column_rows: float | None = None  # a fraction: with column_fraction None, where a detection
+    column_rows: float | None = 0.5  # a fraction: with column_fraction None, where a detection
     # is wider than its predicted body box its u_p is the centre of the slice extent of the
     # columns' motion over the top column_rows of its rows (torso and head, above a suitcase
-    # and the legs' swing); None: never. Rule 33 (0.5, a priori; docs/rules.md)
-    column_filter_only: bool = False  # rule 54: the column column_fraction or column_rows
+    # and the legs' swing); None: never. Rule 33 (0.5, a priori; docs/rules.md); on since issue
+    # 16's fifty-fourth round, with column_filter_only (rule 54), decision 55
+    column_filter_only: bool = True  # rule 54: the column column_fraction or column_rows
     # moves is the filter's measurement (the track's foot point) only; window B and its
     # candidates stay at the slice extent's centre, the paper's u_p (`Detection.window_u`),
-    # and the detection's box stays the extent's
+    # and the detection's box stays the extent's (False with column_rows: rule 33, which moves
+    # window B and the box too). On with rule 55 (`RecheckOptions.strongest_pace`) since
+    # decision 55 (fresh own 9340001-9890001: walkers 1718 -> 1751 of 1960, non-walkers
+    # 20 -> 12 of 840, pace no worse on any pool; dev 8 -> 10 of 10; docs/rules.md, rule 55)
     column_everywhere: bool = False  # rule 54b: the column rules act on every detection with
     # a predicted body box, not only where wid_IMG is wider than it (the moved column then
     # never toggles with the width from frame to frame)
@@ -357,6 +361,13 @@ class RecheckOptions:
     # (radial 0.0198 -> 0.0190, crossing 0.0320 -> 0.0307 Hz) but the own knees radial rose
     # 0.0197 -> 0.0325 Hz (one walker at 1.60 Hz read 2.42 Hz by its later windows) and the
     # dev clips' 0.0163 -> 0.0181 Hz (issue 16's forty-eighth round; docs/rules.md, rule 47)
+    strongest_pace: bool = True  # rule 55 (with `enabled`, after the cuts; rule 47 takes its
+    # place where on): a Pedestrian track's pace and stride are those of its window judged
+    # Pedestrian (as rule 47's) whose chosen peak is the strongest (P of (13)), not the deciding
+    # window's; its verdict stays the deciding window's (`recheck.median_pace`). On since issue
+    # 16's fifty-fourth round: alone, the pace better on six fresh own pools (crossing 0.0300 ->
+    # 0.0267 Hz) and the dev clips (0.0157 -> 0.0080 Hz), no verdict moved (decision 55a);
+    # with rule 54 decision 55 (docs/rules.md, rule 55)
 
     fast_stretch: float = 0.0  # rule 52 (with `enabled`; N's fraction, 0: off): after the
     # deciding window, stretches of this fraction of N rows (one every half stretch, and the

@@ -63,7 +63,10 @@ Rule 47 (`RecheckOptions.median_pace`, off: the dev clips' pace read worse) repo
 Pedestrian track's pace F and stride T (`median_pace`) as the medians over its windows judged
 Pedestrian: the deciding one and each of `later_windows` (with the tail window where `tail` is
 on) that (13)-(15) judge Pedestrian. The verdict, its reason, ratio and speed stay the deciding
-window's (Sec. 4.2)."""
+window's (Sec. 4.2). Rule 55 (`RecheckOptions.strongest_pace`, on; rule 47 takes its place
+where that is on) reports instead the pace and stride of the one of those windows whose chosen
+peak is the strongest (`chosen_peak_power`): a walker's first Pedestrian window is not always
+its cleanest (another window or candidate may pass first, with its pace off)."""
 
 from __future__ import annotations
 
@@ -82,10 +85,10 @@ from .toolkit import RhythmWindows, fast_half, match_window
 from .twice import rows_tall_enough
 
 
-__all__ = ["earlier_switch_row", "earlier_windows", "fast_stretch_row", "keep_rows",
-           "later_windows", "low_window", "median_pace", "mixed_window_row", "not_a_walk",
-           "pace_resolved", "split_at_switches", "stretch_speed", "stretch_starts", "switch_row",
-           "too_fast", "too_quick", "walker_tall"]
+__all__ = ["chosen_peak_power", "earlier_switch_row", "earlier_windows", "fast_stretch_row",
+           "keep_rows", "later_windows", "low_window", "median_pace", "mixed_window_row",
+           "not_a_walk", "pace_resolved", "split_at_switches", "stretch_speed", "stretch_starts",
+           "switch_row", "too_fast", "too_quick", "walker_tall"]
 
 
 def not_a_walk(result: dict, top_speed: float, top_pace: float) -> bool:
@@ -294,19 +297,36 @@ def earlier_switch_row(cfg: Config, obj: RhythmWindows, *, pace: bool = True,
     return None
 
 
+def chosen_peak_power(result: dict) -> float:
+    """P (relative to white noise, (13)) of the peak a window's outcome chose as its pace: the
+    power of the reported peak (`peak_mask`) nearest its pace_hz; NaN where it has none."""
+    freq, power = np.asarray(result["peak_freq"], float), np.asarray(result["peak_power"], float)
+    mask = np.asarray(result["peak_mask"], bool) & np.isfinite(freq)
+    pace = float(result["pace_hz"])
+    if not (mask.any() and math.isfinite(pace)):
+        return math.nan
+    return float(power[mask][np.argmin(np.abs(freq[mask] - pace))])
+
+
 def median_pace(cfg: Config, obj: RhythmWindows, opt: RecheckOptions) -> dict | None:
     """Rule 47 (`opt.median_pace`, with `opt.enabled`): `obj`'s result with pace_hz (F, Hz) and
     stride_m (T, m, (12)) the medians over its deciding window and each of its `later_windows`
-    (`opt.tail`'s tail window too) judged Pedestrian; every other field the deciding window's.
-    The result unchanged where the option is off or the track is not judged Pedestrian."""
-    if not (opt.enabled and opt.median_pace and _pedestrian(obj)):
+    (`opt.tail`'s tail window too) judged Pedestrian. Rule 55 (`opt.strongest_pace`, where rule
+    47 is off): pace and stride of the one of those windows whose chosen peak is the strongest
+    (`chosen_peak_power`; the earliest of equals). Every other field the deciding window's; the
+    result unchanged where both are off or the track is not judged Pedestrian."""
+    if not (opt.enabled and (opt.median_pace or opt.strongest_pace) and _pedestrian(obj)):
         return obj.result
-    paces, strides = [float(obj.result["pace_hz"])], [float(obj.result["stride_m"])]
-    for result in later_windows(cfg, obj, tail=opt.tail):
-        if int(result["verdict"]) == Verdict.PEDESTRIAN:
-            paces.append(float(result["pace_hz"]))
-            strides.append(float(result["stride_m"]))
-    return dict(obj.result, pace_hz=float(np.median(paces)), stride_m=float(np.median(strides)))
+    judged = [obj.result] + [r for r in later_windows(cfg, obj, tail=opt.tail)
+                             if int(r["verdict"]) == Verdict.PEDESTRIAN]
+    if opt.median_pace:
+        paces = [float(r["pace_hz"]) for r in judged]
+        strides = [float(r["stride_m"]) for r in judged]
+        return dict(obj.result, pace_hz=float(np.median(paces)),
+                    stride_m=float(np.median(strides)))
+    powers = [chosen_peak_power(r) for r in judged]
+    best = judged[int(np.argmax(np.where(np.isfinite(powers), powers, -np.inf)))]
+    return dict(obj.result, pace_hz=float(best["pace_hz"]), stride_m=float(best["stride_m"]))
 
 
 def keep_rows(obj, rows: slice) -> None:

@@ -414,7 +414,7 @@ class OnlineTracker:
             for o in list(self._finished):
                 self._split_at_switch(o)
         objs = sorted(self._finished, key=lambda o: o.track_id)
-        for o in objs:  # rule 26: a Pedestrian too low for a walker; rule 47: its median pace
+        for o in objs:  # rule 26: a Pedestrian too low for a walker; rules 47, 55: its pace
             if o.result is not None:
                 o.result = refuse_low(o.result, self._camera, o.rows, self._walker_m, self.opt.size)
                 o.result = median_pace(self.cfg, o, self.opt.recheck)
