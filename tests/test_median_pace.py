@@ -49,8 +49,13 @@ def test_three_later_windows_at_another_pace_give_the_median():
     on = median_pace(CFG, obj, ON)
     assert on["pace_hz"] == pytest.approx(1.7, abs=PACE_TOL)
     assert on["stride_m"] == pytest.approx(SPEED / 1.7, abs=STRIDE_TOL)
+    assert_verdict_kept(on, obj.result)
+
+
+def assert_verdict_kept(result: dict, deciding: dict) -> None:
+    """The verdict, reason, speed, ratio and window are the deciding window's."""
     for key in ("verdict", "reason", "speed_mps", "ratio", "window"):
-        assert on[key] == obj.result[key]
+        assert result[key] == deciding[key], key
 
 
 def test_an_even_count_averages_the_two_middle_windows():
@@ -86,17 +91,17 @@ def test_off_disabled_or_not_pedestrian_leaves_the_result():
     assert median_pace(CFG, short, ON) is None
 
 
-def test_the_tracker_reports_the_median_over_a_lone_walkers_windows():
-    """One rendered walker at 1.9 Hz going away from 8 m, 180 frames: with the rule on the
-    tracks and verdicts are the same as off, its Pedestrian track's pace is the median over
-    its deciding window's and its later windows' paces (read on the objects the tracker
-    returns off) and lies within 0.05 Hz of 1.9."""
+def lone_walker_tracked(key: str):
+    """One rendered walker at 1.9 Hz going away from 8 m, 180 frames, tracked with the tracker's
+    option `key` False (rule 55 off too: its objects' results are the deciding windows') and
+    True. The tracks and verdicts must be the same both ways; returns (the pace of its
+    Pedestrian track with `key` True, that track's object with `key` False)."""
     act = synth.walker(-0.5, 8.0, math.pi / 2, pace_hz=1.9, step_length_m=0.62)
     scene = synth.render_scene(5, synth.SceneSpec(n_frames=180, actors=(act,),
                                                   camera=CFG.camera))
     out = []
-    for median in (False, True):
-        tr = OnlineTracker(CFG, with_changes(TrackerOptions(), {"recheck.median_pace": median}))
+    for changes in ({key: False, "recheck.strongest_pace": False}, {key: True}):
+        tr = OnlineTracker(CFG, with_changes(TrackerOptions(), changes))
         for i, f in enumerate(scene.frames):
             tr.update(i, i / FPS, f)
         out.append(tr.finish())
@@ -104,8 +109,15 @@ def test_the_tracker_reports_the_median_over_a_lone_walkers_windows():
     np.testing.assert_array_equal(tracks_on["track_id"], tracks_off["track_id"])
     assert list(on["verdict"]) == list(off["verdict"])
     i = list(off["verdict"]).index("pedestrian")
-    obj = next(o for o in objs if o.track_id == off["track_id"][i])
+    return float(on["pace_hz"][i]), next(o for o in objs if o.track_id == off["track_id"][i])
+
+
+def test_the_tracker_reports_the_median_over_a_lone_walkers_windows():
+    """With the rule on, the lone walker's Pedestrian track's pace is the median over its
+    deciding window's and its later windows' paces (read on the objects the tracker returns
+    off) and lies within 0.05 Hz of 1.9."""
+    pace, obj = lone_walker_tracked("recheck.median_pace")
     paces = [float(obj.result["pace_hz"])] + later_paces(obj)
     assert len(paces) >= 2
-    assert on["pace_hz"][i] == pytest.approx(float(np.median(paces)), abs=1e-6)
-    assert on["pace_hz"][i] == pytest.approx(1.9, abs=0.05)
+    assert pace == pytest.approx(float(np.median(paces)), abs=1e-6)
+    assert pace == pytest.approx(1.9, abs=0.05)

@@ -12,13 +12,17 @@ import pytest
 
 from rhythmjax.model.params import Config
 from rhythmjax.model.status import Verdict
-from rhythmjax.sim import scene as synth
-from rhythmjax.track.options import RecheckOptions, TrackerOptions, with_changes
+from rhythmjax.track.options import RecheckOptions
 from rhythmjax.track.recheck import chosen_peak_power, later_windows, median_pace
-from rhythmjax.track.tracker import OnlineTracker
 
-from .test_median_pace import PACE_TOL, SPEED, STRIDE_TOL
-from .test_recheck import FPS, judged_online, walk_rows
+from .test_median_pace import (
+    PACE_TOL,
+    SPEED,
+    STRIDE_TOL,
+    assert_verdict_kept,
+    lone_walker_tracked,
+)
+from .test_recheck import judged_online, walk_rows
 
 
 CFG = Config()
@@ -69,8 +73,7 @@ def test_a_stronger_later_window_gives_its_pace():
     on = median_pace(CFG, obj, ON)
     assert on["pace_hz"] == pytest.approx(1.7, abs=PACE_TOL)
     assert on["stride_m"] == pytest.approx(SPEED / 1.7, abs=STRIDE_TOL)
-    for key in ("verdict", "reason", "speed_mps", "ratio", "window"):
-        assert on[key] == obj.result[key]
+    assert_verdict_kept(on, obj.result)
 
 
 def test_a_stronger_deciding_window_keeps_its_pace_where_the_median_would_not():
@@ -102,27 +105,32 @@ def test_off_disabled_or_not_pedestrian_leaves_the_result():
 
 
 def test_the_tracker_reports_the_strongest_of_a_lone_walkers_windows():
-    """One rendered walker at 1.9 Hz going away from 8 m, 180 frames: with the rule on the
-    tracks and verdicts are the same as off, and its Pedestrian track's pace is that of the
-    window with the strongest chosen peak among its deciding and later Pedestrian windows (read
-    on the objects the tracker returns off), within 0.05 Hz of 1.9."""
-    act = synth.walker(-0.5, 8.0, math.pi / 2, pace_hz=1.9, step_length_m=0.62)
-    scene = synth.render_scene(5, synth.SceneSpec(n_frames=180, actors=(act,),
-                                                  camera=CFG.camera))
-    out = []
-    for strongest in (False, True):
-        tr = OnlineTracker(CFG, with_changes(TrackerOptions(),
-                                             {"recheck.strongest_pace": strongest}))
-        for i, f in enumerate(scene.frames):
-            tr.update(i, i / FPS, f)
-        out.append(tr.finish())
-    (tracks_off, off, objs), (tracks_on, on, _) = out
-    np.testing.assert_array_equal(tracks_on["track_id"], tracks_off["track_id"])
-    assert list(on["verdict"]) == list(off["verdict"])
-    i = list(off["verdict"]).index("pedestrian")
-    obj = next(o for o in objs if o.track_id == off["track_id"][i])
+    """`test_median_pace`'s lone walker: with the rule on its Pedestrian track's pace is that of
+    the window with the strongest chosen peak among its deciding and later Pedestrian windows
+    (read on the objects the tracker returns off), within 0.05 Hz of 1.9."""
+    pace, obj = lone_walker_tracked("recheck.strongest_pace")
     windows = pedestrian_windows(obj)
     assert len(windows) >= 2
     best = windows[int(np.argmax([chosen_peak_power(r) for r in windows]))]
-    assert on["pace_hz"][i] == pytest.approx(float(best["pace_hz"]), abs=1e-6)
-    assert on["pace_hz"][i] == pytest.approx(1.9, abs=0.05)
+    assert pace == pytest.approx(float(best["pace_hz"]), abs=1e-6)
+    assert pace == pytest.approx(1.9, abs=0.05)
+
+
+def test_the_pace_window_is_named_and_the_spectra_panel_draws_it():
+    """The result names the window its pace came from (`pace_window`, `pace_candidate`), and the
+    spectra gallery draws that window's spectrum, so the panel's F sits on its peak: the
+    spectrum's maximum within 0.05 Hz of 1.7 Hz (the later windows' pace), where the deciding
+    window's peaks at 2.0 Hz."""
+    from types import SimpleNamespace
+
+    from rhythmjax.cli.spectra import track_spectrum
+
+    obj = walk_rows([SPEED] * 192, paces_hz=[2.0] * 64 + [1.7] * 128)
+    obj = judged_online(noisy(noisy(obj, slice(0, 64), 3.0), slice(64, 192), 1.0, seed=2))
+    on = median_pace(CFG, obj, ON)
+    best = max(pedestrian_windows(obj)[1:], key=chosen_peak_power)
+    assert on["pace_window"] == tuple(best["window"]) != tuple(obj.result["window"])
+    assert on["pace_candidate"] == 0
+    for result, pace in ((on, 1.7), (obj.result, 2.0)):
+        f, p = track_spectrum(CFG, SimpleNamespace(rows=obj.rows, result=result))
+        assert abs(f[np.argmax(p)] - pace) < 0.05

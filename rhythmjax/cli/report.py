@@ -171,7 +171,8 @@ def render_report(*, title: str, summary: dict, verdicts: dict, config: dict | N
     parts.append("<h2>Spectra</h2>")
     if spectra:
         parts.append(f'<p class="meta">every judged track: {len(spectra)} page(s); the MEM '
-                     "spectrum of its deciding window relative to white noise, P_thr (dotted), "
+                     "spectrum of the window its pace came from (its deciding window, or its "
+                     "strongest Pedestrian one) relative to white noise, P_thr (dotted), "
                      "the walking model's pace band (green) and the peak (dashed)</p>")
         parts.append('<div class="gallery">' + "".join(
             f'<img alt="spectra page {k + 1}" src="data:image/png;base64,'

@@ -1,6 +1,7 @@
 """The spectra gallery: one panel per judged track (every one, on as many pages as needed), the MEM
-spectrum of its deciding window relative to white noise, P_thr, the walking model's pace band,
-the spectral peak and the verdict (edge I/O, matplotlib; the numeric core never imports this).
+spectrum of its deciding window (or of the window its pace came from: the tracker's rule 55)
+relative to white noise, P_thr, the walking model's pace band, the spectral peak and the verdict
+(edge I/O, matplotlib; the numeric core never imports this).
 
 Written as `spectra.pdf` (every page) and `spectra.png` (the first page, which says how many
 pages there are); the report embeds every page (`page_images`). The online tracker's objects
@@ -107,12 +108,15 @@ def window_spectrum(inten, dt, order: int):
 
 
 def track_spectrum(cfg: Config, o) -> tuple[np.ndarray, np.ndarray]:
-    """(frequencies Hz, P / white-noise level) of the MEM spectrum of `o`'s deciding window: its
-    rows `result["window"]`, the I(k) of the candidate window B that decided (`result
-    ["candidate"]`, `track.toolkit.window_signal`; window B's own without candidates)."""
-    a, b = o.result["window"]
+    """(frequencies Hz, P / white-noise level) of the MEM spectrum of the window `o`'s pace F
+    came from: its deciding window (rows `result["window"]`, the I(k) of the candidate window B
+    that decided, `result["candidate"]`, `track.toolkit.window_signal`; window B's own without
+    candidates), or, where the tracker's rule 55 read the pace from a later window, that one
+    (`result["pace_window"]`, `result["pace_candidate"]`), so the panel's F is its peak."""
+    a, b = o.result.get("pace_window", o.result["window"])
+    candidate = o.result.get("pace_candidate", o.result.get("candidate", 0))
     t = np.asarray([r.t for r in o.rows[a:b]], np.float64)
-    inten = window_signal(o, a, b, int(o.result.get("candidate", 0))).astype(np.float32)
+    inten = window_signal(o, a, b, int(candidate)).astype(np.float32)
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0 / float(cfg.camera.fps)
     freqs, psd = window_spectrum(jnp.asarray(inten), jnp.float32(dt), int(cfg.thresholds.m))
     return np.asarray(freqs), np.maximum(np.asarray(psd) / dt, 1e-3)

@@ -313,8 +313,10 @@ def median_pace(cfg: Config, obj: RhythmWindows, opt: RecheckOptions) -> dict | 
     stride_m (T, m, (12)) the medians over its deciding window and each of its `later_windows`
     (`opt.tail`'s tail window too) judged Pedestrian. Rule 55 (`opt.strongest_pace`, where rule
     47 is off): pace and stride of the one of those windows whose chosen peak is the strongest
-    (`chosen_peak_power`; the earliest of equals). Every other field the deciding window's; the
-    result unchanged where both are off or the track is not judged Pedestrian."""
+    (`chosen_peak_power`; the earliest of equals), whose rows and candidate it names
+    (pace_window: (first row, end row); pace_candidate: 0 window B, c candidate c - 1). Every
+    other field the deciding window's; the result unchanged where both are off or the track is
+    not judged Pedestrian."""
     if not (opt.enabled and (opt.median_pace or opt.strongest_pace) and _pedestrian(obj)):
         return obj.result
     judged = [obj.result] + [r for r in later_windows(cfg, obj, tail=opt.tail)
@@ -326,7 +328,8 @@ def median_pace(cfg: Config, obj: RhythmWindows, opt: RecheckOptions) -> dict | 
                     stride_m=float(np.median(strides)))
     powers = [chosen_peak_power(r) for r in judged]
     best = judged[int(np.argmax(np.where(np.isfinite(powers), powers, -np.inf)))]
-    return dict(obj.result, pace_hz=float(best["pace_hz"]), stride_m=float(best["stride_m"]))
+    return dict(obj.result, pace_hz=float(best["pace_hz"]), stride_m=float(best["stride_m"]),
+                pace_window=tuple(best["window"]), pace_candidate=int(best.get("candidate", 0)))
 
 
 def keep_rows(obj, rows: slice) -> None:
