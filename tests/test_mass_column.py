@@ -127,9 +127,12 @@ def test_tracker_sums_window_b_at_the_motion_column(monkeypatch, way):
         return sines[-1]
 
     monkeypatch.setattr(lean, "crossing_sine", record_sine)
+    # rule 54's upper-body column off: with it window B stays on the slice extent where the
+    # track's u moves (`test_column_filter.py`), and this test reads window B against that u
     opt = with_changes(TrackerOptions(), {"body.mass_column": way != "off",
                                           "body.mass_crossing": 0.7071 if "gated" in way else 0.0,
-                                          "body.window_candidates": False})
+                                          "body.window_candidates": False,
+                                          "body.column_rows": None})
     tracks = track_frames(cfg, ((i, i / sc.fps, f) for i, f in enumerate(sc.frames)),
                           progress=False, options=opt)[0]
     rows = np.isfinite(tracks["intensity"])
