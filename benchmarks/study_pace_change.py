@@ -3,20 +3,24 @@ defaults and with the rule, its pace error, deciding window, deciding candidate 
 of that window's rows predicted and without a rhythm sample, side by side (issue 16,
 fifty-third round; a study: nothing is chosen here).
 
-The rule is given as tracker option changes (`--change body.column_rows=0.5`, repeatable; values
-read as JSON, else as text); each walker's longest judged track on each side
+The rule is given as tracker option changes (`--change body.column_rows=0.5`, repeatable, read as
+`run --set` reads them), the side it is measured against as the defaults with `--base` changes
+(none by default; e.g. `--base body.column_rows=none --base recheck.strongest_pace=false`, the
+defaults before decision 55, which the fifty-third round's figures used); a track's pace is the
+one it reports (rule 55: its strongest Pedestrian window's); each walker's longest judged track
+on each side
 (`sim.evaluate.match_tracks`). The own scenes are tracked as `eval_synthetic.py` tracks them,
 cached under -d (one folder per side; the cache does not record the changes, so give each rule
 its own -d). The last line sums it up: how many walkers' pace errors
 grew by more than 0.01 Hz, how many of those changed deciding window or candidate, and the mean
 share of the rule's deciding-window rows that are predicted yet carry a sample.
 
-    python benchmarks/study_pace_change.py SEED[,SEED...] [--lateral] --change KEY=VALUE -d DIR
+    python benchmarks/study_pace_change.py SEED[,SEED...] [--lateral] --change KEY=VALUE \
+        [--base KEY=VALUE] -d DIR
 """
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -59,22 +63,19 @@ def walkers(tracks, objs, truth) -> dict:
 
 
 def main(argv=None) -> int:
+    from rhythmjax.cli.option_changes import apply_option_changes
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.sim.presets import synthetic_options
-    from rhythmjax.track.options import with_changes
 
     p = study_parser(__doc__)
     p.add_argument("--change", action="append", default=[], help="KEY=VALUE, a tracker option")
+    p.add_argument("--base", action="append", default=[],
+                   help="KEY=VALUE, a tracker option of the side measured against")
     a = p.parse_args(argv)
-    changes = {}
-    for item in a.change:
-        key, _, value = item.partition("=")
-        try:
-            changes[key] = json.loads(value)
-        except json.JSONDecodeError:
-            changes[key] = value
     cfg = config_from_dict(RECOMMENDED)
-    sides = {"defaults": synthetic_options(), "rule": with_changes(synthetic_options(), changes)}
+    base_options, _ = apply_option_changes(synthetic_options(), a.base)
+    sides = {"defaults": base_options,
+             "rule": apply_option_changes(base_options, a.change)[0]}
     moved = changed = both = 0
     carried = []
     for base, rule in zip(*(scenes_of(cfg, a, o, a.cache / k) for k, o in sides.items())):

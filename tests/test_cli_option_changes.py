@@ -47,6 +47,19 @@ def test_applied_as_with_changes_applies_them():
     assert opt.body.window_candidates is True
 
 
+def test_none_where_the_field_may_be_none():
+    """A field annotated `... | None` takes none/null (rule 54's column off, from its default
+    0.5), and a number still; a field that may not be None refuses the word."""
+    assert TrackerOptions().body.column_rows == 0.5
+    opt, changes = apply_option_changes(TrackerOptions(), ["body.column_rows=none"])
+    assert opt.body.column_rows is None and changes == {"body.column_rows": None}
+    assert parse_option_changes(["body.column_rows=NULL", "body.column_fraction=0.3"],
+                                TrackerOptions()) == {"body.column_rows": None,
+                                                      "body.column_fraction": 0.3}
+    with pytest.raises(ConfigError, match="a number"):
+        parse_option_changes(["body.slice_fraction=none"], TrackerOptions())
+
+
 @pytest.mark.parametrize("item, words", [
     ("appearance.enabld=true", ["AppearanceOptions", "'enabld'", "enabled"]),
     ("apperance.enabled=true", ["no group", "'apperance'", "appearance"]),

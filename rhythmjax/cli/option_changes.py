@@ -4,8 +4,9 @@ The tracker (`track.options.TrackerOptions`, verbs `run` and `track`) and the co
 (`count.options.CountOptions`, verb `count`) carry rules that are built and measured but off by
 default (docs/rules.md names each one, where it was chosen and what it did elsewhere). `--set`
 reaches every one of them without a new flag per rule: the value is read as the type of the
-field's default (true/false, a whole number, a number, a word), so a misspelt value is an error
-naming the field, not a truthy string.
+field's default (true/false, a whole number, a number, a word; none or null where the field may
+be None, e.g. `body.column_rows=none`), so a misspelt value is an error naming the field, not a
+truthy string.
 """
 
 from __future__ import annotations
@@ -32,8 +33,9 @@ def add_set(p, record: str) -> None:
                    metavar=SET_METAVAR, help=f"change one field of the {record} options "
                    "(repeatable; applied after the other flags), e.g. appearance.enabled=true; "
                    "a value is read as its field's type: true/false, a whole number, a "
-                   "number (inf allowed), a word. The rules built but off by default, with "
-                   "their measured effect on each source, are in docs/rules.md")
+                   "number (inf allowed), a word; none where the field may be None. The "
+                   "rules built but off by default, with their measured effect on each "
+                   "source, are in docs/rules.md")
 
 
 def _field(options, dotted: str):
@@ -55,6 +57,12 @@ def _field(options, dotted: str):
         raise ConfigError("--set", f"{type(record).__name__} has no field {name!r} "
                           f"(fields: {', '.join(sorted(names))})")
     return record, name
+
+
+def _optional(record, name: str) -> bool:
+    """Whether the field `name` of `record` may be None (its annotation names None)."""
+    field = next(f for f in dataclasses.fields(record) if f.name == name)
+    return "None" in str(field.type)
 
 
 def _typed(dotted: str, text: str, current: Any) -> Any:
@@ -99,7 +107,10 @@ def parse_option_changes(items: Sequence[str], options) -> dict[str, Any]:
             raise ConfigError("--set", f"{item!r}: expected {SET_METAVAR}, e.g. "
                               "appearance.enabled=true")
         record, name = _field(options, dotted)
-        out[dotted] = _typed(dotted, text, getattr(record, name))
+        if text.lower() in ("none", "null") and _optional(record, name):
+            out[dotted] = None  # e.g. body.column_rows=none: rule 54's column off
+        else:
+            out[dotted] = _typed(dotted, text, getattr(record, name))
     return out
 
 
