@@ -126,6 +126,11 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
   chosen peak is the strongest).
 - upper_strongest: upper_filter with `recheck.strongest_pace` (rules 54 and 55, the defaults)
   vs neither (decision 55).
+- stride_peak: the tracker's `size.stride_peak` True (the default since decision 56) vs False
+  (rule 56: a window whose strongest peak passes (14) at twice its frequency, a walker's stride
+  frequency F/2, judged there on rule 37's height); `rhythm --boxes` gets --[no-]stride-peak.
+- count_stride: count's `verdicts.stride_peak` True vs False (the default: rule 56 in count's
+  verdicts, off since its screen counted PETS09 27 -> 30).
 - still_end: only the still rule's end of a track that stands still (patched off in this
   process), the drop of tracks that never moved kept.
 The counting rule needs no second run: every counting run records, per clip, the walkers each
@@ -331,6 +336,8 @@ def run(rule: str, state: str, only, quick: bool, outdir: Path, seeds=None) -> P
             _patch_tracker({key: val, **with_keys})
             if key == "body.window_candidates":  # `rhythm --boxes` runs in a subprocess
                 ea.RHYTHM_FLAGS.append(f"--{'' if val else 'no-'}window-candidates")
+            if key == "size.stride_peak":
+                ea.RHYTHM_FLAGS.append(f"--{'' if val else 'no-'}stride-peak")
         elif kind == "count":
             _patch_count({key: val})
         elif kind == "patch" and state == "off":

@@ -226,6 +226,14 @@ RULES = {
                   "0.02 chosen on used cached seeds 6120001-6480001 (rule 37's windows: 18 "
                   "walkers' sub-harmonic 0.000-0.543, 5 dogs' 0.000-0.532); 0.2 Hz a priori "
                   "(rule 49)"),
+    "stride_peak": ("tracker", "size.stride_peak", True, False,
+                    TRACKER_SOURCES + ("pets_boxes",),
+                    "nothing fitted (rule 37's fitted 0.57 walker heights, (14) at twice the "
+                    "strongest peak); found on decision 55's radial suitcase pool "
+                    "9740001-9810001, used; on since decision 56 (rule 56)"),
+    "count_stride": ("count", "verdicts.stride_peak", True, False, COUNT_SOURCES,
+                     "nothing fitted (rule 56 in count's verdicts, as the tracker's); "
+                     "decided with decision 56's count screen: PETS09 27 -> 30, off"),
     "count_low": ("count", "verdicts.min_height_heights", 0.5, 0.0, COUNT_SOURCES,
                   "nothing fitted (the tracker's rule 26 in count's verdicts; decided on fresh "
                   "own counting seeds 2730001-2760001: no verdict changed)"),
@@ -277,7 +285,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "across_solo": TRACKER_SOURCES, "fast_stretch": (),
               "twice_quantile": (), "upper_filter": TRACKER_SOURCES,
               "upper_always": (), "upper_median": (), "strongest_pace": TRACKER_SOURCES,
-              "upper_strongest": TRACKER_SOURCES}
+              "upper_strongest": TRACKER_SOURCES, "stride_peak": TRACKER_SOURCES + ("pets_boxes",),
+              "count_stride": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

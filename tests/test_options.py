@@ -72,6 +72,7 @@ TRACKER_DEFAULTS = [
     ("(new: issue 16, rule 37b)", "size.twice_pace_edge", True),  # ... heads above the view
     ("(new: issue 16, rule 49)", "size.twice_pace_sub", 0.0),  # rule 37 needs f1/2's peak, off
     ("(new: issue 16, rule 53)", "size.twice_pace_quantile", 0.5),  # rule 37 reads the median
+    ("(new: issue 16, rule 56)", "size.stride_peak", True),  # a window read at twice f1
     ("(new: issue 16, rule 29)", "recheck.enabled", True),  # later windows re-judged
     ("(new: issue 16, rule 30a)", "recheck.tail", True),  # the last N rows re-judged
     ("(new: issue 16, rule 30d)", "recheck.earlier", "speed-low"),  # windows before the verdict
@@ -141,6 +142,7 @@ COUNT_DEFAULTS = [
     ("(new: issue 16, rule 37)", "verdicts.twice_pace_heights", 0.57),  # twice the pace
     ("(new: issue 16, rule 37)", "verdicts.twice_pace_edge", True),  # ... heads above the view
     ("(new: issue 16, rule 26)", "verdicts.min_height_heights", 0.5),  # the size rule in count
+    ("(new: issue 16, rule 56)", "verdicts.stride_peak", False),  # rule 56 in count, off
     # the foot-point gates of `count.foot_gate` (options a and b), off
     (None, "placement.in_range", False),
     (None, "placement.gate_heights", 0.0),

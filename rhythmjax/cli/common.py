@@ -91,11 +91,16 @@ def add_window_per_pixel(p: argparse.ArgumentParser, default: bool) -> None:
 
 
 def add_height_rules(p: argparse.ArgumentParser) -> None:
-    """--twice-pace-heights and --min-height-heights: rules 37 and 26 in the batch classifier,
-    from the tracks' top rows (v_top, top_at_edge; the tracker's `size` options' defaults)."""
+    """--twice-pace-heights, --stride-peak and --min-height-heights: rules 37, 56 and 26 in the
+    batch classifier, from the tracks' top rows (v_top, top_at_edge; the tracker's `size`
+    options' defaults)."""
     p.add_argument("--twice-pace-heights", type=float, default=SizeOptions().twice_pace_heights,
                    metavar="H", help="judge a window read at twice a walker's pace at half "
                    "it where the object is at least H walker heights tall (rule 37; 0: off)")
+    p.add_argument("--stride-peak", action=argparse.BooleanOptionalAction,
+                   default=SizeOptions().stride_peak, help="judge a window read at half a "
+                   "walker's pace (its stride frequency: one foot hidden) at twice it where "
+                   "rule 37's height test passes (rule 56)")
     p.add_argument("--min-height-heights", type=float, default=SizeOptions().min_height_heights,
                    metavar="H", help="refuse a window judged Pedestrian where the object's "
                    "median height is below H walker heights (rule 26; 0: off)")
@@ -109,7 +114,7 @@ def height_rules(args) -> SizeOptions:
             raise ConfigError("--" + flag.replace("_", "-"), f"must be a number >= 0 (0: off), "
                               f"got {getattr(args, flag)}")
     return SizeOptions(twice_pace_heights=args.twice_pace_heights,
-                       min_height_heights=args.min_height_heights)
+                       min_height_heights=args.min_height_heights, stride_peak=args.stride_peak)
 
 
 def reading_check(args, src, notes=None) -> None:

@@ -295,7 +295,8 @@ def build_result(level: PedestrianLevel, peds: list[Pedestrian]) -> CountResult:
         verdicts = judge_tracks(cfg, tracks, candidates=on,
                                 twice_pace_heights=vo.twice_pace_heights,
                                 twice_pace_edge=vo.twice_pace_edge,
-                                min_height_heights=vo.min_height_heights)
+                                min_height_heights=vo.min_height_heights,
+                                stride_peak=vo.stride_peak)
     else:
         B, nan = len(peds), np.full(len(peds), np.nan)
         verdicts = {"track_id": np.arange(1, B + 1, dtype=np.int64),

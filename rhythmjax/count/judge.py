@@ -18,8 +18,8 @@ __all__ = ["judge_tracks"]
 def judge_tracks(cfg, tracks: dict, candidates: bool = False,
                  twice_pace_heights: float = VerdictOptions.twice_pace_heights,
                  twice_pace_edge: bool = VerdictOptions.twice_pace_edge,
-                 min_height_heights: float = VerdictOptions.min_height_heights
-                 ) -> dict[str, np.ndarray]:
+                 min_height_heights: float = VerdictOptions.min_height_heights,
+                 stride_peak: bool = VerdictOptions.stride_peak) -> dict[str, np.ndarray]:
     """The rhythm paper's verdicts of a counting run's tracks (`tracks_table`, ids 1.. in
     order, at least one track): `model.batch.classify_tracks` over the tracks cut at gaps longer
     than the PREDICT time-out, with `candidates` the candidate windows B. Columns: track_id,
@@ -28,7 +28,8 @@ def judge_tracks(cfg, tracks: dict, candidates: bool = False,
     rule 37 on each window, from the tracks' top rows `v_top` (`track.twice.
     batch_second_look`; `VerdictOptions`' defaults), with the rows at the image's edge where
     `twice_pace_edge` (column top_at_edge). `min_height_heights` > 0: rule 26 after it on each
-    window judged Pedestrian (`track.size.batch_size_look`). Depends on nothing but the
+    window judged Pedestrian (`track.size.batch_size_look`). `stride_peak`: rule 56 with rule
+    37's height (`track.twice`). Depends on nothing but the
     tracks, so a saved run can be judged again (`benchmarks/reclassify_dumps.py`)."""
     n = cfg.thresholds.n
     tr = Tracks(path="<count>", track_id=tracks["track_id"].astype(str).astype(object),
@@ -42,7 +43,7 @@ def judge_tracks(cfg, tracks: dict, candidates: bool = False,
     gap = max(1, round(float(cfg.thresholds.predict_timeout) * cfg.camera.fps))
     batch = to_batch(tr, max_gap_frames=gap, min_len=n)
     size = SizeOptions(twice_pace_heights=twice_pace_heights, twice_pace_edge=twice_pace_edge,
-                       min_height_heights=min_height_heights)
+                       min_height_heights=min_height_heights, stride_peak=stride_peak)
     verdicts = classify_tracks(cfg, batch, progress=False,
                                second_look=height_looks(cfg, batch, size))
     # the deciding window's first frame (-1: none; the spectra): its batch row's time

@@ -257,6 +257,10 @@ class VerdictOptions:
     # heights over at least 10 rows is Non-pedestrian, reason too-low (a trotting dog); 0: off.
     # On since issue 16's fortieth round, as the tracker's: on fresh own counting seeds
     # 2730001-2760001, the dev crowds and PETS09 it changed no verdict (docs/rules.md)
+    stride_peak: bool = False  # rule 56 in the verdicts (the tracker's `size.stride_peak`,
+    # `track.twice`): a window refused by (14) whose strongest peak passes it at twice its
+    # frequency (a walker's stride frequency) is Pedestrian there on rule 37's height. Off:
+    # its screen counted PETS09 27 -> 30 for 19 (dev crowds 14 of 18 both ways)
 
 
 @dataclass(frozen=True)

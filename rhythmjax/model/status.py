@@ -37,6 +37,7 @@ class Reason(enum.IntEnum):
     TOO_LOW = 7  # judged Pedestrian, but the track's measured height is a non-walker's (rule 26)
     MATCHED_TWICE = 8  # (14)-(15) at half the strongest peak, the height a walker's (rule 37)
     MATCHED_DETRENDED = 9  # (13)-(15) with the window's line removed, a trend refused (rule 38)
+    MATCHED_STRIDE = 10  # (14)-(15) at twice the strongest peak, the height a walker's (rule 56)
 
     @property
     def label(self) -> str:

@@ -295,6 +295,11 @@ class SizeOptions:
     # of the rows must reach `twice_pace_heights`, so a dog whose moving region merges with a
     # walker just behind it for part of its window (the walker's head read as its top) is not
     # read as tall (`track.twice.twice_height`; docs/rules.md, rule 53)
+    stride_peak: bool = True  # rule 56: a window refused by (14) whose strongest peak passes
+    # (14) at twice its frequency (a walker's stride frequency, F/2: one foot hidden, by a
+    # suitcase seen from behind) is Pedestrian there on rule 37's height (`track.twice`).
+    # On since decision 56 (issue 16's fifty-fifth round): fresh own 9900001-10450001 walkers
+    # 1758 -> 1770 of 1960 (radial suitcases 242 -> 251 of 280), non-walkers 10 -> 10 of 840
 
     def __post_init__(self):
         for name in ("top_inside_heights", "twice_pace_heights", "twice_pace_sub"):

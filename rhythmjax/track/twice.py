@@ -19,6 +19,14 @@ the image's edge (`TrackRow.top_at_edge`: the tracker's `detect.Detection.top_at
 scenes: 54-75 % of walker boxes), and without them rule 37 has no height to read there (issue
 16, thirty-ninth round).
 
+Rule 56 (`SizeOptions.stride_peak`, issue 16's fifty-fifth round) is the other way round: a
+walker one of whose feet window B does not see (walking away with a suitcase pulled behind,
+which hides a foot) gives I(k) one burst a stride, so the strongest peak sits at F/2 and (14)
+reads a stride of 2T. Such a window (refused with no-model-match, f1 above P_thr with R above
+R_thr, failing (14) at (f1, v/f1) and passing it at (2 f1, v/(2 f1))) is Pedestrian with pace
+2 f1, stride v/(2 f1) and reason matched-stride on rule 37's height test. A dog's leg cycle
+read at f1 fails (14) at 2 f1 (4-10 Hz); rule 37 is tried first.
+
 The tracker looks at each window as it completes (`second_look`, read by
 `toolkit.match_window`); the batch classifier (`model.batch.classify_tracks`, which `count`
 judges its tracks with) at each window it classifies (`batch_second_look`, from the batch's
@@ -36,23 +44,25 @@ from .options import SizeOptions
 from .size import row_heights
 
 
-__all__ = ["SUB_HZ", "batch_second_look", "judge_at_half", "judged_at_half", "reads_twice",
-           "rows_tall_enough", "second_look", "tall_enough", "twice_height"]
+__all__ = ["SUB_HZ", "batch_second_look", "judge_at_half", "judged_at", "judged_at_half",
+           "reads_at", "reads_stride", "reads_twice", "rows_tall_enough", "second_look",
+           "tall_enough", "twice_height"]
 
 
 SUB_HZ = 0.2  # rule 49: a peak this close (Hz) to f1/2 is the walker's own pace (a priori,
 # half the resolution 1 / (N dt) = 0.39 Hz of N = 64 samples at 25 frames/s)
 
 
-def reads_twice(res: dict, cfg: Config, sub_ratio: float = 0.0) -> np.ndarray:
+def reads_at(res: dict, cfg: Config, factor: float, sub_ratio: float = 0.0) -> np.ndarray:
     """Per window of `res` (window outcomes, `toolkit.RESULT_FIELDS` with a leading window
-    axis: verdict (W,), peak_freq (W, peaks), ...), whether its peaks say rule 37 (module doc)
-    before the height is read: refused with no-model-match, strongest peak f1 > 0 above P_thr
-    with R above R_thr and a finite speed, (14) failing at (f1, v/f1) and passing at
-    (f1/2, 2 v/f1); with `sub_ratio` > 0 (rule 49, `SizeOptions.twice_pace_sub`) also a peak
-    within `SUB_HZ` of f1/2 whose power is at least `sub_ratio` times f1's: a walker's steps
-    differ left and right, so its spectrum keeps its true pace; a dog's leg cycle need not.
-    Bool (W,)."""
+    axis: verdict (W,), peak_freq (W, peaks), ...), whether its peaks let the window be judged
+    at `factor` times its strongest peak before the height is read: refused with
+    no-model-match, strongest peak f1 > 0 above P_thr with R above R_thr and a finite speed,
+    (14) failing at (f1, v/f1) and passing at (factor f1, v / (factor f1)). Rule 37 reads
+    factor 1/2 (`reads_twice`), rule 56 factor 2 (`reads_stride`). With `sub_ratio` > 0 (rule
+    49, `SizeOptions.twice_pace_sub`) also a peak within `SUB_HZ` of factor f1 whose power is at
+    least `sub_ratio` times f1's: a walker's steps differ left and right, so its spectrum keeps
+    its true pace; a dog's leg cycle need not. Bool (W,)."""
     thr = cfg.thresholds
     verdict, reason = (np.atleast_1d(np.asarray(res[k])) for k in ("verdict", "reason"))
     first = {k: np.asarray(res[k]).reshape(len(verdict), -1)[:, 0]
@@ -69,31 +79,47 @@ def reads_twice(res: dict, cfg: Config, sub_ratio: float = 0.0) -> np.ndarray:
         v = np.where(maybe, speed, 0.0)
         k3 = float(thr.k_sigma3)
         at_f1 = np.asarray(walking_ok(cfg.walking, k3, f, v / f))
-        at_half = np.asarray(walking_ok(cfg.walking, k3, f / 2, 2 * v / f))
+        at_factor = np.asarray(walking_ok(cfg.walking, k3, factor * f, v / (factor * f)))
     if sub_ratio > 0:
         freq, power, mask = (np.asarray(res[k]).reshape(len(verdict), -1)
                              for k in ("peak_freq", "peak_power", "peak_mask"))
         with np.errstate(invalid="ignore"):
-            near = mask.astype(bool) & (np.abs(freq - f1[:, None] / 2) < SUB_HZ) & \
+            near = mask.astype(bool) & (np.abs(freq - factor * f1[:, None]) < SUB_HZ) & \
                 (power >= sub_ratio * first["peak_power"][:, None])
         maybe = maybe & near.any(axis=1)
-    return maybe & ~at_f1 & at_half
+    return maybe & ~at_f1 & at_factor
 
 
-def judged_at_half(res: dict, which: np.ndarray) -> dict:
-    """`res` with windows `which` (bool, leading window axis) Pedestrian, reason
-    matched-twice, pace f1/2 and stride 2 v/f1."""
+def reads_twice(res: dict, cfg: Config, sub_ratio: float = 0.0) -> np.ndarray:
+    """Rule 37's `reads_at`: the window read at half its strongest peak (module doc)."""
+    return reads_at(res, cfg, 0.5, sub_ratio)
+
+
+def reads_stride(res: dict, cfg: Config) -> np.ndarray:
+    """Rule 56's `reads_at`: the window read at twice its strongest peak, f1 the walker's stride
+    frequency F/2 (module doc)."""
+    return reads_at(res, cfg, 2.0)
+
+
+def judged_at(res: dict, which: np.ndarray, factor: float, reason: Reason) -> dict:
+    """`res` with windows `which` (bool, leading window axis) Pedestrian with `reason`, pace
+    factor f1 and stride v / (factor f1)."""
     f1 = np.asarray(res["peak_freq"], np.float64).reshape(len(which), -1)[:, 0]
     speed = np.atleast_1d(np.asarray(res["speed_mps"], np.float64))
     out = dict(res)
     with np.errstate(invalid="ignore", divide="ignore"):
-        for key, value in (("verdict", int(Verdict.PEDESTRIAN)),
-                           ("reason", int(Reason.MATCHED_TWICE)),
-                           ("pace_hz", f1 / 2), ("stride_m", 2 * speed / f1)):
+        for key, value in (("verdict", int(Verdict.PEDESTRIAN)), ("reason", int(reason)),
+                           ("pace_hz", factor * f1), ("stride_m", speed / (factor * f1))):
             old = np.asarray(res[key])
             out[key] = np.where(which, value, np.atleast_1d(old)).astype(old.dtype) \
                 .reshape(old.shape)
     return out
+
+
+def judged_at_half(res: dict, which: np.ndarray) -> dict:
+    """`res` with windows `which` (bool, leading window axis) Pedestrian, reason
+    matched-twice, pace f1/2 and stride 2 v/f1 (rule 37)."""
+    return judged_at(res, which, 0.5, Reason.MATCHED_TWICE)
 
 
 def twice_height(camera, u, v, v_top, at_edge, walker_height_m: float,
@@ -143,14 +169,20 @@ def rows_tall_enough(rows: list, camera, walker_height_m: float, options: SizeOp
 def judge_at_half(out: dict, cfg: Config, rows: list, camera, walker_height_m: float,
                   options: SizeOptions) -> dict:
     """`out` (a window's outcome: `toolkit.RESULT_FIELDS`) judged at half its strongest peak
-    when rule 37 says so (module doc) for the window's `rows` (`rows.TrackRow`); `out` itself
-    otherwise (and when `options.twice_pace_heights` is 0, off)."""
-    if options.twice_pace_heights <= 0 or \
-            not bool(reads_twice(out, cfg, options.twice_pace_sub)[0]):
+    when rule 37 says so (module doc) for the window's `rows` (`rows.TrackRow`), else, with
+    rule 56 (`options.stride_peak`), at twice it when rule 56 says so; `out` itself otherwise
+    (and when `options.twice_pace_heights` is 0: both off)."""
+    if options.twice_pace_heights <= 0:
+        return out
+    if bool(reads_twice(out, cfg, options.twice_pace_sub)[0]):
+        factor, reason = 0.5, Reason.MATCHED_TWICE
+    elif options.stride_peak and bool(reads_stride(out, cfg)[0]):
+        factor, reason = 2.0, Reason.MATCHED_STRIDE
+    else:
         return out
     if not rows_tall_enough(rows, camera, walker_height_m, options):
         return out
-    return judged_at_half(out, np.ones(1, bool))
+    return judged_at(out, np.ones(1, bool), factor, reason)
 
 
 def second_look(cfg: Config, camera, options: SizeOptions):
@@ -184,6 +216,8 @@ def batch_second_look(cfg: Config, batch, options: SizeOptions):
         if not twice:
             return res
         which = reads_twice(res, cfg, options.twice_pace_sub)
+        stride = reads_stride(res, cfg) & ~which if options.stride_peak else np.zeros_like(which)
+        which = which | stride
         for w in np.flatnonzero(which):
             rows = slice(int(start[w]), int(start[w]) + n)
             uv = batch.z[int(track[w]), rows]
@@ -192,6 +226,8 @@ def batch_second_look(cfg: Config, batch, options: SizeOptions):
                 None if edges is None else edges[int(track[w]), rows], walker_m,
                 options.top_inside_heights, options.twice_pace_quantile)
             which[w] = tall_enough(height, count, walker_m, options)
-        return judged_at_half(res, which) if which.any() else res
+        if stride.any():
+            res = judged_at(res, which & stride, 2.0, Reason.MATCHED_STRIDE)
+        return judged_at_half(res, which & ~stride) if (which & ~stride).any() else res
 
     return look
