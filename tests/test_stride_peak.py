@@ -20,6 +20,8 @@ from rhythmjax.track.options import SizeOptions
 from rhythmjax.track.rows import TrackRow
 from rhythmjax.track.twice import batch_second_look, judge_at_half, reads_stride
 
+from .test_twice_pace import object_rows, refused_window
+
 
 CFG = Config()
 ON = SizeOptions()  # the default: rule 56 on, rule 37's height test (0.57 walker heights)
@@ -28,22 +30,13 @@ FAR = config_from_dict({"thresholds": {"range_max_m": 40.0}})  # the paper's, ra
 
 
 def _rows(top_m: float, n: int = 64) -> list[TrackRow]:
-    """n measured rows of an object at 25-30 m in front of the paper's camera (a walker's head
-    inside the image there) whose top is `top_m` m above its feet."""
-    y = np.linspace(25.0, 30.0, n)
-    u, v = project_3d(CFG.camera, 0 * y, y, 0 * y)
-    _, v_top = project_3d(CFG.camera, 0 * y, y, top_m + 0 * y)
-    return [TrackRow(i, i / 15, float(a), float(b), 20.0, 1.0, 0.0, float(c), 2, float(d))
-            for i, (a, b, c, d) in enumerate(zip(u, v, y, v_top))]
+    """n measured rows of a walker-like object `top_m` m tall at 25-30 m (`object_rows`)."""
+    return object_rows(top_m, n)
 
 
-def _out(f1=1.0, p1=40.0, ratio=0.8, speed=1.4, reason=Reason.NO_MODEL_MATCH):
-    """A window's outcome refused by (14), its strongest peak f1 Hz with power p1."""
-    return {"verdict": np.asarray(int(Verdict.NON_PEDESTRIAN)), "reason": np.asarray(int(reason)),
-            "pace_hz": np.asarray(f1), "stride_m": np.asarray(speed / f1),
-            "ratio": np.asarray(ratio), "speed_mps": np.asarray(speed),
-            "peak_freq": np.asarray([f1, 2.0 * f1]), "peak_power": np.asarray([p1, 5.0]),
-            "peak_mask": np.asarray([True, True])}
+def _out(f1=1.0, **kw):
+    """A window's outcome refused by (14), its strongest peak f1 Hz (`refused_window`)."""
+    return refused_window(f1=f1, **kw)
 
 
 def test_a_walker_at_its_stride_frequency_is_judged_at_twice_it():

@@ -28,7 +28,7 @@ CFG = Config()
 ON = SizeOptions(twice_pace_heights=0.75)  # the a priori value (the default: the fitted 0.57)
 
 
-def _rows(top_m: float, n: int = 12) -> list[TrackRow]:
+def object_rows(top_m: float, n: int = 12) -> list[TrackRow]:
     """n measured rows of an object at 25-30 m in front of the paper's camera (a walker's head
     inside the image there) whose top is `top_m` m above its feet."""
     y = np.linspace(25.0, 30.0, n)
@@ -38,7 +38,7 @@ def _rows(top_m: float, n: int = 12) -> list[TrackRow]:
             for i, (a, b, c, d) in enumerate(zip(u, v, y, v_top))]
 
 
-def _out(f1=4.0, p1=40.0, ratio=0.8, speed=1.4, reason=Reason.NO_MODEL_MATCH):
+def refused_window(f1=4.0, p1=40.0, ratio=0.8, speed=1.4, reason=Reason.NO_MODEL_MATCH):
     """A window's outcome refused by (14), its strongest peak f1 Hz with power p1."""
     return {"verdict": np.asarray(int(Verdict.NON_PEDESTRIAN)), "reason": np.asarray(int(reason)),
             "pace_hz": np.asarray(f1), "stride_m": np.asarray(speed / f1),
@@ -50,7 +50,7 @@ def _out(f1=4.0, p1=40.0, ratio=0.8, speed=1.4, reason=Reason.NO_MODEL_MATCH):
 def test_a_walker_at_twice_its_pace_is_judged_at_half():
     """4.0 Hz at 1.4 m/s: (14) refuses 4.0 Hz, 0.35 m and accepts 2.0 Hz, 0.70 m; the rows read
     1.7 m, above 0.75 x 1.7 = 1.275 m."""
-    out = judge_at_half(_out(), CFG, _rows(1.7), CFG.camera, 1.7, ON)
+    out = judge_at_half(refused_window(), CFG, object_rows(1.7), CFG.camera, 1.7, ON)
     assert int(out["verdict"]) == Verdict.PEDESTRIAN and int(out["reason"]) == Reason.MATCHED_TWICE
     assert float(out["pace_hz"]) == pytest.approx(2.0)
     assert float(out["stride_m"]) == pytest.approx(0.7)
@@ -58,24 +58,24 @@ def test_a_walker_at_twice_its_pace_is_judged_at_half():
 
 
 @pytest.mark.parametrize("why, out, top_m, n, options", [
-    ("off", _out(), 1.7, 12, SizeOptions(twice_pace_heights=0.0)),
-    ("a dog's height", _out(), 0.6, 12, ON),
-    ("1.27 m, just below 0.75 walker heights", _out(), 1.27, 12, ON),
-    ("too few rows to read a height", _out(), 1.7, 9, ON),
-    ("half of 6 Hz is no pace", _out(f1=6.0), 1.7, 12, ON),
-    ("twice 0.58 m at 2.3 m/s is no step", _out(speed=2.3), 1.7, 12, ON),
-    ("the peak below P_thr", _out(p1=9.0), 1.7, 12, ON),
-    ("its R below R_thr", _out(ratio=0.05), 1.7, 12, ON),
-    ("refused by (15), not (14)", _out(reason=Reason.BELOW_THRESHOLD), 1.7, 12, ON),
+    ("off", refused_window(), 1.7, 12, SizeOptions(twice_pace_heights=0.0)),
+    ("a dog's height", refused_window(), 0.6, 12, ON),
+    ("1.27 m, just below 0.75 walker heights", refused_window(), 1.27, 12, ON),
+    ("too few rows to read a height", refused_window(), 1.7, 9, ON),
+    ("half of 6 Hz is no pace", refused_window(f1=6.0), 1.7, 12, ON),
+    ("twice 0.58 m at 2.3 m/s is no step", refused_window(speed=2.3), 1.7, 12, ON),
+    ("the peak below P_thr", refused_window(p1=9.0), 1.7, 12, ON),
+    ("its R below R_thr", refused_window(ratio=0.05), 1.7, 12, ON),
+    ("refused by (15), not (14)", refused_window(reason=Reason.BELOW_THRESHOLD), 1.7, 12, ON),
 ])
 def test_the_verdict_stands(why, out, top_m, n, options):
-    assert judge_at_half(out, CFG, _rows(top_m, n), CFG.camera, 1.7, options) is out, why
+    assert judge_at_half(out, CFG, object_rows(top_m, n), CFG.camera, 1.7, options) is out, why
 
 
 def test_a_peak_inside_the_model_is_not_halved():
     """2.0 Hz at 1.4 m/s passes (14) itself: the rule is for windows (14) refused."""
-    out = _out(f1=2.0)
-    assert judge_at_half(out, CFG, _rows(1.7), CFG.camera, 1.7, ON) is out
+    out = refused_window(f1=2.0)
+    assert judge_at_half(out, CFG, object_rows(1.7), CFG.camera, 1.7, ON) is out
 
 
 def _walker_going_away(look=None, n: int = 128, pace_after: float = 4.0) -> SimpleNamespace:
