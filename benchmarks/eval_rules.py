@@ -129,6 +129,9 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - stride_peak: the tracker's `size.stride_peak` True (the default since decision 56) vs False
   (rule 56: a window whose strongest peak passes (14) at twice its frequency, a walker's stride
   frequency F/2, judged there on rule 37's height); `rhythm --boxes` gets --[no-]stride-peak.
+- twice_refit: the tracker's `size.twice_pace_heights` 0.51 (rule 37's height threshold refitted
+  by `fit_height_threshold.py` under the defaults of issue 16's fifty-fifth round) vs 0.57 (the
+  earlier fit); rules 46 and 56 read the same test.
 - count_stride: count's `verdicts.stride_peak` True vs False (the default: rule 56 in count's
   verdicts, off since its screen counted PETS09 27 -> 30).
 - still_end: only the still rule's end of a track that stands still (patched off in this
