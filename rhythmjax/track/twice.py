@@ -24,8 +24,9 @@ walker one of whose feet window B does not see (walking away with a suitcase pul
 which hides a foot) gives I(k) one burst a stride, so the strongest peak sits at F/2 and (14)
 reads a stride of 2T. Such a window (refused with no-model-match, f1 above P_thr with R above
 R_thr, failing (14) at (f1, v/f1) and passing it at (2 f1, v/(2 f1))) is Pedestrian with pace
-2 f1, stride v/(2 f1) and reason matched-stride on rule 37's height test. A dog's leg cycle
-read at f1 fails (14) at 2 f1 (4-10 Hz); rule 37 is tried first.
+2 f1, stride v/(2 f1) and reason matched-stride on rule 37's height test. A trotting dog's
+peak, at its leg cycle (3-5 Hz) or half it, fails (14) at twice it (3-10 Hz); rule 37 is
+tried first.
 
 The tracker looks at each window as it completes (`second_look`, read by
 `toolkit.match_window`); the batch classifier (`model.batch.classify_tracks`, which `count`
