@@ -132,6 +132,8 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - twice_refit: the tracker's `size.twice_pace_heights` 0.51 (rule 37's height threshold refitted
   by `fit_height_threshold.py` under the defaults of issue 16's fifty-fifth round) vs 0.57 (the
   earlier fit); rules 46 and 56 read the same test.
+- low_refit: the tracker's `size.min_height_heights` 0.47 (rule 26's height threshold refitted
+  by the same study) vs 0.5 (the a priori value); count's verdicts keep 0.5.
 - count_stride: count's `verdicts.stride_peak` True vs False (the default: rule 56 in count's
   verdicts, off since its screen counted PETS09 27 -> 30).
 - still_end: only the still rule's end of a track that stands still (patched off in this

@@ -235,6 +235,10 @@ RULES = {
                     "fitted (fit.heights on own knees 10520001-10550001 under round 55's "
                     "defaults, held out 10560001-10590001: balanced accuracy 0.939 -> 0.955; "
                     "OFF the earlier fit, 0.57) (rule 37 refitted; rules 46 and 56 read it)"),
+    "low_refit": ("tracker", "size.min_height_heights", 0.47, 0.5, TRACKER_SOURCES,
+                  "fitted (fit.heights on own knees 10520001-10550001 under round 55's "
+                  "defaults, held out 10560001-10590001: balanced accuracy 0.968 -> 0.972; "
+                  "OFF the a priori 0.5) (rule 26 refitted; count's verdicts keep 0.5)"),
     "count_stride": ("count", "verdicts.stride_peak", True, False, COUNT_SOURCES,
                      "nothing fitted (rule 56 in count's verdicts, as the tracker's); "
                      "decided with decision 56's count screen: PETS09 27 -> 30, off"),
@@ -290,7 +294,7 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "twice_quantile": (), "upper_filter": TRACKER_SOURCES,
               "upper_always": (), "upper_median": (), "strongest_pace": TRACKER_SOURCES,
               "upper_strongest": TRACKER_SOURCES, "stride_peak": TRACKER_SOURCES + ("pets_boxes",),
-              "count_stride": (), "twice_refit": ()}
+              "count_stride": (), "twice_refit": (), "low_refit": ()}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",
