@@ -1,0 +1,131 @@
+"""Non-walkers judged Pedestrian on an eval run's own scenes: which objects their track's rows
+lie on (issue 16, fifty-sixth round; a study: nothing is chosen here).
+
+`eval_rules.py run` (and `eval_all.py`) score each own object by the track assigned to it
+(`sim.evaluate.match_tracks`). For every bicycle or dog so judged Pedestrian in the given result
+files, this renders and tracks its scene again (as `eval_synthetic.run_scene`: `RECOMMENDED`,
+`synthetic_options`) and walks the track's observed rows: a row is on the object where its foot
+point lies within max(10 px, W/2) across and 10 px down of the object's true foot point
+(`on_object`); a row elsewhere is given to the nearest other true object within 25 px. It prints
+the rows on the object and off it, which came first, the other objects by rows, whether the
+track was lost (state NONE) between two observed rows (re-acquisition, `relink`), and the
+track's pace and speed of (12).
+
+    python benchmarks/study_switch_rows.py D/trend-off-seeds-*.json [--kinds bicycle,dog]
+
+Figures: docs/rules.md, "Who the non-walkers judged Pedestrian are; rule 42' against them".
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+import eval_synthetic as es  # noqa: E402
+
+
+# each own source's scenes (`eval_all.py`'s run_synthetic_* keyword arguments)
+SOURCE_SCENES = {"synthetic": {}, "synthetic_any": {"clothing": "any"},
+                 "synthetic_suitcase": {"suitcase_fraction": 0.5},
+                 "synthetic_lateral": {"lateral_deg": 30.0},
+                 "synthetic_lateral_suitcase": {"lateral_deg": 30.0, "suitcase_fraction": 0.5},
+                 "synthetic_rods": {"articulated": False}}
+NEAR_PX, NEAR_ROWS_PX, OTHER_PX = 10.0, 10.0, 25.0
+
+
+def on_object(u, v, width, tu, tv) -> np.ndarray:
+    """Per row, whether the foot point (u, v) px lies on the object whose true foot point is
+    (tu, tv): |u - tu| < max(10, width / 2) and |v - tv| < 10 (NaN: not on it)."""
+    u, v, width, tu, tv = (np.asarray(a, np.float64) for a in (u, v, width, tu, tv))
+    with np.errstate(invalid="ignore"):
+        return (np.abs(u - tu) < np.maximum(NEAR_PX, width / 2)) & (np.abs(v - tv) < NEAR_ROWS_PX)
+
+
+def row_profile(frames, u, v, width, state, truth_uv, others_uv) -> dict:
+    """The rows of one track against its object's truth. `frames` (int), `u`, `v`, `width`
+    (px, NaN where not observed) and `state` (`TrackState` ints) per row; `truth_uv` (2, F) the
+    object's true foot point per frame (NaN out of view); `others_uv` {name: (2, F)} the other
+    objects'. Returns on, off (observed rows), first ("object", "other" or None), relink (a
+    NONE row between the first and last observed rows) and others (Counter of names)."""
+    frames = np.asarray(frames, int)
+    u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
+    obs = np.flatnonzero(np.isfinite(u))
+    if not obs.size:
+        return {"on": 0, "off": 0, "first": None, "relink": False, "others": Counter()}
+
+    def at(uv, k):
+        return (uv[0][k], uv[1][k]) if k < uv.shape[1] else (np.nan, np.nan)
+
+    truth_uv = np.asarray(truth_uv, np.float64)
+    near = np.array([bool(on_object(u[i], v[i], width[i], *at(truth_uv, frames[i])))
+                     for i in obs])
+    others = Counter()
+    for i in obs[~near]:
+        best = None
+        for name, uv in others_uv.items():
+            d = float(np.hypot(*(np.array((u[i], v[i])) - np.array(at(np.asarray(uv), frames[i])))))
+            if np.isfinite(d) and d < OTHER_PX and (best is None or d < best[0]):
+                best = (d, name)
+        if best:
+            others[best[1]] += 1
+    inner = np.asarray(state)[obs[0]:obs[-1] + 1]
+    return {"on": int(near.sum()), "off": int((~near).sum()),
+            "first": "object" if near[0] else "other", "relink": bool(np.any(inner == 0)),
+            "others": others}
+
+
+def main(argv: list[str]) -> int:
+    from rhythmjax.model.params import config_from_dict
+    from rhythmjax.sim.evaluate import match_tracks
+    from rhythmjax.sim.presets import synthetic_options
+    from rhythmjax.sim.scene import render_scene
+    from rhythmjax.track import track_frames
+
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("results", nargs="+", help="eval_rules.py / eval_all.py result files (JSON)")
+    p.add_argument("--kinds", default="bicycle,dog")
+    a = p.parse_args(argv)
+    kinds = set(a.kinds.split(","))
+    cfg = config_from_dict(es.RECOMMENDED)
+    for path in a.results:
+        for src, res in json.loads(Path(path).read_text())["sources"].items():
+            if src not in SOURCE_SCENES or "skipped" in res:
+                continue
+            for seed, r in res.items():
+                for o in (o for o in r["objects"]
+                          if o["kind"] in kinds and o["verdict"] == "pedestrian"):
+                    s, spec = es.scene_specs(int(seed), **SOURCE_SCENES[src])[o["scene"]]
+                    scene = render_scene(s, spec)
+                    frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
+                    tracks, verdicts, objs, _ = track_frames(cfg, frames, progress=False,
+                                                             options=synthetic_options())
+                    truth = {t.track_id: np.stack([t.u, t.v]) for t in scene.truth}
+                    ids = [int(t) for t in verdicts["track_id"]]
+                    for t, obj in match_tracks(tracks, scene.truth).items():
+                        if obj.track_id != o["object"]:
+                            continue
+                        i = ids.index(t)
+                        rows = next(x for x in objs if x.track_id == t).rows
+                        prof = row_profile([q.frame for q in rows], [q.u for q in rows],
+                                           [q.v for q in rows], [q.width_px for q in rows],
+                                           [int(q.state) for q in rows], truth[o["object"]],
+                                           {k: uv for k, uv in truth.items() if k != o["object"]})
+                        print(f"{src} {seed} scene {s} {o['object']} track {t} "
+                              f"{verdicts['verdict'][i]}: rows on it {prof['on']}, off "
+                              f"{prof['off']}, first {prof['first']}, relink {prof['relink']}, "
+                              f"others {dict(prof['others'].most_common(2))}, pace "
+                              f"{verdicts['pace_hz'][i]:.2f} Hz, speed "
+                              f"{verdicts['speed_mps'][i]:.2f} m/s", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
