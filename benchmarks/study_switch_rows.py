@@ -4,10 +4,11 @@ lie on (issue 16, fifty-sixth round; a study: nothing is chosen here).
 `eval_rules.py run` (and `eval_all.py`) score each own object by the track assigned to it
 (`sim.evaluate.match_tracks`). For every bicycle or dog so judged Pedestrian in the given result
 files, this renders and tracks its scene again (as `eval_synthetic.run_scene`: `RECOMMENDED`,
-`synthetic_options`) and walks the track's observed rows: a row is on the object where its foot
-point lies within max(10 px, W/2) across and 10 px down of the object's true foot point
-(`on_object`); a row elsewhere is given to the nearest other true object within 25 px. It prints
-the rows on the object and off it, which came first, the other objects by rows, whether the
+`synthetic_options`) and, for each track given to that object (with its verdict; the
+figures count those judged Pedestrian), walks the track's observed rows: a row is on the object
+where its foot point lies within max(10 px, W/2) across and 10 px down of the object's true foot
+point (`on_object`); a row elsewhere is given to the nearest other true object within 25 px. It
+prints the rows on the object and off it, which came first, the other objects by rows, whether the
 track was lost (state NONE) between two observed rows (re-acquisition, `relink`), and the
 track's pace and speed of (12).
 
