@@ -3,16 +3,16 @@ lie on (issue 16, fifty-sixth round; a study: nothing is chosen here).
 
 `eval_rules.py run` (and `eval_all.py`) score each own object by the track assigned to it
 (`sim.evaluate.match_tracks`). For every bicycle or dog so judged Pedestrian in the given result
-files, this renders and tracks its scene again (as `eval_synthetic.run_scene`: `RECOMMENDED`,
-`synthetic_options`) and, for each track given to that object (with its verdict; the
-figures count those judged Pedestrian), walks the track's observed rows: a row is on the object
-where its foot point lies within max(10 px, W/2) across and 10 px down of the object's true foot
-point (`on_object`); a row elsewhere is given to the nearest other true object within 25 px. It
-prints the rows on the object and off it, which came first, the other objects by rows, whether the
-track was lost (state NONE) between two observed rows (re-acquisition, `relink`), and the
-track's pace and speed of (12).
+files, this tracks its scene again (`study_tracks.track_scene`, as `eval_synthetic.py` does,
+cached under -d) and, for each track given to that object (with its verdict; the figures count
+those judged Pedestrian), walks the track's observed rows: a row is on the object where its
+foot point lies within max(10 px, W/2) across and 10 px down of the object's true foot point
+(`on_object`); a row elsewhere is given to the true object nearest it
+(`study_tracks.nearest_objects`). It prints the rows on the object and off it, which came
+first, the other objects by rows, whether the track was lost (state NONE) between two observed
+rows (re-acquisition, `relink`), and the track's pace and speed of (12).
 
-    python benchmarks/study_switch_rows.py D/trend-off-seeds-*.json [--kinds bicycle,dog]
+    python benchmarks/study_switch_rows.py D/trend-off-seeds-*.json -d CACHE [--kinds bicycle,dog]
 
 Figures: docs/rules.md, "Who the non-walkers judged Pedestrian are; rule 42' against them".
 """
@@ -31,6 +31,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 
 import eval_synthetic as es  # noqa: E402
+from study_tracks import nearest_objects, track_scene  # noqa: E402
 
 
 # each own source's scenes (`eval_all.py`'s run_synthetic_* keyword arguments)
@@ -39,7 +40,7 @@ SOURCE_SCENES = {"synthetic": {}, "synthetic_any": {"clothing": "any"},
                  "synthetic_lateral": {"lateral_deg": 30.0},
                  "synthetic_lateral_suitcase": {"lateral_deg": 30.0, "suitcase_fraction": 0.5},
                  "synthetic_rods": {"articulated": False}}
-NEAR_PX, NEAR_ROWS_PX, OTHER_PX = 10.0, 10.0, 25.0
+NEAR_PX, NEAR_ROWS_PX = 10.0, 10.0
 
 
 def on_object(u, v, width, tu, tv) -> np.ndarray:
@@ -50,33 +51,24 @@ def on_object(u, v, width, tu, tv) -> np.ndarray:
         return (np.abs(u - tu) < np.maximum(NEAR_PX, width / 2)) & (np.abs(v - tv) < NEAR_ROWS_PX)
 
 
-def row_profile(frames, u, v, width, state, truth_uv, others_uv) -> dict:
+def row_profile(frames, u, v, width, state, truth_uv, nearest) -> dict:
     """The rows of one track against its object's truth. `frames` (int), `u`, `v`, `width`
     (px, NaN where not observed) and `state` (`TrackState` ints) per row; `truth_uv` (2, F) the
-    object's true foot point per frame (NaN out of view); `others_uv` {name: (2, F)} the other
-    objects'. Returns on, off (observed rows), first ("object", "other" or None), relink (a
-    NONE row between the first and last observed rows) and others (Counter of names)."""
+    object's true foot point per frame (NaN out of view); `nearest` per observed row the name of
+    the true object nearest it (`study_tracks.nearest_objects`; None: none visible). Returns on,
+    off (observed rows), first ("object", "other" or None), relink (a NONE row between the
+    first and last observed rows) and others (Counter of the off rows' nearest names)."""
     frames = np.asarray(frames, int)
     u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
     obs = np.flatnonzero(np.isfinite(u))
     if not obs.size:
         return {"on": 0, "off": 0, "first": None, "relink": False, "others": Counter()}
-
-    def at(uv, k):
-        return (uv[0][k], uv[1][k]) if k < uv.shape[1] else (np.nan, np.nan)
-
     truth_uv = np.asarray(truth_uv, np.float64)
-    near = np.array([bool(on_object(u[i], v[i], width[i], *at(truth_uv, frames[i])))
-                     for i in obs])
-    others = Counter()
-    for i in obs[~near]:
-        best = None
-        for name, uv in others_uv.items():
-            d = float(np.hypot(*(np.array((u[i], v[i])) - np.array(at(np.asarray(uv), frames[i])))))
-            if np.isfinite(d) and d < OTHER_PX and (best is None or d < best[0]):
-                best = (d, name)
-        if best:
-            others[best[1]] += 1
+    seen = frames[obs] < truth_uv.shape[1]
+    k = np.where(seen, frames[obs], 0)
+    near = seen & on_object(u[obs], v[obs], np.asarray(width, np.float64)[obs],
+                            truth_uv[0][k], truth_uv[1][k])
+    others = Counter(n for n, on in zip(nearest, near) if not on and n is not None)
     inner = np.asarray(state)[obs[0]:obs[-1] + 1]
     return {"on": int(near.sum()), "off": int((~near).sum()),
             "first": "object" if near[0] else "other", "relink": bool(np.any(inner == 0)),
@@ -86,13 +78,12 @@ def row_profile(frames, u, v, width, state, truth_uv, others_uv) -> dict:
 def main(argv: list[str]) -> int:
     from rhythmjax.model.params import config_from_dict
     from rhythmjax.sim.evaluate import match_tracks
-    from rhythmjax.sim.presets import synthetic_options
-    from rhythmjax.sim.scene import render_scene
-    from rhythmjax.track import track_frames
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("results", nargs="+", help="eval_rules.py / eval_all.py result files (JSON)")
     p.add_argument("--kinds", default="bicycle,dog")
+    p.add_argument("-d", "--cache", type=Path, required=True,
+                   help="folder of the tracked scenes (`study_tracks.track_scene`)")
     a = p.parse_args(argv)
     kinds = set(a.kinds.split(","))
     cfg = config_from_dict(es.RECOMMENDED)
@@ -104,21 +95,20 @@ def main(argv: list[str]) -> int:
                 for o in (o for o in r["objects"]
                           if o["kind"] in kinds and o["verdict"] == "pedestrian"):
                     s, spec = es.scene_specs(int(seed), **SOURCE_SCENES[src])[o["scene"]]
-                    scene = render_scene(s, spec)
-                    frames = ((i, i / scene.fps, f) for i, f in enumerate(scene.frames))
-                    tracks, verdicts, objs, _ = track_frames(cfg, frames, progress=False,
-                                                             options=synthetic_options())
-                    truth = {t.track_id: np.stack([t.u, t.v]) for t in scene.truth}
+                    tracks, verdicts, objs, truth = track_scene(cfg, s, spec, a.cache / src)
+                    own = next(t for t in truth if t.track_id == o["object"])
                     ids = [int(t) for t in verdicts["track_id"]]
-                    for t, obj in match_tracks(tracks, scene.truth).items():
+                    for t, obj in match_tracks(tracks, truth).items():
                         if obj.track_id != o["object"]:
                             continue
                         i = ids.index(t)
                         rows = next(x for x in objs if x.track_id == t).rows
+                        nearest = [None if n is None else n.track_id
+                                   for n in nearest_objects(rows, truth)]
                         prof = row_profile([q.frame for q in rows], [q.u for q in rows],
                                            [q.v for q in rows], [q.width_px for q in rows],
-                                           [int(q.state) for q in rows], truth[o["object"]],
-                                           {k: uv for k, uv in truth.items() if k != o["object"]})
+                                           [int(q.state) for q in rows],
+                                           np.stack([own.u, own.v]), nearest)
                         print(f"{src} {seed} scene {s} {o['object']} track {t} "
                               f"{verdicts['verdict'][i]}: rows on it {prof['on']}, off "
                               f"{prof['off']}, first {prof['first']}, relink {prof['relink']}, "
