@@ -174,6 +174,10 @@ RULES = {
     "lean": ("tracker", "body.lean_column", True, False, TRACKER_SOURCES,
              "nothing fitted (half the config's walker height, a priori); found on used seeds "
              "3300001-3330001, 3380001-3410001 (study_window_placement)"),
+    "relink_speed": ("tracker", "relink.side_rows", 0.25, 0.0, TRACKER_SOURCES,
+                     "nothing fitted ((14)'s fastest walk, N/4 rows a side as rule 52's "
+                     "stretch, a priori); found with a study of relinks on used seeds "
+                     "12320001-12370001 and study_switch_rows on six samples (rule 57)"),
     "halves": ("tracker", "recheck.halves", True, False, TRACKER_SOURCES,
                "nothing fitted (N/2 and (14)'s fastest walk, a priori); found on used seeds "
                "3920001-3950001 (study_half_speed, rule 42)"),
@@ -294,7 +298,8 @@ DEFAULT_ON = {"half_pace": (), "high_foot": ("synthetic",), "hop": ALL,
               "twice_quantile": (), "upper_filter": TRACKER_SOURCES,
               "upper_always": (), "upper_median": (), "strongest_pace": TRACKER_SOURCES,
               "upper_strongest": TRACKER_SOURCES, "stride_peak": TRACKER_SOURCES + ("pets_boxes",),
-              "count_stride": (), "twice_refit": (), "low_refit": ()}
+              "count_stride": (), "twice_refit": (), "low_refit": (),
+              "relink_speed": TRACKER_SOURCES}
 COUNT_VARIANTS = {
     "default": "not judged non-pedestrian, unjudged and too fast not counted (COUNT_RULE)",
     "no_speed_cut": "not judged non-pedestrian (every unjudged track counted)",

@@ -62,6 +62,7 @@ TRACKER_DEFAULTS = [
     ("relink_gate_w", "relink.gate_w", 1.0),
     ("relink_gate_h", "relink.gate_h", 0.25),
     ("relink_gate_per_s", "relink.gate_per_s", 0.5),
+    ("(new: issue 16, rule 57)", "relink.side_rows", 0.25),  # a fast relink undone
     ("max_objects", "max_objects", 8),
     ("(new: issue 16, rule 26)", "size.min_height_heights", 0.5),  # a too-low Pedestrian
     ("(new: issue 16, rule 26)", "size.min_height_rows", 10),

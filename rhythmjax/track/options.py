@@ -242,6 +242,14 @@ class RelinkOptions:
     gate_w: float = 1.0  # the gate: this many W across ...
     gate_h: float = 0.25  # ... and this many walker heights up or down ...
     gate_per_s: float = 0.5  # ... growing by this fraction per second since then
+    side_rows: float = 0.25  # rule 57 (N's fraction, 0: off): at the end, a relink whose rows
+    # next to its gap (this many N a side) move faster on a side than the fastest walk (14) is
+    # undone, each side judged afresh (`relink.fast_gap`); on since issue 16's 57th round
+
+    def __post_init__(self):
+        if not 0.0 <= self.side_rows <= 1.0:
+            raise ValueError(f"relink.side_rows is a fraction of N in [0, 1], "
+                             f"got {self.side_rows!r}")
 
 
 HEIGHT_SCOPES = ("window", "track", "window-or-track")  # `size.min_height_scope`

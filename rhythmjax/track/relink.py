@@ -11,6 +11,13 @@ state (x, y m; vx, vy m/s) moved on at constant velocity for the gap and project
 within `gate_w` W across and `gate_h` walker heights (1.7 m) up or down of the new object's
 foot point, the ellipse growing by `gate_per_s` per second of gap (W: walker width in pixels at
 the new foot point).
+
+The gate reads positions only, so a bicycle that appears where a lost walker's track was heading
+continues it (issue 16, fifty-seventh round: 11 of 32 bicycles judged Pedestrian on the own
+scenes). Rule 57 (`relink.side_rows`, on since that round) reads each relink's two sides when the
+track ends: where the observed rows next to the gap move faster on either side than any walk
+(14) accepts (`fast_gap`), the relink is undone. Re-acquisition is for walkers hidden in a
+group, and a side faster than any walk is not a walker's.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..model.camera_np import project_3d
+from ..model.params import Config, walking_top_speed
 from ..model.status import TrackState
 from .rows import TrackRow, Velocity
 
@@ -71,6 +79,78 @@ def gap_rows(last: TrackRow, index: int, t: float, xy) -> list[TrackRow]:
                             x0 + a * (float(xy[0]) - x0), y0 + a * (float(xy[1]) - y0),
                             int(TrackState.NONE)))
     return out
+
+
+def relink_gaps(rows: list[TrackRow]) -> list[tuple[int, int]]:
+    """(first, end) row indices of each run of state-NONE rows (`gap_rows`) between two rows."""
+    out, start = [], None
+    for k, r in enumerate(rows):
+        if r.state == int(TrackState.NONE):
+            start = k if start is None else start
+        elif start is not None:
+            if start > 0:
+                out.append((start, k))
+            start = None
+    return out
+
+
+def side_speed(rows: list[TrackRow]) -> float:
+    """Ground speed (m/s) of `rows`: |(vx, vy)| of the least-squares lines through the filter's
+    positions x_est(t), y_est(t) (m); NaN with fewer than two distinct times."""
+    t = np.asarray([r.t for r in rows], np.float64)
+    xy = np.asarray([(r.x_est, r.y_est) for r in rows], np.float64).reshape(-1, 2)
+    if len(t) < 2 or np.ptp(t) <= 0:
+        return math.nan
+    tc = t - t.mean()
+    v = tc @ (xy - xy.mean(axis=0)) / (tc @ tc)
+    return float(math.hypot(v[0], v[1]))
+
+
+def fast_gap(rows: list[TrackRow], m: int, top_speed: float) -> tuple[int, int] | None:
+    """Rule 57: the first relink gap (`relink_gaps`) with a side faster than `top_speed` m/s
+    (`side_speed`) over its m observed rows (a finite u) nearest the gap: the last m before it or
+    the first m after it; a side with fewer than m // 2 observed rows is not read. None where no
+    gap has such a side."""
+    seen = [k for k, r in enumerate(rows) if math.isfinite(r.u)]
+    for g0, g1 in relink_gaps(rows):
+        before = [rows[k] for k in seen if k < g0][-m:]
+        after = [rows[k] for k in seen if k >= g1][:m]
+        for side in (before, after):
+            if len(side) >= max(2, m // 2) and side_speed(side) > top_speed:
+                return g0, g1
+    return None
+
+
+def cut_rows(rows: list[TrackRow], m: int, top_speed: float) -> list[slice]:
+    """Rule 57: the pieces (slices of `rows`) left when every fast relink (`fast_gap`, each read
+    in the rows after the one before) is undone, its gap rows dropped; [slice(0, None)] where
+    none is."""
+    pieces, start = [], 0
+    while (gap := fast_gap(rows[start:], m, top_speed)) is not None:
+        pieces.append(slice(start, start + gap[0]))
+        start += gap[1]
+    return pieces + [slice(start, None)]
+
+
+def undo_fast_relinks(cfg: Config, finished: list, fraction: float, judge_afresh) -> int:
+    """Rule 57 at the tracks' end: each object of `finished` (the tracker's `_Object`s) with a
+    fast relink (`cut_rows`, m = max(2, round(`fraction` N)) rows a side, the fastest walk (14)
+    `params.walking_top_speed`) is replaced by its pieces, each judged afresh by
+    `judge_afresh(obj, rows, track_id)` (which appends it to `finished`; the first piece keeps
+    the track's id, track_id None: a new one). Returns the number of relinks undone (0 where
+    `fraction` is 0: off)."""
+    if fraction <= 0:
+        return 0
+    m = max(2, round(fraction * int(cfg.thresholds.n)))
+    top, undone = walking_top_speed(cfg), 0
+    for obj in list(finished):
+        pieces = cut_rows(obj.rows, m, top)
+        if len(pieces) > 1:
+            finished.remove(obj)
+            for i, rows in enumerate(pieces):
+                judge_afresh(obj, rows, None if i else obj.track_id)
+            undone += len(pieces) - 1
+    return undone
 
 
 def best_match(anchors: list, camera, t: float, uv, W: float, **gate) -> int:

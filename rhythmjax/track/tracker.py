@@ -14,7 +14,8 @@ or when the estimate leaves the range. Each tracked frame samples the rhythm sig
 window B at the foot point (also moved by `io.files.WINDOW_CANDIDATES` and, rule 50b, across);
 each completed window of N frames (one every `thresholds.hop_samples`) is matched with
 `rhythm.classify_window` until one says Pedestrian (then matching stops; a window at twice a
-walking pace looked at again, twice.py); a timed-out track waits `relink.within_s` s for a relink.
+walking pace looked at again, twice.py); a timed-out track waits `relink.within_s` s for a relink
+(undone at the end where a side moves faster than any walk: rule 57, `relink.side_rows`).
 """
 
 from __future__ import annotations
@@ -104,7 +105,8 @@ class OnlineTracker:
         self._pending = PendingStep(STEP_OUT)  # the last frame's step, not yet read
         self.glitch_frames: list[int] = []
         self.relinked = 0  # tracks continued by `_relink`
-        self.switches = 0  # tracks split by `_split_at_switch` (rule 29)
+        self.switches = 0  # tracks split by `_split_at_switch` (rule 29) or rule 57
+        self.relinks_undone = 0  # relinks undone by rule 57 (`relink.undo_fast_relinks`)
         self._camera = camera_tuple(cfg.camera)
         self._walker_m = host_float(cfg.width.height)  # rule 41's body height (m)
         self._look = tracker_look(cfg, self._camera, self.opt.size)  # rules 37 and 45
@@ -394,14 +396,12 @@ class OnlineTracker:
         rows, vel = old.rows[:kept], old.vel[:kept]  # has a predicted row here: superseded
         obj.win_start = min(obj.win_start, kept)
         gap = relink.gap_rows(rows[-1], index, t, (mean[0], mean[2]))
-        obj.rows = rows + gap
-        obj.vel = vel + [NAN_VELOCITY] * len(gap)
+        obj.rows, obj.vel = rows + gap, vel + [NAN_VELOCITY] * len(gap)
         if old.candidate_rows is not None:
             obj.candidate_rows = old.candidate_rows[:kept] + [(math.nan,) * self._extra] * len(gap)
         if old.mean_rows is not None:
             obj.mean_rows = old.mean_rows[:kept] + [(math.nan,) * (self._extra + 1)] * len(gap)
-        obj.track_id = old.track_id
-        self.relinked += 1
+        obj.track_id, self.relinked = old.track_id, self.relinked + 1
         return True
 
     def finish(self) -> tuple[dict, dict, list[_Object]]:
@@ -410,6 +410,8 @@ class OnlineTracker:
         for s, obj in enumerate(self._slots):
             if obj is not None:
                 self._end(s)
+        self.relinks_undone = relink.undo_fast_relinks(  # rule 57 (off: relink.side_rows 0)
+            self.cfg, self._finished, self.opt.relink.side_rows, self._judge_afresh)
         if self.opt.recheck.enabled:  # rules 29, 30a, 30d: a switch cut off (on)
             for o in list(self._finished):
                 self._split_at_switch(o)
@@ -427,10 +429,10 @@ class OnlineTracker:
         the track, its side judged afresh (`recheck.split_at_switches`, rule 26's `size`)."""
         split_at_switches(self.cfg, obj, self.opt.recheck, self._judge_afresh, self.opt.size)
 
-    def _judge_afresh(self, obj: _Object, rows: slice) -> None:
-        """A new track (new id) of `obj`'s `rows`, judged as online, then as at its end."""
+    def _judge_afresh(self, obj: _Object, rows: slice, track_id: int | None = None) -> None:
+        """A track of `obj`'s `rows` (id `track_id`; None: new, counted), judged as online."""
         cands, means = obj.candidate_rows, obj.mean_rows
-        part = _Object(track_id=self._next_id, state=obj.state, rows=obj.rows[rows],
+        part = _Object(track_id=track_id or self._next_id, state=obj.state, rows=obj.rows[rows],
                        vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows],
                        pace_window=obj.pace_window, second_look=obj.second_look, across=obj.across,
                        mean_rows=None if means is None else means[rows], mean_gate=obj.mean_gate)
@@ -439,11 +441,10 @@ class OnlineTracker:
             match_window(self.cfg, part)
         match_window(self.cfg, part, final=True)
         self._finished.append(part)
-        self.switches += 1
+        self.switches += track_id is None
 
 
 def _box(uv, w, h) -> detect.WindowBox:
     """The (x0, y0, w, h) px window of size w x h centred on uv; empty when uv is not finite."""
-    if not np.all(np.isfinite(uv)) or w <= 0:
-        return (0, 0, 0, 0)
-    return (int(uv[0] - w / 2), int(uv[1] - h / 2), int(w), int(h))
+    ok = np.all(np.isfinite(uv)) and w > 0
+    return (int(uv[0] - w / 2), int(uv[1] - h / 2), int(w), int(h)) if ok else (0, 0, 0, 0)
