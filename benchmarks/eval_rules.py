@@ -59,10 +59,10 @@ Rules (`RULES`; each sets one key for every source, whatever that source's defau
 - mean_refused: the tracker's `body.window_mean_refused` True (with `body.mean_refused_gate`
   False) vs False (rule 35b: rule 35's mean read only where the sum refuses a window).
 - relink_speed: the tracker's `relink.side_rows` 0.25 (the default since the fifty-seventh round)
-  vs 0 (rule 57: at a track's end, a relink
-  whose observed rows next to its gap, N/4 a side, move faster on either side than any walk
-  (14) accepts, 2.57 m/s, least-squares over the filter's ground positions, is undone: each
-  side a track of its own, judged afresh; `track.relink.fast_gap`).
+  vs 0 (rule 57: at a track's end, a relink whose observed rows next to its gap, N/4 a side,
+  move faster on either side than any walk (14) accepts, 2.57 m/s, least-squares over the
+  filter's ground positions, is undone: each side a track of its own, judged afresh;
+  `track.relink.fast_gap`).
 - halves_around: the tracker's `recheck.halves_around` True vs False (rule 44: rule 42's half
   test on the windows before and after the deciding one only).
 - mean_trend: rule 35b with rule 35c's gate (`body.window_mean_refused` and

@@ -430,7 +430,7 @@ class OnlineTracker:
         split_at_switches(self.cfg, obj, self.opt.recheck, self._judge_afresh, self.opt.size)
 
     def _judge_afresh(self, obj: _Object, rows: slice, track_id: int | None = None) -> None:
-        """A track of `obj`'s `rows` (id `track_id`; None: new, counted), judged as online."""
+        """A track of `obj`'s `rows` (id `track_id`, else new), judged online, then at its end."""
         cands, means = obj.candidate_rows, obj.mean_rows
         part = _Object(track_id=track_id or self._next_id, state=obj.state, rows=obj.rows[rows],
                        vel=obj.vel[rows], candidate_rows=None if cands is None else cands[rows],
